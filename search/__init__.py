@@ -1,0 +1,1 @@
+"""Search agents that propose test mutations through the surrealist_gym envs."""

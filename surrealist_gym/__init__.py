@@ -1,0 +1,49 @@
+"""surrealist-gym: simulation-based testing of drones in the neighbourhood of real flights.
+
+Public face::
+
+    import surrealist_gym as sg
+    flight = sg.read_flight("case0.ulg")      # FlightLog from .ulg / .tlog / .bin
+    traj = flight.trajectory                   # the paper's pipeline: 0.5 s windows
+    sg.dtw(a, b); sg.frechet(a, b)            # Trajectory or (N, 3) arrays
+    test = sg.load_test("seed.yaml"); sg.save_test(test, "out.yaml")
+"""
+from __future__ import annotations
+
+from importlib import resources as _resources
+
+from .errors import (DependencyNotInstalled, InvalidTestCase, LogFormatError, MissionError, SimulationError,
+                     SurrealistError, UnknownAgent)
+from .mission import Command, Mission, MissionItem, read_mission, read_plan, read_waypoints, write_plan
+from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, load_test, save_test
+from .trajectory import Trajectory
+
+__version__ = "0.1.0"
+
+
+def data_path(name: str) -> str:
+    """Path of a file bundled with the package: ``case0.ulg``, ``case0.plan``, ``rq1-seed1.yaml``, ..."""
+    return str(_resources.files(__package__).joinpath("data", name))
+
+
+def __getattr__(name: str):
+    # Late imports keep `import surrealist_gym` fast and let each part be built independently.
+    if name in {"read_flight", "FlightLog"}:
+        from . import logs
+        return getattr(logs, name)
+    if name in {"dtw", "frechet", "dba", "soft_dtw_barycenter"}:
+        from . import metrics
+        return getattr(metrics, name)
+    if name in {"simulate"}:
+        from . import sim
+        return getattr(sim, name)
+    raise AttributeError(f"module 'surrealist_gym' has no attribute {name!r}")
+
+
+__all__ = [
+    "Command", "DependencyNotInstalled", "InvalidTestCase", "LogFormatError", "Mission", "MissionError",
+    "MissionItem", "Obstacle", "RuntimeCommand", "Shape", "SimulationError", "SurrealistError", "TestCase",
+    "Trajectory", "UnknownAgent", "Wind", "data_path", "load_test", "read_mission", "read_plan", "read_waypoints",
+    "save_test", "write_plan", "read_flight", "FlightLog", "dtw", "frechet", "dba", "soft_dtw_barycenter",
+    "simulate",
+]

@@ -1,0 +1,53 @@
+"""The ``surrealist`` command line: one module per sub-command, each with ``add_arguments`` and ``run``.
+
+This is the only place that prints. A :class:`~surrealist_gym.errors.SurrealistError` becomes one line on stderr
+and exit code 2; Ctrl-C exits with 130.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import warnings
+
+from ..errors import SurrealistError
+
+# sub-command -> (module, one-line help); modules are imported only when their command runs.
+COMMANDS = {
+    "inspect": ("surrealist_gym.cli.inspect", "describe a flight log (.ulg, .tlog, .bin) and plot it"),
+    "simulate": ("surrealist_gym.cli.simulate", "fly a test case in the simulator and report each run"),
+}
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="surrealist", description="Test drones in the neighbourhood of real flights.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name, (module, help_text) in COMMANDS.items():
+        cmd = sub.add_parser(name, help=help_text, description=help_text)
+        cmd.set_defaults(_module=module)
+        importlib.import_module(module).add_arguments(cmd)
+    return parser
+
+
+def _version() -> str:
+    from .. import __version__
+    return __version__
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    warnings.simplefilter("ignore", DeprecationWarning)
+    warnings.formatwarning = lambda msg, category, *a, **k: f"warning: {msg}\n"
+    try:
+        return importlib.import_module(args._module).run(args) or 0
+    except SurrealistError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

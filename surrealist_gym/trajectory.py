@@ -1,0 +1,164 @@
+"""The Trajectory value and the paper's trajectory pipeline.
+
+Frame: local, metres, x north, y east, z UP, origin at the first logged position; time in seconds from the first
+sample. Real and simulated flights go through the same pipeline (:meth:`Trajectory.from_local_position`):
+subtract the first timestamp and the first position, then average consecutive 0.5 s windows.
+"""
+from __future__ import annotations
+
+import csv
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import LogFormatError
+
+WINDOW_S = 0.5
+
+
+def _frozen(a, dtype=np.float64) -> np.ndarray:
+    arr = np.array(a, dtype=dtype, copy=True)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Trajectory:
+    """An immutable 3-D trajectory.
+
+    Attributes:
+        t: (N,) seconds since the first sample.
+        xyz: (N, 3) positions in metres (x north, y east, z up).
+        heading: (N,) heading in radians relative to the first sample, or None.
+    """
+
+    t: np.ndarray
+    xyz: np.ndarray
+    heading: np.ndarray | None = None
+
+    def __post_init__(self):
+        t = _frozen(self.t)
+        xyz = _frozen(self.xyz)
+        if xyz.ndim != 2 or xyz.shape[1] != 3:
+            raise ValueError(f"Trajectory.xyz must have shape (N, 3), got {xyz.shape}")
+        if t.shape != (xyz.shape[0],):
+            raise ValueError(f"Trajectory.t must have shape ({xyz.shape[0]},), got {t.shape}")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "xyz", xyz)
+        if self.heading is not None:
+            heading = _frozen(self.heading)
+            if heading.shape != t.shape:
+                raise ValueError(f"Trajectory.heading must have shape {t.shape}, got {heading.shape}")
+            object.__setattr__(self, "heading", heading)
+
+    # --- construction -------------------------------------------------------------------------------------------
+    @classmethod
+    def from_local_position(cls, timestamp_us, x, y, z, heading=None, window_s: float = WINDOW_S) -> "Trajectory":
+        """Apply the paper's pipeline to raw NED local-position samples (z down, as logged).
+
+        Subtract the first timestamp and position, flip z to up, and average consecutive ``window_s`` windows
+        (each output point is the mean time, position and heading of the samples in its window).
+        """
+        ts = np.asarray(timestamp_us, dtype=np.int64)
+        if ts.size == 0:
+            raise ValueError("no samples")
+        order = np.argsort(ts, kind="stable")
+        ts = ts[order]
+        cols = [np.asarray(c, dtype=np.float64)[order] for c in (x, y, z)]
+        rel_t = ts - ts[0]
+        rel = np.column_stack([cols[0] - cols[0][0], cols[1] - cols[1][0], -(cols[2] - cols[2][0])])
+        h = None if heading is None else np.asarray(heading, dtype=np.float64)[order]
+        if h is not None:
+            h = h - h[0]
+        window_us = int(round(window_s * 1e6))
+        bins = rel_t // window_us
+        starts = np.flatnonzero(np.r_[True, bins[1:] != bins[:-1]])
+        counts = np.diff(np.r_[starts, bins.size])
+        mean_t = np.add.reduceat(rel_t.astype(np.float64), starts) / counts
+        mean_xyz = np.add.reduceat(rel, starts, axis=0) / counts[:, None]
+        mean_h = None if h is None else np.add.reduceat(h, starts) / counts
+        return cls(mean_t / 1e6, mean_xyz, mean_h)
+
+    @classmethod
+    def from_array(cls, xyz, dt: float = WINDOW_S) -> "Trajectory":
+        """A trajectory from an (N, 3) array of positions sampled every ``dt`` seconds."""
+        xyz = np.asarray(xyz, dtype=np.float64)
+        return cls(np.arange(len(xyz)) * dt, xyz)
+
+    @classmethod
+    def read_csv(cls, path) -> "Trajectory":
+        """Read the reference format: header ``timestamp,x,y,z,r``, timestamp in microseconds."""
+        try:
+            data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        except (OSError, ValueError) as err:
+            raise LogFormatError(f"{os.fspath(path)}: not a trajectory CSV (timestamp,x,y,z,r): {err}") from err
+        if data.shape[1] < 4:
+            raise LogFormatError(f"{os.fspath(path)}: expected columns timestamp,x,y,z[,r], got {data.shape[1]}")
+        heading = data[:, 4] if data.shape[1] > 4 else None
+        return cls(data[:, 0] / 1e6, data[:, 1:4], heading)
+
+    def write_csv(self, path) -> None:
+        """Write the reference format read by :meth:`read_csv`."""
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["timestamp", "x", "y", "z", "r"])
+            heading = self.heading if self.heading is not None else np.zeros(len(self))
+            for ti, p, h in zip(self.t, self.xyz, heading):
+                w.writerow([int(round(ti * 1e6)), f"{p[0]:.6f}", f"{p[1]:.6f}", f"{p[2]:.6f}", f"{h:.6f}"])
+
+    # --- views and derived values -------------------------------------------------------------------------------
+    def __len__(self) -> int:
+        return self.xyz.shape[0]
+
+    def __array__(self, dtype=None, copy=None):
+        return self.xyz if dtype is None else self.xyz.astype(dtype)
+
+    def __eq__(self, other) -> bool:
+        if not isinstance(other, Trajectory):
+            return NotImplemented
+        same_heading = (self.heading is None and other.heading is None) or (
+            self.heading is not None and other.heading is not None and np.array_equal(self.heading, other.heading)
+        )
+        return np.array_equal(self.t, other.t) and np.array_equal(self.xyz, other.xyz) and same_heading
+
+    __hash__ = None  # arrays inside: compare by value, do not hash
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.xyz[:, 0]
+
+    @property
+    def y(self) -> np.ndarray:
+        return self.xyz[:, 1]
+
+    @property
+    def z(self) -> np.ndarray:
+        return self.xyz[:, 2]
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self) else 0.0
+
+    def shifted(self, dx: float = 0.0, dy: float = 0.0, dz: float = 0.0) -> "Trajectory":
+        """The same trajectory translated by (dx, dy, dz) metres."""
+        return Trajectory(self.t, self.xyz + np.array([dx, dy, dz]), self.heading)
+
+    def between(self, t0: float, t1: float) -> "Trajectory":
+        """The samples with t0 <= t <= t1 (times unchanged)."""
+        m = (self.t >= t0) & (self.t <= t1)
+        return Trajectory(self.t[m], self.xyz[m], None if self.heading is None else self.heading[m])
+
+    def extent(self) -> dict[str, tuple[float, float]]:
+        """(min, max) of x, y and z."""
+        return {k: (float(self.xyz[:, i].min()), float(self.xyz[:, i].max())) for i, k in enumerate("xyz")}
+
+
+def as_points(trajectory) -> np.ndarray:
+    """An (N, 3) float64 array from a Trajectory or an array-like of points."""
+    if isinstance(trajectory, Trajectory):
+        return trajectory.xyz
+    pts = np.asarray(trajectory, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3):
+        raise ValueError(f"expected a Trajectory or an (N, 3) array, got shape {pts.shape}")
+    return pts

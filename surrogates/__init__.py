@@ -1,0 +1,1 @@
+"""Surrogate models trained on past evaluations; pre-screening of mutations."""
