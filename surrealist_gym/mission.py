@@ -285,6 +285,9 @@ def _build_mission(name, rows, planned, home, skipped, cruise_speed) -> Mission:
                 raise MissionError(f"{where}: latitude/longitude ({lat}, {lon}) out of range")
             north, east = geo_to_local(lat, lon, lat0, lon0)
             up = float(alt) - alt0 if frame in _GLOBAL_FRAMES else float(alt)
+            if up < 0 and cmd != Command.LAND:
+                warnings.warn(f"{where}: altitude {up:.1f} m is below home (frame {frame}: "
+                              f"{'AMSL' if frame in _GLOBAL_FRAMES else 'relative'})", stacklevel=3)
             radius = float(p[1] or 0.0) if cmd == Command.WAYPOINT else 0.0
             hold = float(p[0] or 0.0) if cmd == Command.WAYPOINT else 0.0
             items.append(MissionItem(cmd, north, east, up, acceptance_radius=radius, hold_s=hold))

@@ -1,0 +1,115 @@
+import dataclasses
+import shutil
+import warnings
+
+import pytest
+
+import surrealist_gym as sg
+from surrealist_gym.testcase import Obstacle, Shape
+from tests.conftest import EXPERIMENTS, SHARED_DATA
+
+COMPETITION = SHARED_DATA / "competition" / "case_studies"
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        yield
+
+
+def test_rq1_seed1_loads_unchanged():
+    test = sg.load_test(EXPERIMENTS / "rq1-seed1.yaml")
+    assert test.obstacles == (Obstacle(3, 3, 3, -8.64, 1.74, 0, 158.8),)
+    assert [it.command for it in test.mission.items] == [sg.Command.TAKEOFF, sg.Command.LAND]
+    assert test.params["NAV_ACC_RAD"] == 0.5 and test.params["MIS_TAKEOFF_ALT"] == 1.0
+    assert test.commands == (sg.RuntimeCommand(1, 3, 0, 0, 0.5, 0),)
+    assert test.reference_log.endswith("case0.ulg")
+
+
+@pytest.mark.parametrize("name", ["rq1-seed2.yaml", "rq2-seed.yaml"])
+def test_other_seeds_load(name):
+    test = sg.load_test(EXPERIMENTS / name)
+    assert test.mission is not None and len(test.obstacles) >= 1
+
+
+def test_rq2_seed_has_two_boxes_first_one_moves():
+    test = sg.load_test(EXPERIMENTS / "rq2-seed.yaml")
+    assert [o.to_list() for o in test.obstacles] == [[7.625, 5.0625, 20, 17.1875, 17.53125, 0, 0],
+                                                     [7.625, 5.0625, 20, -6.375, 17.53125, 0, 0]]
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_competition_case_studies_load(n):
+    test = sg.load_test(COMPETITION / f"mission{n}.yaml")
+    assert test.obstacles == () and test.mission.items[0].command == sg.Command.TAKEOFF
+    assert test.params  # mission-params.csv
+
+
+def test_bundled_seed_resolves_by_file_name():
+    test = sg.load_test(sg.data_path("rq1-seed1.yaml"))
+    assert test.mission.items == sg.load_test(EXPERIMENTS / "rq1-seed1.yaml").mission.items
+
+
+@pytest.mark.parametrize("legacy", [False, True])
+def test_save_load_round_trip(tmp_path, legacy):
+    test = sg.load_test(EXPERIMENTS / "rq2-seed.yaml")
+    test = dataclasses.replace(test, wind=sg.Wind(velocity_mean=2.0, direction=(0, 1, 0)),
+                               obstacles=test.obstacles + (Obstacle(2, 2, 5, 40, -20, 0, 0, Shape.CYLINDER),))
+    sg.save_test(test, tmp_path / "t.yaml", legacy=legacy)
+    again = sg.load_test(tmp_path / "t.yaml")
+    assert again == test
+    assert again.key() == test.key()
+
+
+def test_dict_obstacle_form_with_angle_and_tree(tmp_path):
+    shutil.copy(EXPERIMENTS / "case0.plan", tmp_path / "case0.plan")
+    (tmp_path / "t.yaml").write_text(
+        "robot:\n  mission_file: case0.plan\nsimulation:\n  obstacles:\n"
+        "  - size: {l: 2, w: 3, h: 4}\n    position: {x: 1, y: 2, z: 0, angle: 30}\n    shape: BOX\n"
+        "  - size: {l: 1, h: 6}\n    position: {x: 10, y: 10}\n    shape: TREE\n")
+    test = sg.load_test(tmp_path / "t.yaml")
+    assert test.obstacles[0] == Obstacle(2, 3, 4, 1, 2, 0, 30)
+    assert test.obstacles[1].shape == Shape.CYLINDER and test.obstacles[1].w == 1
+
+
+@pytest.mark.parametrize("yaml_text,reason", [
+    ("simulation:\n  obstacles: [3,3,0, 1,1,0, 0]\n", "size 'h' must be positive"),
+    ("simulation:\n  obstacles: [3,3,3, 0,0,0, 0, 3,3,3, 1,1,0, 0]\n", "overlap"),
+    ("simulation:\n  obstacles: [3,3,3, 0,0,0]\n", "7 numbers per obstacle"),
+    ("simulation:\n  obstacles: [3,3,'big', 0,0,0, 0]\n", "'h': expected a finite number"),
+    ("robot:\n  mission_file: nowhere.plan\n", "file 'nowhere.plan' not found"),
+    ("robot:\n  mision_file: x.plan\n", "robot.mision_file: unknown field"),
+    ("simulaton:\n  speed: 1\n", "unknown section 'simulaton'"),
+    ("robot:\n  params: {MPC_XY_CRUISE: fast}\n", "params.MPC_XY_CRUISE: expected a number"),
+    ("simulation:\n  wind: {velocity_mean: -1}\n", "wind field 'velocity_mean'"),
+    ("simulation: [\n", "invalid YAML"),
+    ("- just a list\n", "expected a mapping"),
+])
+def test_invalid_yaml_one_line_error(tmp_path, yaml_text, reason):
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml_text)
+    with pytest.raises(sg.InvalidTestCase) as err:
+        sg.load_test(path)
+    message = str(err.value)
+    assert reason in message and "bad.yaml" in message and "\n" not in message
+
+
+def test_mutation_makes_a_new_value():
+    test = sg.load_test(EXPERIMENTS / "rq1-seed1.yaml")
+    moved = test.with_obstacles([dataclasses.replace(test.obstacles[0], x=-4.0)])
+    assert moved is not test and moved.obstacles[0].x == -4.0 and test.obstacles[0].x == -8.64
+    assert moved.key() != test.key()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        test.obstacles[0].x = 1.0
+    with pytest.raises(TypeError):
+        test.params["NAV_ACC_RAD"] = 3
+
+
+def test_overlap_geometry():
+    a = Obstacle(4, 2, 3, 0, 0, 0, 0)
+    assert a.overlaps(Obstacle(2, 2, 3, 2.9, 0, 0, 0))
+    assert not a.overlaps(Obstacle(2, 2, 3, 3.1, 0, 0, 0))
+    assert not a.overlaps(Obstacle(2, 2, 3, 0, 0, 3.5, 0))  # stacked above
+    assert a.overlaps(Obstacle(2, 2, 3, 0, 2.3, 0, 45))  # rotated corner reaches in
+    assert not a.overlaps(Obstacle(1, 1, 3, 0, 3, 0, 0, Shape.CYLINDER))
