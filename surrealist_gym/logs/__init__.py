@@ -1,0 +1,69 @@
+"""Flight logs: PX4 ULog (pyulog), MAVLink telemetry logs and ArduPilot DataFlash logs (pymavlink).
+
+:func:`read_flight` picks the reader from the file's first bytes (else its extension) and returns an immutable
+:class:`FlightLog`. :func:`write_ulog` writes a simulated run as a ULog that the same reader loads.
+
+Example::
+
+    import surrealist_gym as sg
+    flight = sg.read_flight("case0.ulg")
+    flight.trajectory                          # the paper's pipeline (86 points for case0)
+"""
+from __future__ import annotations
+
+import os
+
+from ..errors import LogFormatError
+from .flight import FlightLog, LocalPositions, ModeSpan
+from .ulog import ULOG_MAGIC, read_ulog
+
+_DATAFLASH_MAGIC = b"\xa3\x95"
+_MAVLINK_STX = (0xFE, 0xFD)
+_EXTENSIONS = {".ulg": "ulog", ".tlog": "tlog", ".mav": "tlog", ".bin": "dataflash"}
+
+
+def detect_format(path) -> str | None:
+    """``"ulog"``, ``"tlog"`` or ``"dataflash"`` from the first bytes of the file, else from its extension."""
+    name = os.fspath(path)
+    try:
+        with open(name, "rb") as f:
+            head = f.read(16)
+    except OSError as err:
+        raise LogFormatError(f"{name}: cannot read log file ({err.strerror or err})") from err
+    if head.startswith(ULOG_MAGIC):
+        return "ulog"
+    if head.startswith(_DATAFLASH_MAGIC):
+        return "dataflash"
+    if len(head) > 8 and head[8] in _MAVLINK_STX:  # 8-byte timestamp, then a MAVLink frame
+        return "tlog"
+    return _EXTENSIONS.get(os.path.splitext(name)[1].lower())
+
+
+def read_flight(path) -> FlightLog:
+    """Read a flight log (.ulg, .tlog, .bin) into a :class:`FlightLog`.
+
+    Raises:
+        LogFormatError: unknown format, unreadable, corrupt, or no valid position (one line naming the file).
+    """
+    name = os.fspath(path)
+    fmt = detect_format(name)
+    if fmt == "ulog":
+        return read_ulog(name)
+    if fmt == "tlog":
+        from .mavlink import read_tlog
+        return read_tlog(name)
+    if fmt == "dataflash":
+        from .mavlink import read_dataflash
+        return read_dataflash(name)
+    raise LogFormatError(f"{name}: unknown log format (expected a PX4 ULog .ulg, a MAVLink .tlog "
+                         f"or an ArduPilot DataFlash .bin)")
+
+
+def __getattr__(name: str):
+    if name == "write_ulog":
+        from .ulog_writer import write_ulog
+        return write_ulog
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["FlightLog", "LocalPositions", "ModeSpan", "detect_format", "read_flight", "read_ulog", "write_ulog"]
