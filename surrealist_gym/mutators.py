@@ -1,0 +1,91 @@
+"""Test-property mutators (paper section 3.1.2): parameterised operators on one obstacle of a test case.
+
+``Mutator.apply(test, value)`` returns a new test case whose obstacle is changed by ``value`` relative to ``test``
+(additive mutators; the default value 0 leaves the test unchanged). Moves are along the world axes (x north,
+y east); resizes keep the footprint centre and the base; rotations are in degrees, positive from north toward east.
+An invalid result (non-positive size, overlapping obstacles) raises :class:`InvalidTestCase`: never simulate it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from enum import Enum
+
+from .errors import InvalidTestCase
+from .testcase import TestCase
+
+
+class MutatorKind(str, Enum):
+    """What a mutator changes; the value is the name the authors' code uses (order y, x, r, sy, sx, sz)."""
+
+    MOVE_X = "x"
+    MOVE_Y = "y"
+    ROTATE = "r"
+    RESIZE_L = "sx"
+    RESIZE_W = "sy"
+    RESIZE_H = "sz"
+
+
+_FIELD = {MutatorKind.MOVE_X: "x", MutatorKind.MOVE_Y: "y", MutatorKind.ROTATE: "r",
+          MutatorKind.RESIZE_L: "l", MutatorKind.RESIZE_W: "w", MutatorKind.RESIZE_H: "h"}
+MOVE_KINDS = (MutatorKind.MOVE_Y, MutatorKind.MOVE_X)
+AUTHORS_ORDER = (MutatorKind.MOVE_Y, MutatorKind.MOVE_X, MutatorKind.ROTATE,
+                 MutatorKind.RESIZE_W, MutatorKind.RESIZE_L, MutatorKind.RESIZE_H)
+
+
+@dataclass(frozen=True, slots=True)
+class Mutator:
+    """An additive mutator of one obstacle property.
+
+    Attributes:
+        obstacle: index of the obstacle in ``TestCase.obstacles``.
+        kind: the property changed.
+        default_step: the first step of the adaptive line search (4 m, or 30 degrees for rotations).
+        min_step: the smallest step worth trying (0.1 m / 0.5 degrees in the authors' run).
+        low, high: the range of the mutator value (used by agents that sample it, e.g. random search).
+    """
+
+    obstacle: int
+    kind: MutatorKind
+    default_step: float = 0.0
+    min_step: float = 0.0
+    low: float = -20.0
+    high: float = 20.0
+    default_value: float = 0.0
+
+    def __post_init__(self):
+        kind = MutatorKind(self.kind)
+        object.__setattr__(self, "kind", kind)
+        rotation = kind == MutatorKind.ROTATE
+        if self.default_step == 0.0:
+            object.__setattr__(self, "default_step", 30.0 if rotation else 4.0)
+        if self.min_step == 0.0:
+            object.__setattr__(self, "min_step", 0.5 if rotation else 0.1)
+        if rotation and (self.low, self.high) == (-20.0, 20.0):
+            object.__setattr__(self, "low", -180.0)
+            object.__setattr__(self, "high", 180.0)
+
+    @property
+    def name(self) -> str:
+        return f"obstacle{self.obstacle}.{self.kind.value}"
+
+    def apply(self, test: TestCase, value: float) -> TestCase:
+        """A new test case with this mutator applied by ``value``; raises InvalidTestCase if the result is invalid."""
+        if not 0 <= self.obstacle < len(test.obstacles):
+            raise InvalidTestCase(f"mutator {self.name}: the test has {len(test.obstacles)} obstacle(s)")
+        if value == self.default_value:
+            return test
+        obstacles = list(test.obstacles)
+        old = obstacles[self.obstacle]
+        attr = _FIELD[self.kind]
+        new_value = getattr(old, attr) + value
+        try:
+            obstacles[self.obstacle] = replace(old, **{attr: new_value})
+            return test.with_obstacles(obstacles)
+        except InvalidTestCase as err:
+            raise InvalidTestCase(f"mutator {self.name} by {value:+g}: {err}") from err
+
+
+def default_mutators(test: TestCase, kinds=AUTHORS_ORDER, obstacles=None) -> tuple[Mutator, ...]:
+    """Mutators of the given kinds for each obstacle (all by default), obstacle by obstacle, kinds in order."""
+    indices = range(len(test.obstacles)) if obstacles is None else obstacles
+    return tuple(Mutator(i, k) for i in indices for k in kinds)
