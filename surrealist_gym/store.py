@@ -1,0 +1,107 @@
+"""The evaluation store: every evaluation of a search is written to SQLite as it completes.
+
+One row per evaluated test case, keyed by ``TestCase.key()``: the test (Aerialist-like dict as JSON), the seeds of
+its runs, the per-run summaries (status, minimum distances, duration), the fitness and timings. A search that is
+interrupted resumes from the store and loses nothing; surrogate models train on it.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sqlite3
+import time
+from dataclasses import dataclass, field
+from typing import Iterator
+
+from .errors import SurrealistError
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS evaluations (
+    id          INTEGER PRIMARY KEY AUTOINCREMENT,
+    search      TEXT NOT NULL DEFAULT '',
+    test_key    TEXT NOT NULL,
+    test        TEXT NOT NULL,
+    seeds       TEXT NOT NULL,
+    runs        TEXT NOT NULL,
+    fitness     REAL,
+    info        TEXT NOT NULL DEFAULT '{}',
+    sim_seconds REAL NOT NULL DEFAULT 0,
+    wall_seconds REAL NOT NULL DEFAULT 0,
+    created     REAL NOT NULL
+);
+CREATE INDEX IF NOT EXISTS evaluations_key ON evaluations (search, test_key);
+"""
+
+
+@dataclass(frozen=True, slots=True)
+class StoredEvaluation:
+    """One stored evaluation (``runs`` is a tuple of per-run summary dicts)."""
+
+    test_key: str
+    test: dict
+    seeds: tuple[int, ...]
+    runs: tuple[dict, ...]
+    fitness: float | None
+    info: dict = field(default_factory=dict)
+    sim_seconds: float = 0.0
+    wall_seconds: float = 0.0
+    search: str = ""
+    id: int | None = None
+    created: float | None = None
+
+
+class EvaluationStore:
+    """A SQLite file of evaluations; ``search`` names separate several searches in one file."""
+
+    def __init__(self, path, search: str = ""):
+        self.path = os.fspath(path)
+        self.search = search
+        try:
+            self._db = sqlite3.connect(self.path)
+            self._db.executescript(_SCHEMA)
+        except sqlite3.DatabaseError as err:
+            raise SurrealistError(f"{self.path}: not an evaluation store ({err})") from err
+
+    def add(self, evaluation: StoredEvaluation) -> int:
+        """Write one evaluation and commit at once; returns its id."""
+        cur = self._db.execute(
+            "INSERT INTO evaluations (search, test_key, test, seeds, runs, fitness, info, sim_seconds, wall_seconds,"
+            " created) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (evaluation.search or self.search, evaluation.test_key, json.dumps(evaluation.test),
+             json.dumps(list(evaluation.seeds)), json.dumps(list(evaluation.runs)), evaluation.fitness,
+             json.dumps(evaluation.info), evaluation.sim_seconds, evaluation.wall_seconds, time.time()))
+        self._db.commit()
+        return int(cur.lastrowid)
+
+    def get(self, test_key: str) -> StoredEvaluation | None:
+        """The first stored evaluation of this test in this search, or None."""
+        row = self._db.execute(
+            "SELECT * FROM evaluations WHERE search = ? AND test_key = ? ORDER BY id LIMIT 1",
+            (self.search, test_key)).fetchone()
+        return None if row is None else self._from_row(row)
+
+    def __iter__(self) -> Iterator[StoredEvaluation]:
+        cur = self._db.execute("SELECT * FROM evaluations WHERE search = ? ORDER BY id", (self.search,))
+        for row in cur:
+            yield self._from_row(row)
+
+    def __len__(self) -> int:
+        return self._db.execute("SELECT COUNT(*) FROM evaluations WHERE search = ?", (self.search,)).fetchone()[0]
+
+    def searches(self) -> list[str]:
+        return [r[0] for r in self._db.execute("SELECT DISTINCT search FROM evaluations ORDER BY search")]
+
+    def close(self) -> None:
+        self._db.close()
+
+    def __enter__(self) -> "EvaluationStore":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    @staticmethod
+    def _from_row(row) -> StoredEvaluation:
+        (id_, search, key, test, seeds, runs, fitness, info, sim_s, wall_s, created) = row
+        return StoredEvaluation(key, json.loads(test), tuple(json.loads(seeds)), tuple(json.loads(runs)), fitness,
+                                json.loads(info), sim_s, wall_s, search, id_, created)
