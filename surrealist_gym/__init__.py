@@ -21,6 +21,19 @@ from .trajectory import Trajectory
 __version__ = "0.1.0"
 
 
+def _register_envs() -> None:
+    """Register the envs (idempotent); entry points are strings, so nothing heavy is imported until make()."""
+    from gymnasium.envs.registration import register, registry
+
+    for env_id, entry_point in (("Surrealist-Replicate-v0", "surrealist_gym.envs.replicate:ReplicateEnv"),
+                                ("Surrealist-Generate-v0", "surrealist_gym.envs.generate:GenerateEnv")):
+        if env_id not in registry:
+            register(id=env_id, entry_point=entry_point)
+
+
+_register_envs()
+
+
 def data_path(name: str) -> str:
     """Path of a file bundled with the package: ``case0.ulg``, ``case0.plan``, ``rq1-seed1.yaml``, ..."""
     return str(_resources.files(__package__).joinpath("data", name))

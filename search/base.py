@@ -1,0 +1,135 @@
+"""The agent interface: ask/tell, and the one ``run`` built on them.
+
+An agent proposes actions for a Surrealist env: an action is a vector with one value per mutator of the env
+(``env.unwrapped.mutators``), the mutation of the env's seed test. The env owns the budget, the memo and the
+fitness, so every agent is measured the same way. Subclasses implement ``_setup``, ``_ask`` and ``_tell``; RL
+agents, whose libraries are run-style, override ``run`` and return the same :class:`SearchResult`.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+
+@dataclass(frozen=True, slots=True)
+class SearchResult:
+    """What a search found: the best action (mutation vector), its fitness and test, and the cost to find it."""
+
+    best_action: np.ndarray
+    best_fitness: float
+    best_info: dict
+    evaluations: int             # evaluations that cost budget (simulated), in total
+    evaluations_to_best: int     # evaluations spent until the best was found (the paper's "needed budget")
+    history: tuple[float, ...] = field(default=())  # fitness of every step, in order
+    stop_reason: str = ""
+
+
+class Agent(ABC):
+    """Base class of every search agent (ask/tell; ``run`` drives an env with them)."""
+
+    name = "agent"
+
+    def __init__(self, seed: int | None = None):
+        self.seed = seed
+        self._pending: list[np.ndarray] | None = None
+        self._env = None
+        self._best: tuple[np.ndarray, float, dict] | None = None
+        self._evaluations = 0
+        self._evaluations_to_best = 0
+        self._history: list[float] = []
+        self._stop_reason = ""
+
+    # --- public verbs: bookkeeping, then the subclass hook ------------------------------------------------------
+    def setup(self, env, info: dict) -> None:
+        """Bind to an env just reset; ``info`` is the reset info (it carries the seed test's fitness)."""
+        self._env = env.unwrapped
+        self.rng = np.random.default_rng(self.seed)
+        zero = np.zeros(len(self._env.mutators))
+        self._best = (zero, float(info["fitness"]), info)
+        self._evaluations = int(info.get("evaluations", 1))
+        self._evaluations_to_best = self._evaluations
+        self._history = [float(info["fitness"])]
+        self._stop_reason = ""
+        self._pending = None
+        self._setup(info)
+
+    def ask(self) -> list[np.ndarray]:
+        """The next actions to evaluate (one or more)."""
+        if self._env is None:
+            raise RuntimeError("call setup(env, info) (or run) before ask()")
+        if self._pending is not None:
+            raise RuntimeError("ask() called twice without tell()")
+        actions = [np.asarray(a, dtype=np.float64) for a in self._ask()]
+        self._pending = actions
+        return actions
+
+    def tell(self, actions: Sequence[np.ndarray], fitnesses: Sequence[float], infos: Sequence[dict]) -> None:
+        """Report the fitness (and env info) of actions from the last ask(); a prefix is allowed if the budget ran out."""
+        if self._pending is None:
+            raise RuntimeError("tell() called without a pending ask()")
+        if not (len(actions) == len(fitnesses) == len(infos)) or len(actions) > len(self._pending):
+            raise ValueError(f"tell() got {len(actions)} actions, {len(fitnesses)} fitnesses and {len(infos)} infos "
+                             f"for {len(self._pending)} asked")
+        self._pending = None
+        for action, fitness, info in zip(actions, fitnesses, infos):
+            self._history.append(float(fitness))
+            self._evaluations = int(info.get("evaluations", self._evaluations))
+            if fitness > self._best[1]:
+                self._best = (np.asarray(action, dtype=np.float64), float(fitness), info)
+                self._evaluations_to_best = self._evaluations
+        self._tell(list(actions), [float(f) for f in fitnesses], list(infos))
+
+    def stop(self) -> dict:
+        """A non-empty dict (with the reason) once the agent has nothing more to propose."""
+        return {"reason": self._stop_reason} if self._stop_reason else {}
+
+    @property
+    def result(self) -> SearchResult:
+        if self._best is None:
+            raise RuntimeError("no result before a run")
+        action, fitness, info = self._best
+        return SearchResult(action, fitness, info, self._evaluations, self._evaluations_to_best,
+                            tuple(self._history), self._stop_reason)
+
+    def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
+        """Search on ``env`` until the agent stops or the env's budget is spent."""
+        _, info = env.reset(seed=seed if seed is not None else self.seed)
+        self.setup(env, info)
+        done = False
+        while not done and not self.stop():
+            actions = self.ask()
+            fitnesses, infos = [], []
+            for action in actions:
+                _, reward, terminated, truncated, step_info = env.step(action)
+                fitnesses.append(reward)
+                infos.append(step_info)
+                if callback is not None:
+                    callback(step_info)
+                if terminated or truncated:
+                    done = True
+                    self._stop_reason = self._stop_reason or "budget spent"
+                    break
+            self.tell(actions[:len(fitnesses)], fitnesses, infos)
+        return self.result
+
+    # --- hooks --------------------------------------------------------------------------------------------------
+    def _setup(self, info: dict) -> None:
+        """Prepare a new search (the env is ``self._env``)."""
+
+    @abstractmethod
+    def _ask(self) -> list[np.ndarray]:
+        ...
+
+    @abstractmethod
+    def _tell(self, actions: list[np.ndarray], fitnesses: list[float], infos: list[dict]) -> None:
+        ...
+
+    def _finish(self, reason: str) -> None:
+        self._stop_reason = reason
+
+    @property
+    def best(self) -> tuple[np.ndarray, float, dict[str, Any]]:
+        return self._best

@@ -1,0 +1,4 @@
+"""Gymnasium environments (registered by ``import surrealist_gym``)."""
+from .base import SurrealistEnv
+
+__all__ = ["SurrealistEnv"]

@@ -1,0 +1,32 @@
+"""Surrealist-Generate-v0: find nearby test cases that make the UAV unsafe or crash (paper RQ2).
+
+Reward: paper eq. 2, ``-(sum_dist + 2 min_dist)`` of the riskiest of the n runs (or their mean). Defaults are the
+paper's RQ2: the ``auto1.plan`` mission with the ``rq2-seed.yaml`` obstacles, 10 runs, budget 50, move mutators
+on the first obstacle only.
+"""
+from __future__ import annotations
+
+from ..evaluation import GenerationObjective
+from ..mutators import MOVE_KINDS, default_mutators
+from ..testcase import TestCase, load_test
+from .base import SurrealistEnv
+
+
+class GenerateEnv(SurrealistEnv):
+    """Generate risky tests in the neighbourhood of a seed test."""
+
+    def __init__(self, seed_test=None, runs: int = 10, budget: int = 50, mutators=None,
+                 aggregate: str = "riskiest", executor=None, store=None, random_seed: int = 0, sim_config=None,
+                 workers: int | None = None):
+        from .. import data_path
+
+        if seed_test is None:
+            seed_test = data_path("rq2-seed.yaml")
+        if not isinstance(seed_test, TestCase):
+            seed_test = load_test(seed_test)
+        self.aggregate = aggregate
+        mutators = mutators or default_mutators(seed_test, MOVE_KINDS, obstacles=[0])
+        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers)
+
+    def _objective(self):
+        return GenerationObjective(self.aggregate)

@@ -1,0 +1,56 @@
+"""Surrealist-Replicate-v0: find the obstacle layout whose simulated flight matches a real one (paper RQ1).
+
+Reward: ``-DTW(real trajectory, average of the n simulated runs)``. Defaults are the paper's RQ1: the bundled
+real flight ``case0.ulg``, the paper's seed 1, 5 runs per evaluation, budget 100, all mutators on every obstacle
+(authors' order y, x, r, sy, sx, sz).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from ..evaluation import ReplicationObjective
+from ..mutators import AUTHORS_ORDER, default_mutators
+from ..testcase import Obstacle, TestCase, load_test
+from .base import SurrealistEnv
+
+
+class ReplicateEnv(SurrealistEnv):
+    """Replicate a real flight by searching obstacle placements."""
+
+    def __init__(self, reference_log=None, seed_test=None, runs: int = 5, budget: int = 100, mutators=None,
+                 averaging: str = "dba", executor=None, store=None, random_seed: int = 0, sim_config=None,
+                 workers: int | None = None):
+        from .. import data_path
+        from ..logs import read_flight
+
+        if seed_test is None:
+            seed_test = load_test(data_path("rq1-seed1.yaml")) if reference_log is None else None
+        elif not isinstance(seed_test, TestCase):
+            seed_test = load_test(seed_test)
+        if reference_log is None:
+            reference_log = seed_test.reference_log or data_path("case0.ulg")
+        self.flight = read_flight(reference_log)
+        if seed_test is None:
+            seed_test = seed_from_flight(self.flight)
+        seed_test = replace(seed_test, reference_log=str(self.flight.path))
+        self.reference = self.flight.trajectory
+        self.averaging = averaging
+        mutators = mutators or default_mutators(seed_test, AUTHORS_ORDER)
+        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers)
+
+    def _objective(self):
+        return ReplicationObjective(self.reference, self.averaging)
+
+
+def seed_from_flight(flight, size: float = 3.0) -> TestCase:
+    """The paper's seed for a log without one: a size^3 box near the middle of the straight path, turned along it."""
+    if flight.mission is None or len(flight.mission.waypoints) < 2:
+        from ..errors import InvalidTestCase
+        raise InvalidTestCase(f"{flight.path}: the log holds no mission with two positions to place a seed obstacle "
+                              f"on; give a seed test (--seed TEST.yaml)")
+    (x0, y0, _), (x1, y1, _) = flight.mission.waypoints[0], flight.mission.waypoints[-1]
+    yaw = math.degrees(math.atan2(y1 - y0, x1 - x0))
+    box = Obstacle(size, size, size, (x0 + x1) / 2, (y0 + y1) / 2, 0.0, yaw)
+    return TestCase(mission=flight.mission, obstacles=(box,), params=dict(flight.params),
+                    reference_log=str(flight.path))
