@@ -6,7 +6,6 @@ and the memo is exact. Objectives turn the runs of a test into a fitness (maximi
 """
 from __future__ import annotations
 
-import hashlib
 import time
 from dataclasses import dataclass, field
 from typing import Protocol, Sequence
@@ -20,17 +19,12 @@ from .testcase import TestCase
 from .trajectory import Trajectory
 
 
-def run_seed(test: TestCase, base_seed: int, index: int) -> int:
-    """The seed of run ``index`` of ``test`` under ``base_seed`` (stable across processes and sessions)."""
-    digest = hashlib.sha256(f"{test.key()}|{base_seed}|{index}".encode()).digest()
-    return int.from_bytes(digest[:4], "little")
-
-
 @dataclass(frozen=True, slots=True)
 class RunSummary:
     """What the search keeps of one run."""
 
-    seed: int
+    seed: int                # base seed; the run's noise derives from (test, seed, index)
+    index: int
     status: str
     min_distance: float      # 3-D, over all obstacles [m]
     min_distance_2d: float   # footprint distance, as the paper [m]
@@ -39,11 +33,11 @@ class RunSummary:
     @classmethod
     def of(cls, run) -> "RunSummary":
         status = getattr(run.status, "value", run.status)
-        return cls(int(run.seed), str(status), float(run.min_distance), float(run.min_distance_2d),
-                   float(run.duration))
+        return cls(int(run.seed), int(run.index), str(status), float(run.min_distance),
+                   float(run.min_distance_2d), float(run.duration))
 
     def to_dict(self) -> dict:
-        return {"seed": self.seed, "status": self.status, "min_distance": self.min_distance,
+        return {"seed": self.seed, "index": self.index, "status": self.status, "min_distance": self.min_distance,
                 "min_distance_2d": self.min_distance_2d, "duration": self.duration}
 
 
@@ -56,7 +50,9 @@ class Evaluation:
         terms: the fitness terms (replication: dtw, frechet; generation: sum_dist, min_dist, riskiest, unsafe).
         trajectory: the trajectory the fitness judged (replication: the average of the runs; generation: the
             riskiest run), (N, 3) [m].
-        memo: True when answered from the memo or the store (no simulation, no budget).
+        memo: True when answered from this search's memo (no simulation, no budget).
+        replayed: True when read back from the store of an interrupted search (no simulation; it cost budget
+            when it was first simulated, so it costs budget again and a resumed search retraces the original).
     """
 
     test: TestCase
@@ -66,6 +62,7 @@ class Evaluation:
     trajectory: np.ndarray | None = None
     memo: bool = False
     sim_seconds: float = 0.0
+    replayed: bool = False
 
     @property
     def statuses(self) -> tuple[str, ...]:
@@ -129,6 +126,7 @@ class Evaluator:
         self.store = store
         self._memo: dict[str, Evaluation] = {}
         self.simulations = 0
+        self.replayed = 0
 
     def evaluate(self, test: TestCase) -> Evaluation:
         key = test.key()
@@ -139,18 +137,18 @@ class Evaluator:
             if stored is not None:
                 evaluation = _from_stored(test, stored)
                 self._memo[key] = evaluation
+                self.replayed += 1
                 return evaluation
-        seeds = [run_seed(test, self.seed, i) for i in range(self.runs)]
         start = time.perf_counter()
-        results = self.executor.run(test, seeds, self.sim_config)
+        results = self.executor.run(test, range(self.runs), self.seed, self.sim_config)
         sim_seconds = time.perf_counter() - start
-        self.simulations += len(seeds)
+        self.simulations += self.runs
         fitness, terms, trajectory = self.objective(test, results)
         evaluation = Evaluation(test, float(fitness), tuple(RunSummary.of(r) for r in results), terms,
                                 trajectory, False, sim_seconds)
         self._memo[key] = evaluation
         if self.store is not None:
-            self.store.add(_to_stored(evaluation, seeds))
+            self.store.add(_to_stored(evaluation, [self.seed] * self.runs))
         return evaluation
 
     def close(self) -> None:
@@ -159,7 +157,7 @@ class Evaluator:
 
 def _as_memo(evaluation: Evaluation) -> Evaluation:
     return Evaluation(evaluation.test, evaluation.fitness, evaluation.runs, evaluation.terms, evaluation.trajectory,
-                      True, 0.0)
+                      memo=True)
 
 
 def _to_stored(evaluation: Evaluation, seeds) -> StoredEvaluation:
@@ -176,4 +174,5 @@ def _from_stored(test: TestCase, stored: StoredEvaluation) -> Evaluation:
     trajectory = stored.info.get("trajectory")
     fitness = -np.inf if stored.fitness is None else stored.fitness
     return Evaluation(test, fitness, tuple(RunSummary(**r) for r in stored.runs), stored.info.get("terms", {}),
-                      None if trajectory is None else np.asarray(trajectory), True, 0.0)
+                      None if trajectory is None else np.asarray(trajectory), memo=False,
+                      sim_seconds=stored.sim_seconds, replayed=True)

@@ -1,45 +1,61 @@
 """Where simulations run: in this process, on a local process pool (default), or on a Dask cluster.
 
-Every executor answers ``run(test, seeds, config) -> list of RunResult`` (one per seed, in order). A simulation
-that raises is retried once on its own; if it fails again it becomes a run with status ``error`` and the search
-goes on.
+Every executor answers ``run(test, indices, seed, config) -> list of RunResult`` (one per run index, in order;
+run i of a test draws its noise from (test, seed, i)). A simulation that raises is retried once on its own; if it
+fails again it becomes a run with status ``error`` and the search goes on.
 """
 from __future__ import annotations
 
 import math
 import os
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from typing import Sequence
 
+import numpy as np
+
 from .errors import DependencyNotInstalled
+from .trajectory import Trajectory
 
 
-def fly(test, seeds: Sequence[int], config) -> list:
-    """Simulate the runs of ``test`` with the given seeds in one batch (the function the workers call)."""
-    from .sim import simulate_seeds
+def fly(test, indices: Sequence[int], seed: int, config) -> list:
+    """Simulate the runs of ``test`` with the given indices together (the function the workers call)."""
+    from .sim import simulate_runs
 
-    return list(simulate_seeds(test, seeds, config))
+    return simulate_runs(test, list(indices), seed, config)
 
 
-def _fly_with_retry(submit, test, seeds, config) -> list:
-    """Run chunks via ``submit(test, seeds, config) -> future``; retry a failed chunk run by run, once."""
-    from .sim import failed_run
+@dataclass(frozen=True, slots=True)
+class FailedRun:
+    """A run whose simulation raised twice: status ``error``, no trajectory."""
 
+    seed: int
+    index: int
+    message: str
+    status: str = "error"
+    min_distance: float = float("inf")
+    min_distance_2d: float = float("inf")
+    duration: float = 0.0
+    trajectory: Trajectory = Trajectory(np.zeros(0), np.zeros((0, 3)))
+
+
+def _fly_with_retry(submit, test, indices, seed, config) -> list:
+    """Run a chunk via ``submit(test, indices, seed, config) -> future``; retry a failed chunk run by run, once."""
     try:
-        return submit(test, seeds, config).result()
+        return submit(test, indices, seed, config).result()
     except Exception:  # noqa: BLE001 - any worker failure costs a retry, not the search
         results = []
-        for seed in seeds:
+        for index in indices:
             try:
-                results.extend(submit(test, [seed], config).result())
+                results.extend(submit(test, [index], seed, config).result())
             except Exception as err:  # noqa: BLE001
-                results.append(failed_run(seed, f"{type(err).__name__}: {err}"))
+                results.append(FailedRun(seed, index, f"{type(err).__name__}: {err}"))
         return results
 
 
-def _chunks(seeds: Sequence[int], parts: int) -> list[list[int]]:
-    size = max(1, math.ceil(len(seeds) / max(parts, 1)))
-    return [list(seeds[i:i + size]) for i in range(0, len(seeds), size)]
+def _chunks(indices: Sequence[int], parts: int) -> list[list[int]]:
+    size = max(1, math.ceil(len(indices) / max(parts, 1)))
+    return [list(indices[i:i + size]) for i in range(0, len(indices), size)]
 
 
 class _Done:
@@ -57,8 +73,8 @@ class InlineExecutor:
 
     workers = 1
 
-    def run(self, test, seeds, config) -> list:
-        return _fly_with_retry(lambda *a: _Done(fly, *a), test, list(seeds), config)
+    def run(self, test, indices, seed, config) -> list:
+        return _fly_with_retry(lambda *a: _Done(fly, *a), test, list(indices), seed, config)
 
     def close(self) -> None:
         pass
@@ -71,16 +87,17 @@ class LocalPoolExecutor:
         self.workers = workers or max(1, min(os.cpu_count() or 1, 8))
         self._pool: ProcessPoolExecutor | None = None
 
-    def _submit(self, test, seeds, config):
+    def _submit(self, test, indices, seed, config):
         if self._pool is None:
             self._pool = ProcessPoolExecutor(max_workers=self.workers)
-        return self._pool.submit(fly, test, seeds, config)
+        return self._pool.submit(fly, test, indices, seed, config)
 
-    def run(self, test, seeds, config) -> list:
-        futures = [(chunk, self._submit(test, chunk, config)) for chunk in _chunks(list(seeds), self.workers)]
+    def run(self, test, indices, seed, config) -> list:
+        futures = [(chunk, self._submit(test, chunk, seed, config)) for chunk in _chunks(list(indices), self.workers)]
         results = []
         for chunk, future in futures:
-            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, self._submit, a), test, chunk, config))
+            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, self._submit, a), test, chunk, seed,
+                                           config))
         return results
 
     def close(self) -> None:
@@ -114,13 +131,15 @@ class DaskExecutor:
         self._own = not isinstance(scheduler, Client)
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
 
-    def run(self, test, seeds, config) -> list:
-        futures = [(chunk, self.client.submit(fly, test, chunk, config, pure=False))
-                   for chunk in _chunks(list(seeds), self.workers)]
+    def _submit(self, test, indices, seed, config):
+        return self.client.submit(fly, test, indices, seed, config, pure=False)
+
+    def run(self, test, indices, seed, config) -> list:
+        futures = [(chunk, self._submit(test, chunk, seed, config)) for chunk in _chunks(list(indices), self.workers)]
         results = []
         for chunk, future in futures:
-            submit = (lambda t, s, c: self.client.submit(fly, t, s, c, pure=False))
-            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, submit, a), test, chunk, config))
+            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, self._submit, a), test, chunk, seed,
+                                           config))
         return results
 
     def close(self) -> None:

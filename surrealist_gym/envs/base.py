@@ -54,6 +54,7 @@ class SurrealistEnv(gym.Env):
         self._steps = 0
         self._seed_fitness = 0.0
         self._best: Evaluation | None = None
+        self._seed_evaluation: Evaluation | None = None
         self._last_action = np.zeros(n)
 
     # --- hooks ----------------------------------------------------------------------------------------------------
@@ -82,6 +83,11 @@ class SurrealistEnv(gym.Env):
         return self._budget - self._evaluations
 
     @property
+    def seed_evaluation(self) -> Evaluation | None:
+        """The evaluation of the seed test (made by reset)."""
+        return self._seed_evaluation
+
+    @property
     def best(self) -> Evaluation | None:
         """The best evaluation of this episode."""
         return self._best
@@ -101,6 +107,7 @@ class SurrealistEnv(gym.Env):
         self._last_action = np.zeros(len(self._mutators))
         evaluation = self._evaluate(self._seed_test)
         self._seed_fitness = evaluation.fitness if np.isfinite(evaluation.fitness) else -1.0
+        self._seed_evaluation = evaluation
         self._best = evaluation
         return self._observation(evaluation.fitness), self._info(evaluation, None)
 
@@ -152,8 +159,10 @@ class SurrealistEnv(gym.Env):
         if evaluation is None:
             info.update(fitness=self._penalty(), memo=False, statuses=(), min_distances=(), terms={})
             return info
-        info.update(fitness=evaluation.fitness, memo=evaluation.memo, test=evaluation.test,
-                    statuses=evaluation.statuses, min_distances=tuple(r.min_distance for r in evaluation.runs),
-                    min_distances_2d=tuple(r.min_distance_2d for r in evaluation.runs), terms=evaluation.terms,
+        runs = evaluation.runs
+        info.update(fitness=evaluation.fitness, memo=evaluation.memo, replayed=evaluation.replayed,
+                    test=evaluation.test, statuses=evaluation.statuses,
+                    min_distances=tuple(r.min_distance for r in runs),
+                    min_distances_2d=tuple(r.min_distance_2d for r in runs), terms=evaluation.terms,
                     trajectory=evaluation.trajectory, sim_seconds=evaluation.sim_seconds)
         return info

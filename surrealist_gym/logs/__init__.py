@@ -15,10 +15,10 @@ import os
 
 from ..errors import LogFormatError
 from .flight import FlightLog, LocalPositions, ModeSpan
+from .mavlink import DATAFLASH_MAGIC, MAVLINK_STX, read_dataflash, read_tlog
 from .ulog import ULOG_MAGIC, read_ulog
+from .ulog_writer import write_ulog
 
-_DATAFLASH_MAGIC = b"\xa3\x95"
-_MAVLINK_STX = (0xFE, 0xFD)
 _EXTENSIONS = {".ulg": "ulog", ".tlog": "tlog", ".mav": "tlog", ".bin": "dataflash"}
 
 
@@ -32,9 +32,9 @@ def detect_format(path) -> str | None:
         raise LogFormatError(f"{name}: cannot read log file ({err.strerror or err})") from err
     if head.startswith(ULOG_MAGIC):
         return "ulog"
-    if head.startswith(_DATAFLASH_MAGIC):
+    if head.startswith(DATAFLASH_MAGIC):
         return "dataflash"
-    if len(head) > 8 and head[8] in _MAVLINK_STX:  # 8-byte timestamp, then a MAVLink frame
+    if len(head) > 8 and head[8] in MAVLINK_STX:  # 8-byte timestamp, then a MAVLink frame
         return "tlog"
     return _EXTENSIONS.get(os.path.splitext(name)[1].lower())
 
@@ -42,28 +42,24 @@ def detect_format(path) -> str | None:
 def read_flight(path) -> FlightLog:
     """Read a flight log (.ulg, .tlog, .bin) into a :class:`FlightLog`.
 
+    Args:
+        path: the log file (str or PathLike), or a binary file holding a ULog.
+
     Raises:
         LogFormatError: unknown format, unreadable, corrupt, or no valid position (one line naming the file).
     """
+    if hasattr(path, "read"):
+        return read_ulog(path)  # pymavlink reads files by name only
     name = os.fspath(path)
     fmt = detect_format(name)
     if fmt == "ulog":
         return read_ulog(name)
     if fmt == "tlog":
-        from .mavlink import read_tlog
         return read_tlog(name)
     if fmt == "dataflash":
-        from .mavlink import read_dataflash
         return read_dataflash(name)
     raise LogFormatError(f"{name}: unknown log format (expected a PX4 ULog .ulg, a MAVLink .tlog "
                          f"or an ArduPilot DataFlash .bin)")
-
-
-def __getattr__(name: str):
-    if name == "write_ulog":
-        from .ulog_writer import write_ulog
-        return write_ulog
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = ["FlightLog", "LocalPositions", "ModeSpan", "detect_format", "read_flight", "read_ulog", "write_ulog"]

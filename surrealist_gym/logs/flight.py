@@ -170,10 +170,15 @@ class FlightLog:
                                  f"({span.start:.1f} s to {span.end:.1f} s)")
         return part.trajectory()
 
-    def mission_trajectory(self) -> Trajectory:
-        """:meth:`segment` of AUTO_MISSION (PX4) or AUTO (ArduPilot), whichever the log has."""
+    @property
+    def mission_mode(self) -> str | None:
+        """The autonomous mission mode the log enters: AUTO_MISSION (PX4) or AUTO (ArduPilot), else None."""
         names = {s.mode for s in self.modes}
-        return self.segment("AUTO" if "AUTO_MISSION" not in names and "AUTO" in names else "AUTO_MISSION")
+        return next((m for m in ("AUTO_MISSION", "AUTO") if m in names), None)
+
+    def mission_trajectory(self) -> Trajectory:
+        """:meth:`segment` of the mission mode (:attr:`mission_mode`); LogFormatError when there is none."""
+        return self.segment(self.mission_mode or "AUTO_MISSION")
 
 
 def mode_spans(times_us, names, start_us: int, end_us: int) -> tuple[ModeSpan, ...]:
@@ -181,10 +186,11 @@ def mode_spans(times_us, names, start_us: int, end_us: int) -> tuple[ModeSpan, .
     spans: list[ModeSpan] = []
     cur_name, cur_t = None, None
     for t, name in zip(times_us, names):
+        t = max(int(t), start_us)
         if name != cur_name:
             if cur_name is not None:
-                spans.append(ModeSpan((cur_t - start_us) / 1e6, (int(t) - start_us) / 1e6, cur_name))
-            cur_name, cur_t = name, int(t)
+                spans.append(ModeSpan((cur_t - start_us) / 1e6, (t - start_us) / 1e6, cur_name))
+            cur_name, cur_t = name, t
     if cur_name is not None:
         spans.append(ModeSpan((cur_t - start_us) / 1e6, (max(end_us, cur_t) - start_us) / 1e6, cur_name))
     return tuple(spans)

@@ -12,6 +12,7 @@ import io
 import logging
 import math
 import os
+import warnings
 
 import numpy as np
 
@@ -87,7 +88,7 @@ def read_ulog(source) -> FlightLog:
         if d.multi_id == 0 or d.name not in data:
             data[d.name] = d.data
     if ulog.file_corruption:
-        log.debug("%s: pyulog reports file corruption; decoded what it could", name)
+        warnings.warn(f"{name}: corrupt data in the ULog was skipped (pyulog resynchronised)", stacklevel=2)
     positions = _positions(name, data.get("vehicle_local_position"))
     params = dict(ulog.initial_parameters)
     start_us, end_us = int(ulog.start_timestamp), int(ulog.last_timestamp)
@@ -115,14 +116,15 @@ def _positions(name: str, lp) -> LocalPositions:
     if missing:
         raise LogFormatError(f"no valid local position in {name} (vehicle_local_position lacks {', '.join(missing)})")
     ok = np.isfinite(lp["x"]) & np.isfinite(lp["y"]) & np.isfinite(lp["z"])
-    why = "x/y/z never finite"
+    if not np.any(ok):
+        raise LogFormatError(f"no valid local position in {name} (vehicle_local_position x/y/z never finite)")
     for flag in ("xy_valid", "z_valid"):
+        if flag in lp and not np.any(ok & (lp[flag] != 0)):
+            raise LogFormatError(f"no valid local position in {name} (vehicle_local_position.{flag} never set)")
         if flag in lp:
-            if not np.any(ok & (lp[flag] != 0)):
-                why = f"vehicle_local_position.{flag} never set"
             ok &= lp[flag] != 0
     if not np.any(ok):
-        raise LogFormatError(f"no valid local position in {name} ({why})")
+        raise LogFormatError(f"no valid local position in {name} (xy_valid and z_valid never set together)")
     heading = lp.get("heading", lp.get("yaw"))
     return LocalPositions(lp["timestamp"][ok].astype(np.int64), lp["x"][ok], lp["y"][ok], lp["z"][ok],
                           None if heading is None else heading[ok])

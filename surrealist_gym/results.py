@@ -1,0 +1,145 @@
+"""The results folder of a search: best test (Aerialist YAML + its mission), evaluations.csv, summary.json, and
+plots in the paper's style (Figure 1: real vs seed vs best; Figure 2: fitness over evaluations and per-run
+minimum distances of seed and best).
+"""
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from .fitness import UNSAFE_DISTANCE_M
+from .mission import write_plan
+from .store import EvaluationStore
+from .testcase import save_test
+
+
+def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> dict:
+    """Write the results folder of a finished (or interrupted) search; returns the summary."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    env = env.unwrapped
+    seed_eval, best_eval = env.seed_evaluation, env.best
+    best_test = best_eval.test
+    if best_test.mission is not None:
+        write_plan(best_test.mission, out / "best-mission.plan")
+        best_test = replace(best_test, mission_file=str((out / "best-mission.plan").resolve()), params_file=None)
+    save_test(best_test, out / "best.yaml")
+    rows = write_evaluations_csv(env.evaluator.store, out / "evaluations.csv")
+    summary = {
+        "problem": problem,
+        "seed_fitness": seed_eval.fitness, "best_fitness": best_eval.fitness,
+        "seed_terms": seed_eval.terms, "best_terms": best_eval.terms,
+        "evaluations": result.evaluations, "evaluations_to_best": result.evaluations_to_best,
+        "simulations": env.evaluator.simulations, "runs_per_evaluation": env.evaluator.runs,
+        "budget": env.budget, "stop_reason": result.stop_reason,
+        "wall_seconds": round(wall_seconds, 3),
+        "seconds_per_evaluation": round(wall_seconds / max(1, rows), 3),
+        "seed_obstacles": [o.to_dict() for o in seed_eval.test.obstacles],
+        "best_obstacles": [o.to_dict() for o in best_eval.test.obstacles],
+        "best_action": {m.name: float(v) for m, v in zip(env.mutators, result.best_action)},
+        "seed_runs": [r.to_dict() for r in seed_eval.runs], "best_runs": [r.to_dict() for r in best_eval.runs],
+        "best_unsafe_rate": _rate(best_eval, lambda r: r.min_distance_2d < UNSAFE_DISTANCE_M),
+        "best_crash_rate": _rate(best_eval, lambda r: r.status == "collision"),
+    }
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
+    reference = getattr(env, "reference", None)
+    plot_search(out, seed_eval, best_eval, result.history, reference)
+    return summary
+
+
+def _rate(evaluation, predicate) -> float:
+    return sum(1 for r in evaluation.runs if predicate(r)) / max(1, len(evaluation.runs))
+
+
+def _jsonable(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    return str(value)
+
+
+def write_evaluations_csv(store: EvaluationStore | None, path: Path) -> int:
+    """One row per stored evaluation, in order; returns the number of rows."""
+    rows = list(store) if store is not None else []
+    n_obstacles = max((len(r.test.get("obstacles", [])) for r in rows), default=0)
+    header = ["evaluation", "fitness", "runs", "collisions", "unsafe", "min_distance", "sim_seconds"]
+    for i in range(n_obstacles):
+        header += [f"o{i}_{k}" for k in ("l", "w", "h", "x", "y", "z", "r")]
+    with open(path, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(header)
+        for n, row in enumerate(rows, start=1):
+            dists = [r["min_distance_2d"] for r in row.runs]
+            line = [n, row.fitness, len(row.runs), sum(r["status"] == "collision" for r in row.runs),
+                    sum(d < UNSAFE_DISTANCE_M for d in dists), min(dists, default=""), round(row.sim_seconds, 4)]
+            for o in row.test.get("obstacles", []):
+                line += [o["size"]["l"], o["size"]["w"], o["size"]["h"], o["position"]["x"], o["position"]["y"],
+                         o["position"]["z"], o["position"]["r"]]
+            writer.writerow(line)
+    return len(rows)
+
+
+def plot_search(out: Path, seed_eval, best_eval, history, reference=None) -> None:
+    """figure1.png (trajectories and obstacles), fitness.png and min_distances.png."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle, Polygon
+
+    fig, (top, alt) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [1.2, 1]})
+    lines = [("real flight", reference, "k", 2.5), ("seed", seed_eval.trajectory, "tab:orange", 1.5),
+             ("best", best_eval.trajectory, "tab:blue", 1.5)]
+    for label, traj, colour, width in lines:
+        if traj is None:
+            continue
+        xyz = np.asarray(traj)
+        top.plot(xyz[:, 1], xyz[:, 0], color=colour, lw=width, label=label)
+        alt.plot(np.arange(len(xyz)) * 0.5, xyz[:, 2], color=colour, lw=width, label=label)
+    for evaluation, colour, style in ((seed_eval, "tab:orange", "--"), (best_eval, "tab:blue", "-")):
+        for o in evaluation.test.obstacles:
+            if o.shape.value == "cylinder":
+                patch = Circle((o.y, o.x), o.l / 2, fill=False, ec=colour, ls=style)
+            else:
+                patch = Polygon([(y, x) for x, y in o.footprint()], closed=True, fill=False, ec=colour, ls=style)
+            top.add_patch(patch)
+    top.set_xlabel("east [m]")
+    top.set_ylabel("north [m]")
+    top.set_aspect("equal", adjustable="datalim")
+    top.legend(loc="best", fontsize=8)
+    top.set_title("top view (obstacles: seed dashed, best solid)")
+    alt.set_xlabel("time [s] (0.5 s windows)")
+    alt.set_ylabel("altitude [m]")
+    alt.set_title("altitude")
+    fig.tight_layout()
+    fig.savefig(out / "figure1.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    values = np.array(history, dtype=float)
+    finite = np.isfinite(values)
+    ax.plot(np.flatnonzero(finite), values[finite], ".", color="0.5", label="evaluated")
+    ax.plot(np.maximum.accumulate(np.where(finite, values, -np.inf)), color="tab:blue", label="best so far")
+    ax.set_xlabel("step (0 = seed)")
+    ax.set_ylabel("fitness")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "fitness.png", dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(5, 4))
+    data = [[r.min_distance_2d for r in seed_eval.runs], [r.min_distance_2d for r in best_eval.runs]]
+    ax.boxplot(data)
+    ax.set_xticks([1, 2], ["seed", "best"])
+    for i, d in enumerate(data, start=1):
+        ax.plot(np.full(len(d), i), d, "o", alpha=0.6)
+    ax.axhline(UNSAFE_DISTANCE_M, color="tab:red", ls="--", label="unsafe (1.5 m)")
+    ax.set_ylabel("minimum distance to obstacles per run [m]")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "min_distances.png", dpi=110)
+    plt.close(fig)
