@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -36,7 +36,7 @@ class FailedRun:
     min_distance: float = float("inf")
     min_distance_2d: float = float("inf")
     duration: float = 0.0
-    trajectory: Trajectory = Trajectory(np.zeros(0), np.zeros((0, 3)))
+    trajectory: Trajectory = field(default_factory=lambda: Trajectory(np.zeros(0), np.zeros((0, 3))))
 
 
 def _fly_with_retry(submit, test, indices, seed, config) -> list:

@@ -22,7 +22,9 @@ KEY_PARAMS = ("MPC_XY_CRUISE", "MPC_XY_VEL_MAX", "MPC_TKO_SPEED", "MPC_LAND_SPEE
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist inspect``."""
-    parser.add_argument("log", metavar="LOG", help="flight log: PX4 .ulg, MAVLink .tlog or ArduPilot DataFlash .bin")
+    parser.add_argument("log", metavar="LOG", nargs="?", default=None,
+                        help="flight log: PX4 .ulg, MAVLink .tlog or ArduPilot DataFlash .bin "
+                             "(default: the bundled real flight case0.ulg)")
     parser.add_argument("--out", metavar="PNG", help="plot file (default: ./<log name>.png in the current directory)")
     parser.add_argument("--no-plot", action="store_true", help="do not write the plot")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -111,8 +113,11 @@ def _text(info: dict) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Read the log, print its summary (text or JSON) and write the plot."""
+    from .. import data_path
     from ..logs import read_flight
 
+    if args.log is None:
+        args.log = data_path("case0.ulg")
     flight = read_flight(args.log)
     info = summary(flight)
     if not args.no_plot:
