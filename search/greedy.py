@@ -60,7 +60,7 @@ class AdaptiveGreedy(Agent):
 
     def _setup(self, info: dict) -> None:
         action, fitness, info = self.best
-        self._current = (action.copy(), fitness, info)
+        self._current = (self._env.values_for(action), fitness, info)
         self._search = self._global_search()
         self._advance(None)
 
@@ -106,12 +106,12 @@ class AdaptiveGreedy(Agent):
             up, down = base.copy(), base.copy()
             up[index] += param + step
             down[index] += param - step
-            results = yield [up, down]
+            results = yield [self._env.action_for(up), self._env.action_for(down)]
             local_budget -= sum(0 if info.get("memo") else 1 for _, info in results)
             if len(results) < 2:
                 break
             (f_up, i_up), (f_down, i_down) = results
-            if f_up > new_best[1] + cfg.epsilon and f_up > f_down:
+            if f_up > new_best[1] + cfg.epsilon and f_up > f_down:  # best solutions kept as mutator values
                 new_best, param = (up, f_up, i_up), param + step
                 positive, negative, no_improvement = positive + 1, 0, 0
                 if positive > cfg.max_seq:

@@ -50,9 +50,8 @@ class Evaluation:
         terms: the fitness terms (replication: dtw, frechet; generation: sum_dist, min_dist, riskiest, unsafe).
         trajectory: the trajectory the fitness judged (replication: the average of the runs; generation: the
             riskiest run), (N, 3) [m].
-        memo: True when answered from this search's memo (no simulation, no budget).
-        replayed: True when read back from the store of an interrupted search (no simulation; it cost budget
-            when it was first simulated, so it costs budget again and a resumed search retraces the original).
+        cached: True when answered without simulating: from the evaluator's memory or its store (a resumed
+            search reads back what the interrupted one simulated). Whether it costs budget is the env's call.
     """
 
     test: TestCase
@@ -60,9 +59,8 @@ class Evaluation:
     runs: tuple[RunSummary, ...]
     terms: dict = field(default_factory=dict)
     trajectory: np.ndarray | None = None
-    memo: bool = False
+    cached: bool = False
     sim_seconds: float = 0.0
-    replayed: bool = False
 
     @property
     def statuses(self) -> tuple[str, ...]:
@@ -126,18 +124,16 @@ class Evaluator:
         self.store = store
         self._memo: dict[str, Evaluation] = {}
         self.simulations = 0
-        self.replayed = 0
 
     def evaluate(self, test: TestCase) -> Evaluation:
         key = test.key()
         if key in self._memo:
-            return _as_memo(self._memo[key])
+            return _as_cached(self._memo[key])
         if self.store is not None:
             stored = self.store.get(key)
             if stored is not None:
                 evaluation = _from_stored(test, stored)
                 self._memo[key] = evaluation
-                self.replayed += 1
                 return evaluation
         start = time.perf_counter()
         results = self.executor.run(test, range(self.runs), self.seed, self.sim_config)
@@ -145,7 +141,7 @@ class Evaluator:
         self.simulations += self.runs
         fitness, terms, trajectory = self.objective(test, results)
         evaluation = Evaluation(test, float(fitness), tuple(RunSummary.of(r) for r in results), terms,
-                                trajectory, False, sim_seconds)
+                                trajectory, cached=False, sim_seconds=sim_seconds)
         self._memo[key] = evaluation
         if self.store is not None:
             self.store.add(_to_stored(evaluation, [self.seed] * self.runs))
@@ -155,9 +151,9 @@ class Evaluator:
         self.executor.close()
 
 
-def _as_memo(evaluation: Evaluation) -> Evaluation:
+def _as_cached(evaluation: Evaluation) -> Evaluation:
     return Evaluation(evaluation.test, evaluation.fitness, evaluation.runs, evaluation.terms, evaluation.trajectory,
-                      memo=True)
+                      cached=True)
 
 
 def _to_stored(evaluation: Evaluation, seeds) -> StoredEvaluation:
@@ -174,5 +170,5 @@ def _from_stored(test: TestCase, stored: StoredEvaluation) -> Evaluation:
     trajectory = stored.info.get("trajectory")
     fitness = -np.inf if stored.fitness is None else stored.fitness
     return Evaluation(test, fitness, tuple(RunSummary(**r) for r in stored.runs), stored.info.get("terms", {}),
-                      None if trajectory is None else np.asarray(trajectory), memo=False,
-                      sim_seconds=stored.sim_seconds, replayed=True)
+                      None if trajectory is None else np.asarray(trajectory), cached=True,
+                      sim_seconds=stored.sim_seconds)

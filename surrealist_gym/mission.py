@@ -63,7 +63,7 @@ def local_to_geo(north: float, east: float, lat0: float, lon0: float) -> tuple[f
     return math.degrees(lat), math.degrees(lon)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, eq=False)
 class MissionItem:
     """One flyable mission item in the local frame (x north, y east, z up above home, metres).
 
@@ -82,6 +82,17 @@ class MissionItem:
     @property
     def has_position(self) -> bool:
         return not math.isnan(self.x)
+
+    def _values(self) -> tuple:
+        return (int(self.command), self.x, self.y, self.z, self.acceptance_radius, self.speed, self.hold_s)
+
+    def __eq__(self, other) -> bool:  # nan fields (no position, no speed) compare equal to nan
+        if not isinstance(other, MissionItem):
+            return NotImplemented
+        return all(a == b or (a != a and b != b) for a, b in zip(self._values(), other._values()))
+
+    def __hash__(self) -> int:
+        return hash(tuple(repr(v) for v in self._values()))
 
 
 @dataclass(frozen=True, slots=True)

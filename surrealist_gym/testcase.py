@@ -13,10 +13,10 @@ import os
 from dataclasses import dataclass, field, fields, replace
 from enum import Enum
 from pathlib import Path
-from types import MappingProxyType
 from typing import Mapping
 
 from .errors import InvalidTestCase, MissionError
+from .frozendict import FrozenDict
 from .mission import Mission, read_mission
 
 
@@ -201,7 +201,7 @@ class TestCase:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise InvalidTestCase(f"params.{k}: expected a number, got {v!r}")
             params[str(k)] = v
-        object.__setattr__(self, "params", MappingProxyType(params))
+        object.__setattr__(self, "params", FrozenDict(params))
         if self.mission is not None and not isinstance(self.mission, Mission):
             raise InvalidTestCase(f"mission: expected a Mission, got {type(self.mission).__name__}")
 

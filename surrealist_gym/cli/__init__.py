@@ -16,6 +16,8 @@ from ..errors import SurrealistError
 COMMANDS = {
     "inspect": ("surrealist_gym.cli.inspect", "describe a flight log (.ulg, .tlog, .bin) and plot it"),
     "simulate": ("surrealist_gym.cli.simulate", "fly a test case in the simulator and report each run"),
+    "replicate": ("surrealist_gym.cli.replicate", "find obstacles that make the simulated flight match a real log"),
+    "generate": ("surrealist_gym.cli.generate", "find nearby tests that make the UAV unsafe or crash"),
 }
 
 

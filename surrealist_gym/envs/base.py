@@ -1,17 +1,22 @@
 """The template env: an episode is one search from a seed test case.
 
-Action: one value per mutator (``env.mutators``): the mutation of the SEED test, in the mutators' units (metres,
-degrees), within each mutator's range. The adaptive greedy's move "param +/- step on one mutator around the best"
-is an action vector; CMA-ES and RL propose whole vectors. Reward: the fitness of the mutated test (maximised).
+Action: one value in [-1, 1] per mutator (``env.mutators``): the mutation of the SEED test, scaled to each
+mutator's range (``values_for(action)`` gives metres and degrees, ``action_for(values)`` the inverse). The adaptive
+greedy's move "param +/- step on one mutator around the best" is an action vector; CMA-ES and RL propose whole
+vectors. Reward: the fitness of the mutated test (maximised).
 Observation: the action last evaluated (scaled to [-1, 1]), the last and best fitness (scaled by the seed's), and
-the share of the budget left. ``reset`` evaluates the seed (one evaluation). A test evaluated before comes from
-the memo and costs no budget; an invalid test (overlap, non-positive size) is not simulated, costs no budget and
+the share of the budget left. ``reset`` evaluates the seed (one evaluation). A test evaluated before in the
+episode comes from the memo and costs no budget (``info["memo"]``); one evaluated in an earlier episode, or by an
+interrupted search whose store is reused, is not simulated again but costs budget, so an episode does not depend
+on what came before it (and a resumed search retraces the interrupted one); ``info["simulations"]`` counts the
+runs the episode's evaluations stand for; an invalid test (overlap, non-positive size) is not simulated, costs no budget and
 scores a penalty. The episode is truncated when the budget is spent.
 
 Subclasses override only the hooks ``_objective`` and, if needed, ``_terminated``.
 """
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 
 import gymnasium as gym
@@ -45,14 +50,17 @@ class SurrealistEnv(gym.Env):
             executor = LocalPoolExecutor(workers)
         self.evaluator = Evaluator(self._objective(), runs=runs, seed=random_seed, sim_config=sim_config,
                                    executor=executor, store=store)
-        low = np.array([m.low for m in self._mutators], dtype=np.float32)
-        high = np.array([m.high for m in self._mutators], dtype=np.float32)
-        self.action_space = gym.spaces.Box(low, high, dtype=np.float32)
         n = len(self._mutators)
+        low = np.array([m.low for m in self._mutators], dtype=np.float64)
+        high = np.array([m.high for m in self._mutators], dtype=np.float64)
+        self._centre, self._half_range = (high + low) / 2, (high - low) / 2
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(n + 3,), dtype=np.float32)
         self._evaluations = 0
+        self._simulations = 0
         self._steps = 0
         self._seed_fitness = 0.0
+        self._episode_keys: set[str] = set()
         self._best: Evaluation | None = None
         self._seed_evaluation: Evaluation | None = None
         self._last_action = np.zeros(n)
@@ -92,77 +100,91 @@ class SurrealistEnv(gym.Env):
         """The best evaluation of this episode."""
         return self._best
 
+    def values_for(self, action) -> np.ndarray:
+        """Mutator values (metres, degrees) of an action in [-1, 1]."""
+        return self._centre + np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0) * self._half_range
+
+    def action_for(self, values) -> np.ndarray:
+        """The action in [-1, 1] of mutator values (metres, degrees); values beyond a mutator's range are clipped."""
+        return np.clip((np.asarray(values, dtype=np.float64) - self._centre) / self._half_range, -1.0, 1.0)
+
     def test_for(self, action) -> TestCase:
         """The test case an action stands for (raises InvalidTestCase if it is invalid)."""
         test = self._seed_test
-        for mutator, value in zip(self._mutators, np.asarray(action, dtype=np.float64)):
-            test = mutator.apply(test, float(value))
+        for mutator, value in zip(self._mutators, self.values_for(action)):
+            test = mutator.apply(test, float(np.round(value, 9)))
         return test
 
     # --- gymnasium API ----------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         self._evaluations = 0
+        self._simulations = 0
         self._steps = 0
+        self._episode_keys: set[str] = set()
         self._last_action = np.zeros(len(self._mutators))
-        evaluation = self._evaluate(self._seed_test)
+        evaluation, _ = self._evaluate(self._seed_test)
         self._seed_fitness = evaluation.fitness if np.isfinite(evaluation.fitness) else -1.0
         self._seed_evaluation = evaluation
         self._best = evaluation
-        return self._observation(evaluation.fitness), self._info(evaluation, None)
+        return self._observation(evaluation.fitness), self._info(evaluation, None, False)
 
     def step(self, action):
-        action = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), self.action_space.low,
-                         self.action_space.high)
+        action = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
         self._steps += 1
         self._last_action = action
         try:
             test = self.test_for(action)
         except InvalidTestCase as err:
-            evaluation, invalid = None, str(err)
+            evaluation, invalid, memo = None, str(err), False
         else:
-            evaluation, invalid = self._evaluate(test), None
+            (evaluation, memo), invalid = self._evaluate(test), None
             if evaluation.fitness > self._best.fitness:
                 self._best = evaluation
         fitness = self._penalty() if evaluation is None or not np.isfinite(evaluation.fitness) else evaluation.fitness
         truncated = self.budget_left <= 0 or self._steps >= INVALID_STEPS_FACTOR * self._budget
         terminated = evaluation is not None and self._terminated(evaluation)
-        return self._observation(fitness), float(fitness), terminated, truncated, self._info(evaluation, invalid)
+        info = self._info(evaluation, invalid, memo)
+        return self._observation(fitness), float(fitness), terminated, truncated, info
 
     def close(self):
         self.evaluator.close()
 
     # --- internals ------------------------------------------------------------------------------------------------
-    def _evaluate(self, test: TestCase) -> Evaluation:
-        evaluation = self.evaluator.evaluate(test)
-        if not evaluation.memo:
+    def _evaluate(self, test: TestCase) -> tuple[Evaluation, bool]:
+        """Evaluate; a test already evaluated in this episode is a memo hit and costs no budget."""
+        key = test.key()
+        memo = key in self._episode_keys
+        if not memo:
+            self._episode_keys.add(key)
             self._evaluations += 1
-        return evaluation
+        evaluation = self.evaluator.evaluate(test)
+        if not memo:
+            self._simulations += len(evaluation.runs)
+        return evaluation, memo
 
     def _penalty(self) -> float:
         return self._seed_fitness - max(1.0, abs(self._seed_fitness))
 
     def _observation(self, fitness: float) -> np.ndarray:
-        span = np.maximum(self.action_space.high - self.action_space.low, 1e-9) / 2
-        centre = (self.action_space.high + self.action_space.low) / 2
         scale = max(1.0, abs(self._seed_fitness))
         fitness = fitness if np.isfinite(fitness) else self._penalty()
         best = self._best.fitness if self._best is not None and np.isfinite(self._best.fitness) else fitness
-        obs = np.concatenate([(self._last_action - centre) / span,
+        obs = np.concatenate([self._last_action,
                               [fitness / scale, best / scale, self.budget_left / self._budget]])
         return obs.astype(np.float32)
 
-    def _info(self, evaluation: Evaluation | None, invalid: str | None) -> dict:
+    def _info(self, evaluation: Evaluation | None, invalid: str | None, memo: bool) -> dict:
         info = {"invalid": invalid, "evaluations": self._evaluations, "budget_left": self.budget_left,
-                "simulations": self.evaluator.simulations,
+                "simulations": self._simulations,
                 "best_fitness": None if self._best is None else self._best.fitness}
         if evaluation is None:
             info.update(fitness=self._penalty(), memo=False, statuses=(), min_distances=(), terms={})
             return info
         runs = evaluation.runs
-        info.update(fitness=evaluation.fitness, memo=evaluation.memo, replayed=evaluation.replayed,
+        info.update(fitness=evaluation.fitness, memo=memo,
                     test=evaluation.test, statuses=evaluation.statuses,
                     min_distances=tuple(r.min_distance for r in runs),
-                    min_distances_2d=tuple(r.min_distance_2d for r in runs), terms=evaluation.terms,
-                    trajectory=evaluation.trajectory, sim_seconds=evaluation.sim_seconds)
+                    min_distances_2d=tuple(r.min_distance_2d for r in runs), terms=copy.deepcopy(evaluation.terms),
+                    trajectory=None if evaluation.trajectory is None else evaluation.trajectory.copy())
         return info

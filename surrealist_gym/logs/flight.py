@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from types import MappingProxyType
+from ..frozendict import FrozenDict
 from typing import Mapping
 
 import numpy as np
@@ -129,7 +129,7 @@ class FlightLog:
     def __post_init__(self):
         if len(self.positions) == 0:
             raise LogFormatError(f"no valid local position in {self.path}")
-        object.__setattr__(self, "params", MappingProxyType(dict(self.params)))
+        object.__setattr__(self, "params", FrozenDict(dict(self.params)))
         object.__setattr__(self, "modes", tuple(self.modes))
         if self.home is not None:
             object.__setattr__(self, "home", tuple(float(v) for v in self.home))

@@ -1,0 +1,91 @@
+"""What `surrealist replicate` and `surrealist generate` share: options, progress bar, results folder, resume."""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+
+from ..errors import SurrealistError
+
+RUN_FILE = "run.json"
+
+
+def add_search_arguments(parser, budget: int, runs: int) -> None:
+    parser.add_argument("--budget", type=int, default=budget, help=f"evaluations allowed (default {budget})")
+    parser.add_argument("--runs", type=int, default=runs, help=f"simulations per evaluation (default {runs})")
+    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
+                        help="run the simulations on a Dask cluster (tcp://host:port)")
+    parser.add_argument("--preset", default="authors", choices=["paper", "authors"],
+                        help="greedy hyper-parameters: paper Table 1, or the authors' own run (default)")
+    parser.add_argument("--random-seed", type=int, default=0, help="base seed of the simulation noise")
+    parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
+    parser.add_argument("--resume", default=None, metavar="DIR",
+                        help="resume an interrupted search from its results folder (same options)")
+
+
+def prepare(args, command: str, keys: tuple[str, ...]) -> tuple[Path, dict]:
+    """The results folder and the options of this search (read back from run.json when resuming)."""
+    if args.resume:
+        out = Path(args.resume)
+        saved = out / RUN_FILE
+        if not saved.is_file():
+            raise SurrealistError(f"{out}: not a results folder to resume (no {RUN_FILE})")
+        options = json.loads(saved.read_text())
+        if options.get("command") != command:
+            raise SurrealistError(f"{saved}: a '{options.get('command')}' search, not '{command}'")
+        return out, options
+    out = Path(args.out or f"results/{command}-{datetime.now():%Y%m%d-%H%M%S}")
+    options = {"command": command, **{k: getattr(args, k) for k in keys}}
+    for key in ("log", "test", "seed"):
+        if options.get(key):
+            options[key] = str(Path(options[key]).resolve())
+    out.mkdir(parents=True, exist_ok=True)
+    (out / RUN_FILE).write_text(json.dumps(options, indent=2) + "\n")
+    return out, options
+
+
+def run_search(env, options: dict, out: Path, problem: str) -> int:
+    """Run the greedy on env with a live progress bar, then write the results folder and print where."""
+    from tqdm import tqdm
+
+    from search import AdaptiveGreedy
+
+    from ..results import write_results
+
+    agent = AdaptiveGreedy(options["preset"])
+    bar = tqdm(total=options["budget"], unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
+               disable=None)
+    start = time.perf_counter()
+
+    def progress(info: dict) -> None:
+        bar.n = min(info["evaluations"], bar.total)
+        bar.set_postfix(best=f"{info['best_fitness']:.2f}", memo=info.get("memo", False), refresh=False)
+        bar.refresh()
+
+    try:
+        result = agent.run(env, seed=options["random_seed"], callback=progress)
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"interrupted: every finished evaluation is stored; resume with --resume {out}", file=sys.stderr)
+        env.close()
+        return 130
+    bar.n = min(result.evaluations, bar.total)
+    bar.close()
+    summary = write_results(out, env, result, time.perf_counter() - start, problem)
+    env.close()
+    print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
+          f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "
+          f"({summary['simulations']} simulations, {summary['wall_seconds']:.1f} s)")
+    for key, value in summary["best_terms"].items():
+        if isinstance(value, float):
+            print(f"  best {key}: {value:.2f} (seed {summary['seed_terms'].get(key, float('nan')):.2f})")
+    print(f"results in {out}/: best.yaml, evaluations.csv, summary.json, figure1.png, fitness.png, "
+          f"min_distances.png")
+    return 0
+
+
+def executor_of(options: dict):
+    return options.get("dask_scheduler") or None
