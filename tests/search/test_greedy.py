@@ -1,0 +1,60 @@
+"""The adaptive greedy on the real envs (tiny budgets), and the agent interface's checks."""
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import surrealist_gym  # noqa: F401 - registers the envs
+from search import AdaptiveGreedy, GreedyConfig
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        yield
+
+
+def _env(budget=10):
+    return gym.make("Surrealist-Generate-v0", budget=budget, runs=1, executor="inline")
+
+
+def test_greedy_spends_the_budget_and_never_loses_the_seed():
+    env = _env()
+    steps = []
+    result = AdaptiveGreedy("paper").run(env, seed=0, callback=steps.append)
+    assert result.evaluations == 10 and result.stop_reason == "budget spent"
+    assert result.best_fitness >= result.history[0]
+    assert result.best_fitness == max(result.history)
+    assert 1 <= result.evaluations_to_best <= 10
+    # the first moves are the paper's: +/- 4 m on the first mutator (y) around the seed
+    assert [s["test"].obstacles[0].y for s in steps[:2]] == pytest.approx([17.53125 + 4, 17.53125 - 4])
+
+
+def test_same_seed_same_search():
+    a = AdaptiveGreedy("authors").run(_env(6), seed=3)
+    b = AdaptiveGreedy("authors").run(_env(6), seed=3)
+    assert a.history == b.history and np.array_equal(a.best_action, b.best_action)
+
+
+def test_ask_tell_order_is_checked():
+    agent = AdaptiveGreedy()
+    with pytest.raises(RuntimeError, match="before ask"):
+        agent.ask()
+    env = _env(4)
+    _, info = env.reset(seed=0)
+    agent.setup(env, info)
+    actions = agent.ask()
+    assert len(actions) == 2
+    with pytest.raises(RuntimeError, match="twice"):
+        agent.ask()
+    with pytest.raises(ValueError, match="3 actions"):
+        agent.tell(actions + actions[:1], [0.0] * 3, [{}] * 3)
+
+
+def test_presets():
+    assert AdaptiveGreedy("paper").config == GreedyConfig()
+    assert AdaptiveGreedy("authors").config.max_seq == 3
+    with pytest.raises(ValueError, match="unknown greedy preset"):
+        AdaptiveGreedy("fast")

@@ -1,0 +1,98 @@
+"""The envs on the real simulator, with tiny budgets (one run per evaluation, in process)."""
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import surrealist_gym as sg
+from surrealist_gym.store import EvaluationStore
+
+ENV_IDS = ["Surrealist-Replicate-v0", "Surrealist-Generate-v0"]
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        yield
+
+
+def make(env_id, **kwargs):
+    kwargs = {"budget": 30, "runs": 1, "executor": "inline", **kwargs}
+    return gym.make(env_id, **kwargs)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_gymnasium_check_env(env_id):
+    env = make(env_id)
+    check_env(env.unwrapped)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_sb3_check_env(env_id):
+    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    env = make(env_id)
+    sb3_checker.check_env(env.unwrapped, warn=False)
+    env.close()
+
+
+def test_defaults_are_the_papers():
+    rep = gym.make("Surrealist-Replicate-v0", executor="inline").unwrapped
+    assert rep.budget == 100 and rep.evaluator.runs == 5 and len(rep.reference) == 86
+    assert [m.name for m in rep.mutators] == [f"obstacle0.{k}" for k in ("y", "x", "r", "sy", "sx", "sz")]
+    assert rep.seed_test.obstacles[0].x == -8.64
+    gen = gym.make("Surrealist-Generate-v0", executor="inline").unwrapped
+    assert gen.budget == 50 and gen.evaluator.runs == 10
+    assert [m.name for m in gen.mutators] == ["obstacle0.y", "obstacle0.x"] and len(gen.seed_test.obstacles) == 2
+
+
+def test_memo_budget_truncation_and_info():
+    env = make("Surrealist-Replicate-v0", budget=3).unwrapped
+    obs, info = env.reset(seed=0)
+    assert info["evaluations"] == 1 and np.isfinite(info["fitness"]) and info["terms"]["dtw"] > 0
+    assert obs.shape == env.observation_space.shape
+    action = env.action_for([2.0, 0, 0, 0, 0, 0])
+    _, r1, _, trunc, info1 = env.step(action)
+    assert info1["evaluations"] == 2 and not info1["memo"] and not trunc
+    assert info1["statuses"] and len(info1["min_distances"]) == 1 and info1["simulations"] == 2
+    _, r2, _, trunc, info2 = env.step(action)  # the same test again: memo, no budget
+    assert info2["memo"] and info2["evaluations"] == 2 and r2 == r1 and not trunc
+    _, _, _, trunc, info3 = env.step(env.action_for([0, 0, 0, 0, 0, -4.0]))  # height 3 - 4 < 0: invalid
+    assert info3["invalid"] and "'h' must be positive" in info3["invalid"] and info3["evaluations"] == 2
+    _, _, _, trunc, info4 = env.step(env.action_for([-2.0, 0, 0, 0, 0, 0]))
+    assert trunc and info4["budget_left"] == 0
+    assert env.best.fitness == max(info["fitness"], r1, info4["fitness"])
+
+
+def test_same_seed_same_episode():
+    env = make("Surrealist-Generate-v0").unwrapped
+    a = env.action_for([3.0, -2.0])
+    first = [env.reset(seed=1)[1]["fitness"], env.step(a)[1]]
+    second = [env.reset(seed=1)[1]["fitness"], env.step(a)[1]]
+    assert first == second
+
+
+def test_every_evaluation_is_stored(tmp_path):
+    env = make("Surrealist-Generate-v0", store=tmp_path / "e.sqlite").unwrapped
+    env.reset(seed=0)
+    env.step(env.action_for([4.0, 0.0]))
+    env.step(env.action_for([4.0, 0.0]))  # memo: not stored twice
+    rows = list(EvaluationStore(tmp_path / "e.sqlite"))
+    assert len(rows) == 2 and rows[1].runs[0]["status"] in {"success", "collision", "timeout", "stuck"}
+    # a new env on the same store answers from it without simulating, and still counts the budget
+    again = make("Surrealist-Generate-v0", store=tmp_path / "e.sqlite").unwrapped
+    _, info = again.reset(seed=0)
+    assert again.evaluator.simulations == 0 and info["evaluations"] == 1
+    assert info["fitness"] == rows[0].fitness
+
+
+def test_replicate_from_a_log_without_seed_places_the_papers_box():
+    from surrealist_gym.envs.replicate import seed_from_flight
+
+    seed = seed_from_flight(sg.read_flight(sg.data_path("case0.ulg")))
+    box = seed.obstacles[0]
+    assert (box.l, box.w, box.h) == (3.0, 3.0, 3.0)
+    assert box.x == pytest.approx(-17.0 / 2, abs=0.6) and box.y == pytest.approx(6.8 / 2, abs=0.6)
