@@ -1,0 +1,122 @@
+"""``surrealist simulate TEST.yaml``: fly a test case's runs in the simulator, report and save them.
+
+Prints one row per run (status, minimum distance, duration), writes each run as a ULog and a plot of all runs with
+the obstacles (top view and altitude). With a reference log, the plot shows the real flight too and the table
+gives each run's DTW and Frechet distance to it.
+
+Example::
+
+    surrealist simulate rq1-seed1.yaml --runs 5 --seed 0 --out runs/
+    surrealist simulate rq1-seed1.yaml --reference case0.ulg --no-avoidance
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from dataclasses import replace
+from pathlib import Path
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``surrealist simulate``."""
+    parser.add_argument("test", metavar="TEST.yaml", help="Aerialist test case")
+    parser.add_argument("--runs", type=int, default=5, help="number of runs (default 5)")
+    parser.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
+    parser.add_argument("--reference", metavar="LOG",
+                        help="real flight to compare against (default: the test's assertion log, if any)")
+    parser.add_argument("--no-reference", action="store_true", help="do not compare with the test's assertion log")
+    parser.add_argument("--out", metavar="DIR", default="sim_out", help="output folder (default ./sim_out)")
+    parser.add_argument("--vehicle", choices=["px4_vision", "iris"], default="px4_vision", help="vehicle preset")
+    avoid = parser.add_mutually_exclusive_group()
+    avoid.add_argument("--avoidance", dest="avoidance", action="store_true", default=None,
+                       help="fly with the avoidance planner (default: the parameter COM_OBS_AVOID)")
+    avoid.add_argument("--no-avoidance", dest="avoidance", action="store_false", help="fly without avoidance")
+    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                        help="override a PX4 parameter (repeatable)")
+    parser.add_argument("--no-ulog", action="store_true", help="do not write the ULogs")
+    parser.add_argument("--no-plot", action="store_true", help="do not write the plot")
+    parser.add_argument("--json", action="store_true", help="print the table as JSON")
+
+
+def _params(items: list[str]) -> dict:
+    from ..errors import SimulationError
+
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            out[name.strip()] = float(value) if sep else None
+        except ValueError:
+            out[name.strip()] = None
+        if out[name.strip()] is None:
+            raise SimulationError(f"--param {item!r}: expected NAME=number")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the command; returns the exit code."""
+    from .. import load_test
+    from ..sim import SimConfig, simulate
+
+    test = load_test(args.test)
+    if args.runs < 1:
+        from ..errors import SimulationError
+        raise SimulationError(f"--runs: expected a positive number, got {args.runs}")
+    ref_path = args.reference or (None if args.no_reference else test.reference_log)
+    reference = None
+    if ref_path:
+        from .. import read_flight
+        reference = read_flight(ref_path)
+        if args.reference:
+            test = replace(test, reference_log=str(Path(args.reference).resolve()))
+    config = SimConfig(vehicle=args.vehicle, avoidance=args.avoidance, params=_params(args.param))
+    start = time.perf_counter()
+    results = simulate(test, runs=args.runs, seed=args.seed, config=config)
+    wall = time.perf_counter() - start
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = Path(args.test).stem
+    rows = []
+    for r in results:
+        row = {"run": r.index, "status": r.status.value, "min_distance_m": round(r.min_distance, 3),
+               "min_distance_2d_m": round(r.min_distance_2d, 3), "duration_s": round(r.duration, 2),
+               "message": r.message}
+        if reference is not None:
+            from ..metrics import dtw, frechet
+            row["dtw"] = round(dtw(r.trajectory, reference.trajectory), 2)
+            row["frechet_m"] = round(frechet(r.trajectory, reference.trajectory), 3)
+        if not args.no_ulog:
+            path = out / f"{stem}-run{r.index}.ulg"
+            r.save_ulog(path, mission=test.mission)
+            row["ulog"] = str(path)
+        rows.append(row)
+    plot = None
+    if not args.no_plot:
+        from ..plots import plot_trajectories
+        plot = out / f"{stem}.png"
+        plot_trajectories(plot, [r.trajectory for r in results], obstacles=test.obstacles,
+                          title=f"{stem}: {len(results)} simulated runs (seed {args.seed})",
+                          reference=None if reference is None else reference.trajectory,
+                          reference_label="real flight")
+    simulated = sum(r.duration for r in results)
+    if args.json:
+        print(json.dumps({"runs": rows, "plot": None if plot is None else str(plot), "wall_s": round(wall, 3),
+                          "simulated_s": round(simulated, 2)}, indent=2))
+        return 0
+    head = f"{'run':>3}  {'status':9}  {'min dist':>8}  {'min 2-D':>8}  {'duration':>8}"
+    if reference is not None:
+        head += f"  {'DTW':>8}  {'Frechet':>8}"
+    print(head)
+    for row in rows:
+        line = (f"{row['run']:>3}  {row['status']:9}  {row['min_distance_m']:>7.2f}m  {row['min_distance_2d_m']:>7.2f}m"
+                f"  {row['duration_s']:>7.1f}s")
+        if reference is not None:
+            line += f"  {row['dtw']:>8.1f}  {row['frechet_m']:>7.2f}m"
+        print(line)
+    print(f"{len(results)} runs, {simulated:.1f} s simulated in {wall:.2f} s wall ({simulated / wall:.0f}x real time)")
+    if not args.no_ulog:
+        print(f"ULogs: {out}/{stem}-run*.ulg")
+    if plot is not None:
+        print(f"plot: {plot}")
+    return 0

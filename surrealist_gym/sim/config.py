@@ -1,0 +1,176 @@
+"""Configuration of the simulator: frozen ``*Config`` dataclasses (units in brackets) and PX4 parameter defaults.
+
+PX4 parameters keep their PX4 names. Their values come, in increasing priority, from :data:`PX4_DEFAULTS`
+(PX4 v1.12 defaults, the firmware generation of ``case0.ulg``), the reference log's parameters (when the test has
+one and :attr:`SimConfig.use_reference_params` is set), the test case's ``params`` and
+:attr:`SimConfig.params` overrides.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+from functools import lru_cache
+from ..frozendict import FrozenDict
+from typing import Any, Mapping
+
+# PX4 v1.12 defaults of the parameters the simulated UAV reads (sources: the *_params.c / *_params.yaml of
+# mc_pos_control, mc_att_control, mc_rate_control, navigator, land_detector, commander in PX4-Autopilot v1.12).
+PX4_DEFAULTS: Mapping[str, float] = FrozenDict({
+    # position / velocity control (mc_pos_control)
+    "MPC_XY_P": 0.95, "MPC_Z_P": 1.0,
+    "MPC_XY_VEL_P_ACC": 1.8, "MPC_XY_VEL_I_ACC": 0.4, "MPC_XY_VEL_D_ACC": 0.2,
+    "MPC_Z_VEL_P_ACC": 4.0, "MPC_Z_VEL_I_ACC": 2.0, "MPC_Z_VEL_D_ACC": 0.0,
+    "MPC_XY_CRUISE": 5.0, "MPC_XY_VEL_MAX": 12.0, "MPC_Z_VEL_MAX_UP": 3.0, "MPC_Z_VEL_MAX_DN": 1.0,
+    "MPC_TILTMAX_AIR": 45.0, "MPC_THR_HOVER": 0.5, "MPC_USE_HTE": 1, "MPC_THR_MIN": 0.12, "MPC_THR_MAX": 1.0,
+    "MPC_ACC_HOR": 3.0, "MPC_ACC_UP_MAX": 4.0, "MPC_ACC_DOWN_MAX": 3.0, "MPC_JERK_AUTO": 4.0,
+    "MPC_TKO_SPEED": 1.5, "MPC_TKO_RAMP_T": 3.0, "MPC_LAND_SPEED": 0.7, "MPC_LAND_ALT1": 10.0,
+    "MPC_LAND_ALT2": 5.0, "MPC_YAWRAUTO_MAX": 45.0, "MPC_YAW_MODE": 0, "MPC_XY_TRAJ_P": 0.5,
+    # attitude and rate control (mc_att_control, mc_rate_control)
+    "MC_ROLL_P": 6.5, "MC_PITCH_P": 6.5, "MC_YAW_P": 2.8, "MC_YAW_WEIGHT": 0.4,
+    "MC_ROLLRATE_P": 0.15, "MC_ROLLRATE_I": 0.2, "MC_ROLLRATE_D": 0.003, "MC_ROLLRATE_K": 1.0,
+    "MC_PITCHRATE_P": 0.15, "MC_PITCHRATE_I": 0.2, "MC_PITCHRATE_D": 0.003, "MC_PITCHRATE_K": 1.0,
+    "MC_YAWRATE_P": 0.2, "MC_YAWRATE_I": 0.1, "MC_YAWRATE_D": 0.0, "MC_YAWRATE_K": 1.0,
+    "MC_ROLLRATE_MAX": 220.0, "MC_PITCHRATE_MAX": 220.0, "MC_YAWRATE_MAX": 200.0,
+    "MC_RR_INT_LIM": 0.3, "MC_PR_INT_LIM": 0.3, "MC_YR_INT_LIM": 0.3, "THR_MDL_FAC": 0.0,
+    # navigator (mission mode, RTL)
+    "NAV_ACC_RAD": 10.0, "NAV_MC_ALT_RAD": 0.8, "MIS_TAKEOFF_ALT": 2.5, "MIS_YAW_ERR": 12.0,
+    "RTL_RETURN_ALT": 60.0, "RTL_LAND_DELAY": 0.0,
+    # land detector, commander
+    "LNDMC_Z_VEL_MAX": 0.5, "LNDMC_XY_VEL_MAX": 1.5, "LNDMC_TRIG_TIME": 1.0, "COM_DISARM_LAND": 2.0,
+    "COM_OBS_AVOID": 0,
+})
+
+
+class VehicleModel(str, Enum):
+    """Vehicle presets (see :mod:`surrealist_gym.sim.vehicle`)."""
+
+    PX4_VISION = "px4_vision"
+    IRIS = "iris"
+
+
+@dataclass(frozen=True, slots=True)
+class NoiseConfig:
+    """Sources of run-to-run variation; all drawn from the run's seed.
+
+    Attributes:
+        pos_noise_std: white noise of the estimated position [m].
+        pos_drift_std: stationary std of the slowly drifting estimator position error [m].
+        pos_drift_tau_s: correlation time of that drift [s].
+        vel_noise_std: white noise of the estimated velocity [m/s].
+        turbulence_std: std of the ambient wind turbulence added to the test's wind [m/s].
+        turbulence_tau_s: correlation time of the turbulence [s].
+        sensor: whether the depth sensor gets the run's random generator (its own noise model).
+    """
+
+    pos_noise_std: float = 0.02
+    pos_drift_std: float = 0.10
+    pos_drift_tau_s: float = 5.0
+    vel_noise_std: float = 0.03
+    turbulence_std: float = 0.3
+    turbulence_tau_s: float = 2.0
+    sensor: bool = True
+
+    @classmethod
+    def off(cls) -> "NoiseConfig":
+        """No noise at all: every seed gives the same flight."""
+        return cls(0.0, 0.0, 5.0, 0.0, 0.0, 2.0, False)
+
+
+@dataclass(frozen=True, slots=True)
+class SimConfig:
+    """How a test case is flown.
+
+    Attributes:
+        vehicle: vehicle preset.
+        physics_hz: PyBullet step rate, also the attitude/rate loop rate [Hz].
+        outer_hz: position/velocity controller and navigator rate [Hz].
+        planner_hz: avoidance planner and depth sensor rate [Hz].
+        log_hz: rate of the recorded local-position samples (the trajectory and the ULog) [Hz].
+        avoidance: fly with the local planner; None = from the parameter COM_OBS_AVOID.
+        params: PX4 parameter overrides (highest priority).
+        use_reference_params: read the parameters of the test's reference log, below the test's own.
+        takeoff_delay_s: time on the ground between arming (start of the log) and the mission start [s].
+        timeout_s: simulated-time limit [s]; None = 90 s + 4 s per metre of the mission's path.
+        stuck_window_s / stuck_distance_m: the run is STUCK when its distance to the current goal has not
+            shrunk by stuck_distance_m [m] during the last stuck_window_s [s] of flight.
+        noise: noise configuration.
+        avoidance_config / sensor_config: the planner's and the depth sensor's configurations (None = defaults).
+    """
+
+    vehicle: VehicleModel = VehicleModel.PX4_VISION
+    physics_hz: float = 200.0
+    outer_hz: float = 50.0
+    planner_hz: float = 10.0
+    log_hz: float = 10.0
+    avoidance: bool | None = None
+    params: Mapping[str, float] = field(default_factory=dict)
+    use_reference_params: bool = True
+    takeoff_delay_s: float = 4.0
+    timeout_s: float | None = None
+    stuck_window_s: float = 20.0
+    stuck_distance_m: float = 0.5
+    noise: NoiseConfig = NoiseConfig()
+    avoidance_config: Any = None
+    sensor_config: Any = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "vehicle", VehicleModel(self.vehicle))
+        object.__setattr__(self, "params", FrozenDict(dict(self.params)))
+        if self.physics_hz < 200:
+            raise ValueError(f"SimConfig.physics_hz must be >= 200 Hz, got {self.physics_hz:g}")
+        for name in ("outer_hz", "planner_hz", "log_hz"):
+            rate = getattr(self, name)
+            if not 0 < rate <= self.physics_hz or abs(self.physics_hz / rate - round(self.physics_hz / rate)) > 1e-9:
+                raise ValueError(f"SimConfig.{name} must divide physics_hz ({self.physics_hz:g}), got {rate:g}")
+        if abs(self.outer_hz / self.planner_hz - round(self.outer_hz / self.planner_hz)) > 1e-9:
+            raise ValueError(f"SimConfig.planner_hz must divide outer_hz, got {self.planner_hz:g}")
+        if abs(self.outer_hz / self.log_hz - round(self.outer_hz / self.log_hz)) > 1e-9:
+            raise ValueError(f"SimConfig.log_hz must divide outer_hz, got {self.log_hz:g}")
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> "SimConfig":
+        """A config from keyword values; an unknown key is a ``TypeError`` naming it."""
+        return replace_checked(cls(), **dict(values))
+
+
+def replace_checked(obj, **changes):
+    """``dataclasses.replace`` that raises ``TypeError`` (with the valid names) for an unknown field."""
+    names = {f.name for f in dataclasses.fields(obj)}
+    unknown = sorted(set(changes) - names)
+    if unknown:
+        raise TypeError(f"{type(obj).__name__}: unknown field {unknown[0]!r} (expected one of {sorted(names)})")
+    return dataclasses.replace(obj, **changes)
+
+
+@lru_cache(maxsize=16)
+def _log_params(path: str) -> Mapping[str, float]:
+    from pyulog import ULog
+
+    try:
+        ulog = ULog(path, message_name_filter_list=[], parse_header_only=False)
+    except Exception:  # pyulog raises assorted errors on corrupt files; the reference is then ignored
+        return FrozenDict({})
+    return FrozenDict({k: float(v) for k, v in ulog.initial_parameters.items()})
+
+
+def resolve_params(test, config: SimConfig) -> dict[str, float]:
+    """The PX4 parameters of a run: defaults < reference log < test params < config overrides."""
+    params: dict[str, float] = dict(PX4_DEFAULTS)
+    ref = getattr(test, "reference_log", None)
+    if config.use_reference_params and ref and str(ref).lower().endswith(".ulg"):
+        params.update(_log_params(str(ref)))
+    params.update(test.params)
+    params.update(config.params)
+    return params
+
+
+def auto_timeout(mission) -> float:
+    """Default time limit of a mission [s]: 90 s plus 4 s per metre of the path through its items."""
+    length, prev = 0.0, (0.0, 0.0, 0.0)
+    for item in mission.items if mission is not None else ():
+        if item.has_position:
+            length += math.dist(prev, (item.x, item.y, item.z))
+            prev = (item.x, item.y, item.z)
+    return 90.0 + 4.0 * length

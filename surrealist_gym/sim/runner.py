@@ -1,0 +1,354 @@
+"""The run loop: fly the runs of one test case in one PyBullet world and report each run.
+
+Rates (SimConfig): physics, attitude and rate loops at ``physics_hz``; estimator, navigator and position/velocity
+control at ``outer_hz``; depth sensor and avoidance planner at ``planner_hz``; recorded local position at
+``log_hz``. The runs of a batch are independent bodies in one world (no vehicle-vehicle collisions), each with its
+own controllers, planner and noise, so run ``i`` flies exactly as it would alone (see the tests).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+from ..frozendict import FrozenDict
+from typing import Mapping
+
+import numpy as np
+import pybullet as pb
+
+from ..errors import SimulationError
+from ..geometry import obstacle_distances
+from ..mission import Command
+from ..trajectory import Trajectory
+from .config import SimConfig, auto_timeout, resolve_params
+from .control import PositionControl, inner_step, kernel_params
+from .navigator import Navigator, Phase
+from .noise import NoiseSource, run_seed_sequence
+from .vehicle import preset
+from .world import World
+
+
+class RunStatus(str, Enum):
+    """How a run ended."""
+
+    SUCCESS = "success"      # mission completed (landed and disarmed, or last item reached in the air)
+    COLLISION = "collision"  # PyBullet contact between the vehicle and an obstacle
+    TIMEOUT = "timeout"      # simulated-time limit reached
+    STUCK = "stuck"          # no progress for SimConfig.stuck_window_s
+    ERROR = "error"          # the vehicle flipped or its state became invalid
+
+
+@dataclass(frozen=True, slots=True)
+class Clearance:
+    """Closest approach to one obstacle: 3-D and 2-D (footprint) distances [m] and when [s since arming]."""
+
+    obstacle: int
+    distance: float
+    time: float
+    distance_2d: float
+    time_2d: float
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class LocalPosition:
+    """Recorded ``vehicle_local_position`` samples (NED, origin at the start position), as a ULog holds them."""
+
+    timestamp_us: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    vz: np.ndarray
+    heading: np.ndarray
+
+    def __post_init__(self):
+        for name in self.__slots__:
+            arr = np.array(getattr(self, name), dtype=np.int64 if name == "timestamp_us" else np.float64)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class RunResult:
+    """The outcome of one simulated run.
+
+    Attributes:
+        trajectory: the recorded local position through the paper's pipeline (x north, y east, z up, 0.5 s means).
+        status: how the run ended. message: a one-line description of the end.
+        min_distance / min_distance_2d: smallest 3-D / 2-D distance from the vehicle's centre to any obstacle
+            [m] (inf without obstacles), from ``true_xyz`` with :func:`~surrealist_gym.geometry.obstacle_distances`.
+        clearances: per-obstacle closest approach.
+        duration: simulated time from arming to the end of the run [s].
+        seed, index: base seed and run index (the run's seed derives from them and the test's key).
+        local_position: the recorded estimated local position (what a ULog holds), ``SimConfig.log_hz``.
+        true_t, true_xyz: true positions at the outer-loop rate [s], [m] (x north, y east, z up above the ground).
+        params: the PX4 parameters the run used.
+    """
+
+    trajectory: Trajectory
+    status: RunStatus
+    min_distance: float
+    min_distance_2d: float
+    clearances: tuple[Clearance, ...]
+    duration: float
+    seed: int
+    index: int
+    local_position: LocalPosition
+    true_t: np.ndarray
+    true_xyz: np.ndarray
+    message: str = ""
+    params: Mapping[str, float] = field(default_factory=dict)
+
+    def save_ulog(self, path, mission=None) -> None:
+        """Write the run as a ULog (``vehicle_local_position`` and the parameters) that pyulog reads."""
+        from ..logs.ulog_writer import write_ulog
+
+        lp = self.local_position
+        write_ulog(path, lp.timestamp_us, lp.x, lp.y, lp.z, lp.vx, lp.vy, lp.vz, lp.heading,
+                   params=dict(self.params), mission=mission)
+
+
+class _Run:
+    """Mutable per-vehicle state inside the loop."""
+
+    __slots__ = ("body", "pos_ctl", "kp", "ks", "wind", "nav", "planner", "noise", "q_sp", "thrust", "status", "message",
+                 "end_t", "log", "true", "plan_out", "anchor", "anchor_t", "anchor_phase", "ground", "active",
+                 "index")
+
+
+def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
+    """Fly ``runs`` runs of a test case; run ``i`` draws its noise from (test.key(), seed, i).
+
+    Args:
+        test: a :class:`~surrealist_gym.testcase.TestCase` with a mission.
+        runs: number of runs (flown together in one world).
+        seed: base seed.
+        config: simulator configuration (default :class:`SimConfig`).
+
+    Returns:
+        One :class:`RunResult` per run, in run order.
+
+    Example::
+
+        >>> import surrealist_gym as sg
+        >>> test = sg.load_test(sg.data_path("rq1-seed1.yaml"))     # doctest: +SKIP
+        >>> [r.status.value for r in sg.simulate(test, runs=2)]       # doctest: +SKIP
+        ['success', 'success']
+    """
+    if runs < 1:
+        raise ValueError(f"runs must be >= 1, got {runs}")
+    return simulate_runs(test, range(runs), seed, config)
+
+
+def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
+    """Fly the runs with the given indices of a test case together (see :func:`simulate`)."""
+    cfg = config or SimConfig()
+    indices = [int(i) for i in indices]
+    mission = test.mission
+    if mission is None or not any(it.has_position for it in mission.items):
+        raise SimulationError("test case: the mission has no item with a position to fly to")
+    params = resolve_params(test, cfg)
+    avoidance = bool(params["COM_OBS_AVOID"]) if cfg.avoidance is None else cfg.avoidance
+    vehicle = preset(cfg.vehicle)
+    timeout = cfg.timeout_s if cfg.timeout_s is not None else auto_timeout(mission)
+    outer_dt = 1.0 / cfg.outer_hz
+    n_outer = int(math.ceil(timeout * cfg.outer_hz)) + 2
+    key = test.key()
+    # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
+    # modelled as converged: the controller's hover thrust is the vehicle's physical one.
+    ctl_params = dict(params, MPC_THR_HOVER=vehicle.hover_command) if params.get("MPC_USE_HTE", 1) else params
+    with World(test.obstacles, vehicle, len(indices), cfg.physics_hz) as world:
+        sensor = None
+        if avoidance:
+            from .avoidance import AvoidanceConfig, LocalPlanner
+            from .sensor import DepthSensor, DepthSensorConfig
+            sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig())
+            plan_cfg = cfg.avoidance_config or AvoidanceConfig()
+        yaw0 = _initial_yaw(mission)
+        runs = []
+        for body, index in zip(world.vehicles, indices):
+            r = _Run()
+            r.body, r.index = body, index
+            r.pos_ctl = PositionControl(ctl_params)
+            r.kp = kernel_params(params, vehicle, 1.0 / cfg.physics_hz,
+                                 (vehicle.drag_xy, vehicle.drag_z, vehicle.drag_quad))
+            r.ks = np.zeros(10)
+            r.wind = (0.0, 0.0, 0.0)
+            r.nav = Navigator(mission, params, cfg.takeoff_delay_s)
+            r.planner = LocalPlanner(plan_cfg) if avoidance else None
+            r.noise = NoiseSource(run_seed_sequence(key, seed, index), cfg.noise, test.wind, n_outer, outer_dt)
+            r.q_sp, r.thrust = (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)), 0.0
+            r.status, r.message, r.end_t = None, "", 0.0
+            r.log, r.true, r.plan_out = [], [], None
+            r.anchor, r.anchor_t, r.anchor_phase = None, 0.0, None
+            r.ground, r.active = True, True
+            world.set_yaw(body, yaw0)
+            runs.append(r)
+        _loop(world, runs, cfg, params, vehicle, sensor, timeout)
+    return [_result(r, test, cfg, params, seed) for r in runs]
+
+
+def _initial_yaw(mission) -> float:
+    """Heading of the vehicle on the ground: toward the first position that is not straight above home."""
+    for it in mission.items:
+        if it.has_position and it.command != Command.TAKEOFF and math.hypot(it.x, it.y) > 1.0:
+            return math.atan2(it.y, it.x)
+    return 0.0
+
+
+def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, sensor, timeout: float) -> None:
+    cid = world.cid
+    dt = 1.0 / cfg.physics_hz
+    outer_div = int(round(cfg.physics_hz / cfg.outer_hz))
+    plan_div = int(round(cfg.outer_hz / cfg.planner_hz))
+    log_div = int(round(cfg.outer_hz / cfg.log_hz))
+    outer_dt = outer_div * dt
+    rest_z = world.rest_z
+    inner = inner_step
+    obstacle_index = world.obstacle_index
+    body_run = {r.body: r for r in runs}
+    get_pose, get_vel = pb.getBasePositionAndOrientation, pb.getBaseVelocity
+    apply_force, apply_torque, frame = pb.applyExternalForce, pb.applyExternalTorque, pb.WORLD_FRAME
+    step_sim, contacts = pb.stepSimulation, pb.getContactPoints
+    stuck_w, stuck_d = cfg.stuck_window_s, cfg.stuck_distance_m
+    active = list(runs)
+    step = 0
+    max_steps = int(math.ceil(timeout * cfg.physics_hz))
+    while active:
+        outer = step % outer_div == 0
+        k = step // outer_div
+        t = step * dt
+        for r in active:
+            body = r.body
+            pos, orn = get_pose(body, physicsClientId=cid)
+            lin, ang = get_vel(body, physicsClientId=cid)
+            if outer and not _outer(r, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w,
+                                    stuck_d):
+                continue
+            nav = r.nav
+            fx, fy, fz, tx, ty, tz = inner(orn, lin, ang, r.q_sp, r.thrust, r.wind, dt, nav.armed,
+                                           not nav.on_ground_phase, r.kp, r.ks)
+            apply_force(body, -1, (fx, fy, fz), pos, frame, physicsClientId=cid)
+            apply_torque(body, -1, (tx, ty, tz), frame, physicsClientId=cid)
+        step_sim(physicsClientId=cid)
+        step += 1
+        if outer:
+            for r in active:
+                r.ground = False
+        for c in contacts(physicsClientId=cid):
+            a, b = c[1], c[2]
+            r = body_run.get(a)
+            other = b
+            if r is None:
+                r, other = body_run.get(b), a
+            if r is None or not r.active:
+                continue
+            if other in obstacle_index:
+                r.status, r.end_t = RunStatus.COLLISION, step * dt
+                r.message = f"collision with obstacle {obstacle_index[other]} at t={step * dt:.2f} s"
+            else:
+                r.ground = True
+        if step >= max_steps:
+            for r in active:
+                if r.status is None:
+                    r.status, r.end_t = RunStatus.TIMEOUT, step * dt
+                    r.message = f"timeout after {timeout:g} s in phase {r.nav.phase.value}"
+        finished = [r for r in active if r.status is not None]
+        for r in finished:
+            r.active = False
+            _record(r, r.end_t, *get_pose(r.body, physicsClientId=cid), *get_vel(r.body, physicsClientId=cid),
+                    rest_z, min(k, len(r.noise.pos_err) - 1))
+            world.remove(r.body)
+            active.remove(r)
+
+
+def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d) -> bool:
+    """Estimator, planner, navigator, position control and bookkeeping; False when the run ended."""
+    nav = r.nav
+    kk = min(k, len(r.noise.pos_err) - 1)
+    pe, ve = r.noise.pos_err[kk], r.noise.vel_err[kk]
+    r.wind = tuple(r.noise.wind[kk])
+    qx, qy, qz, qw = orn
+    yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz)) + r.noise.yaw_err[kk]
+    if not (math.isfinite(pos[0]) and math.isfinite(pos[2])) or 1 - 2 * (qx * qx + qy * qy) < -0.1:
+        r.status, r.end_t = RunStatus.ERROR, t
+        r.message = f"vehicle flipped or state invalid at t={t:.2f} s"
+        return False
+    ex, ey, ez = pos[0] + pe[0], pos[1] + pe[1], pos[2] - rest_z + pe[2]
+    evx, evy, evz = lin[0] + ve[0], lin[1] + ve[1], lin[2] + ve[2]
+    pos_up, vel_up = (ex, ey, -ez), (evx, evy, -evz)
+    r.true.append((t, pos[0], pos[1], -pos[2]))
+    if k % log_div == 0:
+        r.log.append((t, ex, ey, ez, evx, evy, evz, yaw))
+    plan = None
+    if r.planner is not None and nav.uses_planner:
+        if k % plan_div == 0 or r.plan_out is None:
+            hits = sensor.scan((pos[0], pos[1], -pos[2]), yaw, r.noise.rng)
+            if len(hits):
+                hits = hits + np.array([pe[0], pe[1], -(pe[2])])
+            r.plan_out = r.planner.update(t, pos_up, vel_up, nav.goal(), hits, max_speed=nav.cruise)
+        plan = r.plan_out
+    pos_sp, vel_ff, yaw_sp = nav.update(t, pos_up, vel_up, yaw, outer_dt, r.ground, plan)
+    if nav.mission_complete:
+        r.status, r.end_t = RunStatus.SUCCESS, t
+        r.message = ("landed and disarmed" if nav.phase == Phase.DONE else "mission finished in the air") + \
+            f" at t={t:.2f} s"
+        return False
+    if nav.on_ground_phase:
+        r.pos_ctl.reset()
+        r.thrust = 0.0
+        r.q_sp = (math.cos(yaw_sp / 2), 0.0, 0.0, math.sin(yaw_sp / 2))
+    else:
+        r.q_sp, r.thrust = r.pos_ctl.update((ex, ey, ez), (evx, evy, evz), pos_sp, vel_ff, yaw_sp, outer_dt)
+    # stuck: the distance to the current goal has not shrunk by stuck_d during the last stuck_w seconds
+    if nav.phase in (Phase.CRUISE, Phase.TAKEOFF, Phase.CLIMB, Phase.DESCEND):
+        g = nav.target
+        gz = 0.0 if nav.phase == Phase.DESCEND else g[2]
+        d = math.sqrt((g[0] - pos[0]) ** 2 + (g[1] - pos[1]) ** 2 + (gz + pos[2]) ** 2)
+        if r.anchor is None or r.anchor_phase != (nav.phase, nav.index) or d < r.anchor - stuck_d:
+            r.anchor, r.anchor_t, r.anchor_phase = d, t, (nav.phase, nav.index)
+        elif t - r.anchor_t > stuck_w:
+            r.status, r.end_t = RunStatus.STUCK, t
+            r.message = (f"stuck: no progress of {stuck_d:g} m toward the goal in {stuck_w:g} s "
+                         f"(phase {nav.phase.value}, t={t:.2f} s)")
+            return False
+    else:
+        r.anchor = None
+    return True
+
+
+def _record(r: _Run, t, pos, orn, lin, ang, rest_z, kk) -> None:
+    pe, ve = r.noise.pos_err[kk], r.noise.vel_err[kk]
+    qx, qy, qz, qw = orn
+    yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz))
+    if not r.log or r.log[-1][0] < t:
+        r.log.append((t, pos[0] + pe[0], pos[1] + pe[1], pos[2] - rest_z + pe[2], lin[0] + ve[0], lin[1] + ve[1],
+                      lin[2] + ve[2], yaw))
+    if not r.true or r.true[-1][0] < t:
+        r.true.append((t, pos[0], pos[1], -pos[2]))
+
+
+def _result(r: _Run, test, cfg: SimConfig, params, seed: int) -> RunResult:
+    log = np.array(r.log, dtype=np.float64)
+    ts = np.round(log[:, 0] * 1e6).astype(np.int64)
+    lp = LocalPosition(ts, log[:, 1], log[:, 2], log[:, 3], log[:, 4], log[:, 5], log[:, 6], log[:, 7])
+    traj = Trajectory.from_local_position(ts, lp.x, lp.y, lp.z, lp.heading)
+    true = np.array(r.true, dtype=np.float64)
+    true_t, true_xyz = true[:, 0], true[:, 1:4]
+    clearances = []
+    if test.obstacles:
+        d3 = obstacle_distances(true_xyz, test.obstacles, dims=3)
+        d2 = obstacle_distances(true_xyz, test.obstacles, dims=2)
+        for j in range(len(test.obstacles)):
+            i3, i2 = int(np.argmin(d3[:, j])), int(np.argmin(d2[:, j]))
+            clearances.append(Clearance(j, float(d3[i3, j]), float(true_t[i3]), float(d2[i2, j]), float(true_t[i2])))
+    min3 = min((c.distance for c in clearances), default=math.inf)
+    min2 = min((c.distance_2d for c in clearances), default=math.inf)
+    true_t.setflags(write=False)
+    true_xyz = np.ascontiguousarray(true_xyz)
+    true_xyz.setflags(write=False)
+    return RunResult(trajectory=traj, status=r.status, min_distance=min3, min_distance_2d=min2,
+                     clearances=tuple(clearances), duration=float(r.end_t), seed=int(seed), index=r.index,
+                     local_position=lp, true_t=true_t, true_xyz=true_xyz, message=r.message,
+                     params=FrozenDict(dict(params)))
