@@ -153,8 +153,6 @@ def make_executor(spec=None, workers: int | None = None):
         return LocalPoolExecutor(workers)
     if spec == "inline":
         return InlineExecutor()
-    if isinstance(spec, str):
+    if isinstance(spec, str) or type(spec).__module__.startswith("distributed"):
         return DaskExecutor(spec)
-    if hasattr(spec, "run"):
-        return spec
-    return DaskExecutor(spec)
+    return spec  # an executor object: run(test, indices, seed, config) and close()

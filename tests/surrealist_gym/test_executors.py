@@ -1,0 +1,57 @@
+"""Executors on real simulations: in process, a local process pool, a Dask LocalCluster; failures become runs."""
+import dataclasses
+import warnings
+
+import pytest
+
+import surrealist_gym as sg
+from surrealist_gym.executors import InlineExecutor, LocalPoolExecutor, make_executor
+from surrealist_gym.sim import SimConfig
+
+
+@pytest.fixture(scope="module")
+def test_case():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return sg.load_test(sg.data_path("rq2-seed.yaml"))
+
+
+def _summary(runs):
+    return [(str(getattr(r.status, "value", r.status)), round(r.min_distance, 9), r.index) for r in runs]
+
+
+def test_pool_equals_inline(test_case):
+    inline = InlineExecutor().run(test_case, [0, 1, 2], 5, SimConfig())
+    pool = LocalPoolExecutor(workers=2)
+    try:
+        pooled = pool.run(test_case, [0, 1, 2], 5, SimConfig())
+    finally:
+        pool.close()
+    assert _summary(inline) == _summary(pooled) and len(inline) == 3
+
+
+def test_dask_local_cluster_equals_inline(test_case):
+    distributed = pytest.importorskip("distributed")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                      dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+            executor = make_executor(client)
+            remote = executor.run(test_case, [0, 1], 5, SimConfig())
+    assert _summary(remote) == _summary(InlineExecutor().run(test_case, [0, 1], 5, SimConfig()))
+
+
+def test_a_failing_simulation_is_retried_then_recorded(test_case):
+    no_mission = dataclasses.replace(test_case, mission=None)
+    runs = InlineExecutor().run(no_mission, [0, 1], 0, SimConfig())
+    assert [r.status for r in runs] == ["error", "error"]
+    assert "no item with a position" in runs[0].message
+
+
+def test_env_survives_failed_simulations(test_case):
+    from surrealist_gym.envs.generate import GenerateEnv
+
+    env = GenerateEnv(seed_test=dataclasses.replace(test_case, mission=None), runs=1, budget=2,
+                                       executor="inline")
+    _, info = env.reset(seed=0)
+    assert info["statuses"] == ("error",) and info["fitness"] < 0
