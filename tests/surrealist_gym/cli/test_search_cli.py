@@ -1,0 +1,87 @@
+"""`surrealist replicate` and `surrealist generate` end to end on the real simulator (tiny budgets)."""
+import csv
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import surrealist_gym as sg
+from surrealist_gym.cli import main
+from surrealist_gym.store import EvaluationStore
+
+
+def _rows(path: Path) -> list[dict]:
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def test_generate_writes_the_results_folder(tmp_path, capsys):
+    out = tmp_path / "gen"
+    assert main(["generate", "--budget", "3", "--runs", "2", "--workers", "1", "--out", str(out)]) == 0
+    for name in ("best.yaml", "evaluations.csv", "summary.json", "figure1.png", "fitness.png", "min_distances.png"):
+        assert (out / name).is_file(), name
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["evaluations"] == 3 and summary["runs_per_evaluation"] == 2
+    assert len(_rows(out / "evaluations.csv")) == 3
+    best = sg.load_test(out / "best.yaml")
+    assert len(best.obstacles) == 2 and best.mission is not None
+    assert "results in" in capsys.readouterr().out
+    # the best test runs in the simulator as it is
+    assert main(["simulate", str(out / "best.yaml"), "--runs", "1", "--out", str(tmp_path / "sim")]) == 0
+
+
+def test_replicate_with_a_seed(tmp_path):
+    out = tmp_path / "rep"
+    seed = sg.data_path("rq1-seed2.yaml")
+    assert main(["replicate", "--seed", seed, "--budget", "3", "--runs", "1", "--workers", "1",
+                 "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["best_terms"]["dtw"] <= summary["seed_terms"]["dtw"]
+    assert summary["seed_obstacles"][0]["position"]["x"] == -7.56
+
+
+def test_killed_search_resumes_without_losing_evaluations(tmp_path):
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "surrealist_gym.cli", "generate", "--budget", "8", "--runs", "1", "--workers", "1",
+           "--out", str(out)]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    store = out / "evaluations.sqlite"
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        if store.is_file() and len(EvaluationStore(store)) >= 3:
+            break
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    before = [e.test_key for e in EvaluationStore(store)]
+    assert len(before) >= 3
+    assert main(["generate", "--resume", str(out)]) == 0
+    after = [e.test_key for e in EvaluationStore(store)]
+    assert after[:len(before)] == before  # nothing lost, nothing simulated twice
+    assert len(after) == len(set(after)) and len(_rows(out / "evaluations.csv")) == len(after)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["evaluations"] == 8 and summary["simulations"] == 8 - len(before)
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["replicate", "/nonexistent/flight.ulg"], "flight.ulg"),
+    (["generate", "--resume", "/nonexistent/folder"], "not a results folder"),
+])
+def test_bad_input_is_one_line_exit_2(argv, needle, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err and "\n" not in err and err.startswith("error:")
+
+
+def test_bad_yaml_via_subprocess(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("simulation:\n  obstacles: [3,3,-1, 0,0,0, 0]\n")
+    proc = subprocess.run([sys.executable, "-m", "surrealist_gym.cli", "generate", str(bad), "--out",
+                           str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "bad.yaml" in lines[0] and "'h' must be positive" in lines[0]
