@@ -20,21 +20,27 @@ class ReplicateEnv(SurrealistEnv):
 
     def __init__(self, reference_log=None, seed_test=None, runs: int = 5, budget: int = 100, mutators=None,
                  averaging: str = "dba", executor=None, store=None, random_seed: int = 0, sim_config=None,
-                 workers: int | None = None):
+                 workers: int | None = None, reference_trajectory=None):
+        """``reference_trajectory`` (a Trajectory) replaces the log's, e.g. a simulated flight with hidden
+        obstacles that plays the real one; the seed test then must be given."""
         from .. import data_path
         from ..logs import read_flight
 
-        if seed_test is None:
-            seed_test = load_test(data_path("rq1-seed1.yaml")) if reference_log is None else None
-        elif not isinstance(seed_test, TestCase):
+        if seed_test is not None and not isinstance(seed_test, TestCase):
             seed_test = load_test(seed_test)
-        if reference_log is None:
-            reference_log = seed_test.reference_log or data_path("case0.ulg")
-        self.flight = read_flight(reference_log)
-        if seed_test is None:
-            seed_test = seed_from_flight(self.flight)
-        seed_test = replace(seed_test, reference_log=str(self.flight.path))
-        self.reference = self.flight.trajectory
+        self.flight = None
+        if reference_trajectory is not None:
+            if seed_test is None:
+                raise ValueError("reference_trajectory needs a seed_test")
+            self.reference = reference_trajectory
+        else:
+            if seed_test is None and reference_log is None:
+                seed_test = load_test(data_path("rq1-seed1.yaml"))
+            if reference_log is None:
+                reference_log = seed_test.reference_log or data_path("case0.ulg")
+            self.flight = read_flight(reference_log)
+            seed_test = replace(seed_test or seed_from_flight(self.flight), reference_log=str(self.flight.path))
+            self.reference = self.flight.trajectory
         self.averaging = averaging
         mutators = mutators or default_mutators(seed_test, AUTHORS_ORDER)
         super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers)
