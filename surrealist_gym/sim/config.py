@@ -84,7 +84,9 @@ class SimConfig:
 
     Attributes:
         vehicle: vehicle preset.
-        physics_hz: PyBullet step rate, also the attitude/rate loop rate [Hz].
+        physics_hz: PyBullet's integration rate [Hz] (>= 200).
+        control_hz: attitude/rate loop and motor rate [Hz]; PyBullet takes physics_hz / control_hz sub-steps
+            per control step (the forces held constant over them).
         outer_hz: position/velocity controller and navigator rate [Hz].
         planner_hz: avoidance planner and depth sensor rate [Hz].
         log_hz: rate of the recorded local-position samples (the trajectory and the ULog) [Hz].
@@ -101,6 +103,7 @@ class SimConfig:
 
     vehicle: VehicleModel = VehicleModel.PX4_VISION
     physics_hz: float = 200.0
+    control_hz: float = 100.0
     outer_hz: float = 50.0
     planner_hz: float = 10.0
     log_hz: float = 10.0
@@ -120,10 +123,13 @@ class SimConfig:
         object.__setattr__(self, "params", FrozenDict(dict(self.params)))
         if self.physics_hz < 200:
             raise ValueError(f"SimConfig.physics_hz must be >= 200 Hz, got {self.physics_hz:g}")
+        if not 0 < self.control_hz <= self.physics_hz or _not_divisor(self.physics_hz, self.control_hz):
+            raise ValueError(f"SimConfig.control_hz must divide physics_hz ({self.physics_hz:g}), got "
+                             f"{self.control_hz:g}")
         for name in ("outer_hz", "planner_hz", "log_hz"):
             rate = getattr(self, name)
-            if not 0 < rate <= self.physics_hz or abs(self.physics_hz / rate - round(self.physics_hz / rate)) > 1e-9:
-                raise ValueError(f"SimConfig.{name} must divide physics_hz ({self.physics_hz:g}), got {rate:g}")
+            if not 0 < rate <= self.control_hz or _not_divisor(self.control_hz, rate):
+                raise ValueError(f"SimConfig.{name} must divide control_hz ({self.control_hz:g}), got {rate:g}")
         if abs(self.outer_hz / self.planner_hz - round(self.outer_hz / self.planner_hz)) > 1e-9:
             raise ValueError(f"SimConfig.planner_hz must divide outer_hz, got {self.planner_hz:g}")
         if abs(self.outer_hz / self.log_hz - round(self.outer_hz / self.log_hz)) > 1e-9:
@@ -133,6 +139,10 @@ class SimConfig:
     def from_dict(cls, values: Mapping[str, Any]) -> "SimConfig":
         """A config from keyword values; an unknown key is a ``TypeError`` naming it."""
         return replace_checked(cls(), **dict(values))
+
+
+def _not_divisor(a: float, b: float) -> bool:
+    return abs(a / b - round(a / b)) > 1e-9
 
 
 def replace_checked(obj, **changes):

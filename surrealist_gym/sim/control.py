@@ -84,7 +84,7 @@ class PositionControl:
         self.prev_v = None
         self.acc_f = (0.0, 0.0, 0.0)
 
-    def update(self, pos, vel, pos_sp, vel_ff, yaw_sp: float, dt: float):
+    def update(self, pos, vel, pos_sp, vel_ff, yaw_sp: float, dt: float, acc_ff=(0.0, 0.0, 0.0)):
         """One control step.
 
         Args:
@@ -92,6 +92,7 @@ class PositionControl:
             pos_sp: NED position setpoint; a nan component is not position-controlled.
             vel_ff: NED velocity feed-forward [m/s] (the setpoint when the position component is nan).
             yaw_sp: heading setpoint [rad]. dt: time since the last update [s].
+            acc_ff: NED acceleration feed-forward [m/s^2] (the trajectory's acceleration).
 
         Returns:
             (q_sp, thrust): attitude setpoint (w, x, y, z) and collective thrust command in [0, 1].
@@ -110,9 +111,9 @@ class PositionControl:
             self.acc_f = tuple(a * f + (1 - a) * (v - q) / dt for f, v, q in zip(self.acc_f, vel, self.prev_v))
         self.prev_v = vel
         ex, ey, ez = vx - vel[0], vy - vel[1], vz - vel[2]
-        ax = self.vxy_p * ex + self.int_x - self.vxy_d * self.acc_f[0]
-        ay = self.vxy_p * ey + self.int_y - self.vxy_d * self.acc_f[1]
-        az = self.vz_p * ez + self.int_z - self.vz_d * self.acc_f[2]
+        ax = acc_ff[0] + self.vxy_p * ex + self.int_x - self.vxy_d * self.acc_f[0]
+        ay = acc_ff[1] + self.vxy_p * ey + self.int_y - self.vxy_d * self.acc_f[1]
+        az = acc_ff[2] + self.vz_p * ez + self.int_z - self.vz_d * self.acc_f[2]
         # acceleration -> thrust vector, tilt limit, vertical priority
         bx, by, bz = -ax, -ay, GRAVITY
         n = math.sqrt(bx * bx + by * by + bz * bz)
@@ -374,3 +375,91 @@ def inner_step(orn, lin, ang, q_sp, thrust, wind, dt, armed, integrate, P, S):
     return (fx_w, fy_w, fz_w, r00 * tx + r01 * ty + r02 * tz, r10 * tx + r11 * ty + r12 * tz,
             r20 * tx + r21 * ty + r22 * tz)
 
+
+
+def position_params(p: dict):
+    """The float64 parameter vector of :func:`position_step` (built once per run)."""
+    import numpy as np
+
+    ref = PositionControl(p)
+    return np.array([ref.xy_p, ref.z_p, ref.vxy_p, ref.vxy_i, ref.vxy_d, ref.vz_p, ref.vz_i, ref.vz_d,
+                     ref.vel_max_xy, ref.vel_up, ref.vel_dn, ref.tilt_max, ref.hover, ref.thr_min, ref.thr_max],
+                    dtype=np.float64)
+
+
+@njit(cache=True)
+def _attitude_from_thrust(tx, ty, tz, yaw):
+    n = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if n < 1e-9:
+        zx, zy, zz = 0.0, 0.0, 1.0
+    else:
+        zx, zy, zz = -tx / n, -ty / n, -tz / n
+    cx, cy = -math.sin(yaw), math.cos(yaw)
+    xx, xy, xz = cy * zz, -cx * zz, cx * zy - cy * zx
+    m = math.sqrt(xx * xx + xy * xy + xz * xz)
+    if m < 1e-9:
+        xx, xy, xz = 1.0, 0.0, 0.0
+    else:
+        xx, xy, xz = xx / m, xy / m, xz / m
+    yx, yy, yz = zy * xz - zz * xy, zz * xx - zx * xz, zx * xy - zy * xx
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = xx, yx, zx, xy, yy, zy, xz, yz, zz
+    tr = r00 + r11 + r22
+    if tr > 0:
+        s = 2.0 * math.sqrt(tr + 1.0)
+        return (0.25 * s, (r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s)
+    if r00 > r11 and r00 > r22:
+        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
+        return ((r21 - r12) / s, 0.25 * s, (r01 + r10) / s, (r02 + r20) / s)
+    if r11 > r22:
+        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
+        return ((r02 - r20) / s, (r01 + r10) / s, 0.25 * s, (r12 + r21) / s)
+    s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
+    return ((r10 - r01) / s, (r02 + r20) / s, (r12 + r21) / s, 0.25 * s)
+
+
+@njit(cache=True)
+def position_step(pos, vel, pos_sp, vel_ff, acc_ff, yaw_sp, dt, P, S):
+    """Compiled :meth:`PositionControl.update` (same maths). State S: [0:3] integrators, [3:6] previous
+    velocity, [6:9] filtered acceleration, [9] 1 when [3:6] is valid. Returns (qw, qx, qy, qz, thrust)."""
+    g = 9.80665
+    vx = vel_ff[0] if pos_sp[0] != pos_sp[0] else vel_ff[0] + P[0] * (pos_sp[0] - pos[0])
+    vy = vel_ff[1] if pos_sp[1] != pos_sp[1] else vel_ff[1] + P[0] * (pos_sp[1] - pos[1])
+    vz = vel_ff[2] if pos_sp[2] != pos_sp[2] else vel_ff[2] + P[1] * (pos_sp[2] - pos[2])
+    sp = math.hypot(vx, vy)
+    if sp > P[8]:
+        vx, vy = vx * P[8] / sp, vy * P[8] / sp
+    vz = min(max(vz, -P[9]), P[10])
+    if S[9] > 0.5 and dt > 0:
+        for i in range(3):
+            S[6 + i] = 0.5 * S[6 + i] + 0.5 * (vel[i] - S[3 + i]) / dt
+    S[3], S[4], S[5], S[9] = vel[0], vel[1], vel[2], 1.0
+    ex, ey, ez = vx - vel[0], vy - vel[1], vz - vel[2]
+    ax = acc_ff[0] + P[2] * ex + S[0] - P[4] * S[6]
+    ay = acc_ff[1] + P[2] * ey + S[1] - P[4] * S[7]
+    az = acc_ff[2] + P[5] * ez + S[2] - P[7] * S[8]
+    bx, by, bz = -ax, -ay, g
+    n = math.sqrt(bx * bx + by * by + bz * bz)
+    bx, by, bz = bx / n, by / n, bz / n
+    tilt = math.acos(max(-1.0, min(1.0, bz)))
+    if tilt > P[11]:
+        h = math.hypot(bx, by)
+        bx, by, bz = bx / h * math.sin(P[11]), by / h * math.sin(P[11]), math.cos(P[11])
+    hover, thr_min, thr_max = P[12], P[13], P[14]
+    thr_ned_z = az * (hover / g) - hover
+    collective = thr_ned_z / bz
+    tx, ty = bx * collective, by * collective
+    tz = min(max(thr_ned_z, -thr_max), -thr_min)
+    if (tz >= -thr_min and ez >= 0.0) or (tz <= -thr_max and ez <= 0.0):
+        ez = 0.0
+    xy_max = math.sqrt(max(thr_max * thr_max - tz * tz, 0.0))
+    txy = math.hypot(tx, ty)
+    if txy > xy_max:
+        tx, ty = tx * xy_max / txy, ty * xy_max / txy
+    arw = 2.0 / P[2]
+    ex -= arw * (ax - tx * (g / hover))
+    ey -= arw * (ay - ty * (g / hover))
+    S[0] += ex * P[3] * dt
+    S[1] += ey * P[3] * dt
+    S[2] = max(-g, min(g, S[2] + ez * P[6] * dt))
+    q = _attitude_from_thrust(tx, ty, tz, yaw_sp)
+    return (q[0], q[1], q[2], q[3], math.sqrt(tx * tx + ty * ty + tz * tz))

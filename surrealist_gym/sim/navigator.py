@@ -68,6 +68,7 @@ class Navigator:
         self.then_land = False  # RTL: land after reaching the target
         self.finished_in_air = False
         self.t = 0.0
+        self.carrot = None
 
     # --- public --------------------------------------------------------------------------------------------------
     @property
@@ -96,18 +97,19 @@ class Navigator:
             planner: the latest PlannerOutput when avoidance is on, else None.
 
         Returns:
-            (pos_sp_ned, vel_ff_ned, yaw_sp): NED position setpoint (nan = free), NED velocity feed-forward, heading.
+            (pos_sp_ned, vel_ff_ned, acc_ff_ned, yaw_sp): NED position setpoint (nan = free), velocity and
+            acceleration feed-forward, heading.
         """
         self.t = t
         if self.yaw_sp is None:
             self.yaw_sp = yaw
         self._advance(t, pos, vel, ground_contact)
         ph = self.phase
-        pos_sp, vel_sp = (NAN, NAN, NAN), (0.0, 0.0, 0.0)
+        pos_sp, vel_sp, acc = (NAN, NAN, NAN), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
         yaw_target = self.yaw_sp
         if ph in (Phase.IDLE, Phase.LANDED, Phase.DONE):
             self.v_cmd = [0.0, 0.0, 0.0]
-            return (NAN, NAN, NAN), (0.0, 0.0, 0.3), self.yaw_sp  # push down: thrust goes to its minimum
+            return (NAN, NAN, NAN), (0.0, 0.0, 0.3), (0.0, 0.0, 0.0), self.yaw_sp  # push down: minimum thrust
         if ph == Phase.TAKEOFF or ph == Phase.CLIMB:
             ramp = min(1.0, (t - self.phase_t0) / max(self.p["MPC_TKO_RAMP_T"], 1e-3)) if ph == Phase.TAKEOFF else 1.0
             speed = self.p["MPC_TKO_SPEED"] if ph == Phase.TAKEOFF else self.p["MPC_Z_VEL_MAX_UP"]
@@ -130,15 +132,18 @@ class Navigator:
             pos_sp, vel_sp = (self.target[0], self.target[1], NAN), (0.0, 0.0, -vd)
         elif ph == Phase.CRUISE:
             if planner is not None:
-                vel_sp = planner.velocity
+                vel_sp = self._approach(pos, planner.velocity)
                 yaw_target = planner.yaw
             else:
                 vel_sp = self._line_velocity(pos)
                 yaw_target = self._yaw_mode(pos, vel, self.target)
+            old = self.v_cmd
             vel_sp = self._slew(vel_sp, dt)
+            acc = tuple((vel_sp[i] - old[i]) / dt for i in range(3))
+            pos_sp = self._carrot(pos, vel_sp, dt)
         self.yaw_sp = self._yaw_step(self.yaw_sp, yaw_target, dt)
         ned_pos = (pos_sp[0], pos_sp[1], -pos_sp[2])
-        return ned_pos, (vel_sp[0], vel_sp[1], -vel_sp[2]), self.yaw_sp
+        return ned_pos, (vel_sp[0], vel_sp[1], -vel_sp[2]), (acc[0], acc[1], -acc[2]), self.yaw_sp
 
     # --- state machine -------------------------------------------------------------------------------------------
     def _advance(self, t, pos, vel, ground_contact):
@@ -216,6 +221,7 @@ class Navigator:
 
     def _go(self, t, phase, target, pos):
         self.phase, self.phase_t0 = phase, t
+        self.carrot = None
         self.target = tuple(target)
         self.landed_since = None
 
@@ -262,9 +268,32 @@ class Navigator:
         elif uz < -1e-6:
             vmax = min(vmax, self.p["MPC_Z_VEL_MAX_DN"] / -uz)
         brake = 0.5 * self.p["MPC_ACC_HOR"]
-        along = min(vmax, math.sqrt(2.0 * brake * max(remaining, 0.0)))
+        along = min(vmax, math.sqrt(2.0 * brake * max(remaining, 0.0)), self.p["MPC_XY_P"] * max(remaining, 0.0) + 0.1)
         kp = self.p["MPC_XY_P"]
         return (along * ux + kp * cx, along * uy + kp * cy, along * uz + kp * cz)
+
+    def _approach(self, pos, v):
+        """Before a stop (landing, last item) cap the speed to MPC_XY_P times the distance left, so the vehicle
+        arrives slowly instead of overshooting the acceptance radius (PX4 plans the stop into its trajectory)."""
+        if not (self.then_land or self._next_position() is None):
+            return v
+        d = math.sqrt(sum((self.target[i] - pos[i]) ** 2 for i in range(3)))
+        cap = self.p["MPC_XY_P"] * d + 0.1
+        n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+        return v if n <= cap else (v[0] * cap / n, v[1] * cap / n, v[2] * cap / n)
+
+    def _carrot(self, pos, v, dt):
+        """The position setpoint that moves with the velocity setpoint (PX4's trajectory setpoint: position and
+        velocity together, so the position P term removes the velocity loop's lag); kept within 1 m."""
+        c = self.carrot
+        if c is None:
+            c = tuple(pos)
+        c = [c[i] + v[i] * dt for i in range(3)]
+        d = math.sqrt(sum((c[i] - pos[i]) ** 2 for i in range(3)))
+        if d > 1.0:
+            c = [pos[i] + (c[i] - pos[i]) / d for i in range(3)]
+        self.carrot = tuple(c)
+        return self.carrot
 
     def _slew(self, v, dt):
         """Limit the change of the velocity setpoint: MPC_ACC_HOR horizontally, MPC_ACC_UP_MAX/_DOWN_MAX up/down."""

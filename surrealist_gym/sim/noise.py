@@ -58,6 +58,9 @@ class NoiseSource:
         if wind is not None:
             self.wind += _plugin_wind(wnd, wind, n, dt)
         self.rng = sens if c.sensor else None
+        # plain lists: indexing them in the loop is several times cheaper than numpy rows
+        self.pos_list, self.vel_list = self.pos_err.tolist(), self.vel_err.tolist()
+        self.yaw_list, self.wind_list = self.yaw_err.tolist(), [tuple(w) for w in self.wind.tolist()]
 
 
 def _plugin_wind(rng: np.random.Generator, wind, n: int, dt: float) -> np.ndarray:

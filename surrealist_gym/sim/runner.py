@@ -1,6 +1,7 @@
 """The run loop: fly the runs of one test case in one PyBullet world and report each run.
 
-Rates (SimConfig): physics, attitude and rate loops at ``physics_hz``; estimator, navigator and position/velocity
+Rates (SimConfig): PyBullet integrates at ``physics_hz``; attitude/rate loops and motors run at ``control_hz``
+(one ``stepSimulation`` of physics_hz / control_hz sub-steps each); estimator, navigator and position/velocity
 control at ``outer_hz``; depth sensor and avoidance planner at ``planner_hz``; recorded local position at
 ``log_hz``. The runs of a batch are independent bodies in one world (no vehicle-vehicle collisions), each with its
 own controllers, planner and noise, so run ``i`` flies exactly as it would alone (see the tests).
@@ -21,7 +22,7 @@ from ..geometry import obstacle_distances
 from ..mission import Command
 from ..trajectory import Trajectory
 from .config import SimConfig, auto_timeout, resolve_params
-from .control import PositionControl, inner_step, kernel_params
+from .control import inner_step, kernel_params, position_params, position_step
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
 from .vehicle import preset
@@ -112,7 +113,7 @@ class RunResult:
 class _Run:
     """Mutable per-vehicle state inside the loop."""
 
-    __slots__ = ("body", "pos_ctl", "kp", "ks", "wind", "nav", "planner", "noise", "q_sp", "thrust", "status", "message",
+    __slots__ = ("body", "pp", "ps", "kp", "ks", "wind", "armed", "integ", "nav", "planner", "noise", "q_sp", "thrust", "status", "message",
                  "end_t", "log", "true", "plan_out", "anchor", "anchor_t", "anchor_phase", "ground", "active",
                  "index")
 
@@ -158,7 +159,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
     # modelled as converged: the controller's hover thrust is the vehicle's physical one.
     ctl_params = dict(params, MPC_THR_HOVER=vehicle.hover_command) if params.get("MPC_USE_HTE", 1) else params
-    with World(test.obstacles, vehicle, len(indices), cfg.physics_hz) as world:
+    with World(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz) as world:
         sensor = None
         if avoidance:
             from .avoidance import AvoidanceConfig, LocalPlanner
@@ -170,8 +171,8 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
         for body, index in zip(world.vehicles, indices):
             r = _Run()
             r.body, r.index = body, index
-            r.pos_ctl = PositionControl(ctl_params)
-            r.kp = kernel_params(params, vehicle, 1.0 / cfg.physics_hz,
+            r.pp, r.ps = position_params(ctl_params), np.zeros(10)
+            r.kp = kernel_params(params, vehicle, 1.0 / cfg.control_hz,
                                  (vehicle.drag_xy, vehicle.drag_z, vehicle.drag_quad))
             r.ks = np.zeros(10)
             r.wind = (0.0, 0.0, 0.0)
@@ -182,7 +183,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             r.status, r.message, r.end_t = None, "", 0.0
             r.log, r.true, r.plan_out = [], [], None
             r.anchor, r.anchor_t, r.anchor_phase = None, 0.0, None
-            r.ground, r.active = True, True
+            r.ground, r.active, r.armed, r.integ = True, True, True, False
             world.set_yaw(body, yaw0)
             runs.append(r)
         _loop(world, runs, cfg, params, vehicle, sensor, timeout)
@@ -199,8 +200,8 @@ def _initial_yaw(mission) -> float:
 
 def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, sensor, timeout: float) -> None:
     cid = world.cid
-    dt = 1.0 / cfg.physics_hz
-    outer_div = int(round(cfg.physics_hz / cfg.outer_hz))
+    dt = 1.0 / cfg.control_hz
+    outer_div = int(round(cfg.control_hz / cfg.outer_hz))
     plan_div = int(round(cfg.outer_hz / cfg.planner_hz))
     log_div = int(round(cfg.outer_hz / cfg.log_hz))
     outer_dt = outer_div * dt
@@ -214,7 +215,8 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
     stuck_w, stuck_d = cfg.stuck_window_s, cfg.stuck_distance_m
     active = list(runs)
     step = 0
-    max_steps = int(math.ceil(timeout * cfg.physics_hz))
+    max_steps = int(math.ceil(timeout * cfg.control_hz))
+    done = False
     while active:
         outer = step % outer_div == 0
         k = step // outer_div
@@ -225,17 +227,14 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
             lin, ang = get_vel(body, physicsClientId=cid)
             if outer and not _outer(r, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w,
                                     stuck_d):
+                done = True
                 continue
-            nav = r.nav
-            fx, fy, fz, tx, ty, tz = inner(orn, lin, ang, r.q_sp, r.thrust, r.wind, dt, nav.armed,
-                                           not nav.on_ground_phase, r.kp, r.ks)
+            fx, fy, fz, tx, ty, tz = inner(orn, lin, ang, r.q_sp, r.thrust, r.wind, dt, r.armed, r.integ, r.kp,
+                                           r.ks)
             apply_force(body, -1, (fx, fy, fz), pos, frame, physicsClientId=cid)
             apply_torque(body, -1, (tx, ty, tz), frame, physicsClientId=cid)
         step_sim(physicsClientId=cid)
         step += 1
-        if outer:
-            for r in active:
-                r.ground = False
         for c in contacts(physicsClientId=cid):
             a, b = c[1], c[2]
             r = body_run.get(a)
@@ -245,20 +244,23 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
             if r is None or not r.active:
                 continue
             if other in obstacle_index:
-                r.status, r.end_t = RunStatus.COLLISION, step * dt
+                r.status, r.end_t, done = RunStatus.COLLISION, step * dt, True
                 r.message = f"collision with obstacle {obstacle_index[other]} at t={step * dt:.2f} s"
             else:
                 r.ground = True
         if step >= max_steps:
+            done = True
             for r in active:
                 if r.status is None:
                     r.status, r.end_t = RunStatus.TIMEOUT, step * dt
                     r.message = f"timeout after {timeout:g} s in phase {r.nav.phase.value}"
-        finished = [r for r in active if r.status is not None]
-        for r in finished:
+        if not done:
+            continue
+        done = False
+        for r in [r for r in active if r.status is not None]:
             r.active = False
             _record(r, r.end_t, *get_pose(r.body, physicsClientId=cid), *get_vel(r.body, physicsClientId=cid),
-                    rest_z, min(k, len(r.noise.pos_err) - 1))
+                    rest_z, min(k, len(r.noise.pos_list) - 1))
             world.remove(r.body)
             active.remove(r)
 
@@ -266,11 +268,12 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
 def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d) -> bool:
     """Estimator, planner, navigator, position control and bookkeeping; False when the run ended."""
     nav = r.nav
-    kk = min(k, len(r.noise.pos_err) - 1)
-    pe, ve = r.noise.pos_err[kk], r.noise.vel_err[kk]
-    r.wind = tuple(r.noise.wind[kk])
+    noise = r.noise
+    kk = min(k, len(noise.pos_list) - 1)
+    pe, ve = noise.pos_list[kk], noise.vel_list[kk]
+    r.wind = noise.wind_list[kk]
     qx, qy, qz, qw = orn
-    yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz)) + r.noise.yaw_err[kk]
+    yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz)) + noise.yaw_list[kk]
     if not (math.isfinite(pos[0]) and math.isfinite(pos[2])) or 1 - 2 * (qx * qx + qy * qy) < -0.1:
         r.status, r.end_t = RunStatus.ERROR, t
         r.message = f"vehicle flipped or state invalid at t={t:.2f} s"
@@ -289,18 +292,22 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
                 hits = hits + np.array([pe[0], pe[1], -(pe[2])])
             r.plan_out = r.planner.update(t, pos_up, vel_up, nav.goal(), hits, max_speed=nav.cruise)
         plan = r.plan_out
-    pos_sp, vel_ff, yaw_sp = nav.update(t, pos_up, vel_up, yaw, outer_dt, r.ground, plan)
+    pos_sp, vel_ff, acc_ff, yaw_sp = nav.update(t, pos_up, vel_up, yaw, outer_dt, r.ground, plan)
+    r.ground = False  # collects the contacts of the next outer period
     if nav.mission_complete:
         r.status, r.end_t = RunStatus.SUCCESS, t
         r.message = ("landed and disarmed" if nav.phase == Phase.DONE else "mission finished in the air") + \
             f" at t={t:.2f} s"
         return False
+    r.armed, r.integ = nav.armed, not nav.on_ground_phase
     if nav.on_ground_phase:
-        r.pos_ctl.reset()
+        r.ps[:] = 0.0
         r.thrust = 0.0
         r.q_sp = (math.cos(yaw_sp / 2), 0.0, 0.0, math.sin(yaw_sp / 2))
     else:
-        r.q_sp, r.thrust = r.pos_ctl.update((ex, ey, ez), (evx, evy, evz), pos_sp, vel_ff, yaw_sp, outer_dt)
+        qw, qx, qy, qz, r.thrust = position_step((ex, ey, ez), (evx, evy, evz), pos_sp, vel_ff, acc_ff, yaw_sp,
+                                                 outer_dt, r.pp, r.ps)
+        r.q_sp = (qw, qx, qy, qz)
     # stuck: the distance to the current goal has not shrunk by stuck_d during the last stuck_w seconds
     if nav.phase in (Phase.CRUISE, Phase.TAKEOFF, Phase.CLIMB, Phase.DESCEND):
         g = nav.target
@@ -319,7 +326,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
 
 
 def _record(r: _Run, t, pos, orn, lin, ang, rest_z, kk) -> None:
-    pe, ve = r.noise.pos_err[kk], r.noise.vel_err[kk]
+    pe, ve = r.noise.pos_list[kk], r.noise.vel_list[kk]
     qx, qy, qz, qw = orn
     yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz))
     if not r.log or r.log[-1][0] < t:

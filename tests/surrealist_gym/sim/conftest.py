@@ -19,10 +19,11 @@ def seed1():
 
 @pytest.fixture(scope="session")
 def blocked(seed1):
-    """Seed 1 with its box moved onto the straight line from home to the landing point."""
+    """Seed 1 with its box moved onto the straight line from home to the landing point, 4 m tall (the 3-m box
+    is level with the 3-m cruise altitude, so some runs skim over it)."""
     f = 0.52
     box = seed1.obstacles[0]
-    return seed1.with_obstacles([replace(box, x=LAND_XY[0] * f, y=LAND_XY[1] * f)])
+    return seed1.with_obstacles([replace(box, x=LAND_XY[0] * f, y=LAND_XY[1] * f, h=4.0)])
 
 
 @pytest.fixture(scope="session")

@@ -8,7 +8,7 @@ import pytest
 
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.control import (AttitudeRateControl, PositionControl, attitude_from_thrust, inner_step,
-                                        kernel_params)
+                                        kernel_params, position_params, position_step)
 from surrealist_gym.sim.vehicle import IRIS, PX4_VISION
 
 
@@ -63,3 +63,19 @@ def test_position_control_tilt_limited():
     w, x, y, z = q
     tilt = math.acos(1 - 2 * (x * x + y * y))
     assert tilt == pytest.approx(math.radians(20.0), abs=1e-6)
+
+
+def test_compiled_position_control_equals_reference():
+    params = dict(PX4_DEFAULTS, MPC_THR_HOVER=0.3, MPC_XY_VEL_MAX=5.0)
+    ref, kp, ks = PositionControl(params), position_params(params), np.zeros(10)
+    rng = np.random.default_rng(4)
+    for i in range(300):
+        pos, vel = tuple(rng.normal(size=3) * 5), tuple(rng.normal(size=3) * 2)
+        pos_sp = tuple(rng.normal(size=3) * 5)
+        if i % 3 == 0:
+            pos_sp = (math.nan, math.nan, pos_sp[2])
+        vel_ff, yaw = tuple(rng.normal(size=3)), float(rng.uniform(-math.pi, math.pi))
+        acc_ff = tuple(rng.normal(size=3))
+        q, thrust = ref.update(pos, vel, pos_sp, vel_ff, yaw, 0.02, acc_ff)
+        out = position_step(pos, vel, pos_sp, vel_ff, acc_ff, yaw, 0.02, kp, ks)
+        np.testing.assert_allclose(out, (*q, thrust), atol=1e-9)

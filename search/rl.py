@@ -1,0 +1,257 @@
+"""Reinforcement-learning agents on stable-baselines3: train a policy across procedurally generated problems, then
+roll it out as a search agent.
+
+Training (:func:`train_policy`) uses :class:`ProceduralEnv`, a Gymnasium env that draws a new problem at every
+reset. A replication problem is the seed test (by default the paper's case0 seed 1) plus a HIDDEN obstacle layout:
+the seed mutated by a random action, so the answer is reachable; our simulator flies the hidden layout once and that
+flight plays the "real" one (``ReplicateEnv(reference_trajectory=...)``). A generation problem is the RQ2 seed with
+its first obstacle moved at random. Episodes are short searches (``budget`` evaluations of ``runs`` simulations).
+
+Search (:class:`PPOAgent`): the trained policy acts deterministically on the env; an action the env answers from
+its memo (already evaluated) or rejects as invalid is followed by one sampled from the policy, so the rollout keeps
+spending the budget. RL libraries are run-style, so the agent overrides ``run`` and returns a SearchResult.
+
+Example:
+    >>> train_policy(steps=256, out="ppo.zip", problem="replicate")            # doctest: +SKIP
+    >>> env = gym.make("Surrealist-Replicate-v0", budget=20)                  # doctest: +SKIP
+    >>> PPOAgent("ppo.zip", seed=0).run(env).best_fitness                     # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+from typing import Callable
+
+import gymnasium as gym
+import numpy as np
+
+from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
+
+from .base import Agent, SearchResult
+
+
+class Problem(str, Enum):
+    """The family of procedurally generated training problems."""
+
+    REPLICATE = "replicate"
+    GENERATE = "generate"
+
+
+class Algorithm(str, Enum):
+    """The stable-baselines3 algorithm (both fit the env's continuous action box)."""
+
+    PPO = "ppo"
+    SAC = "sac"
+
+
+def _sb3(algorithm: Algorithm | str):
+    try:
+        import stable_baselines3
+    except ImportError as err:
+        raise DependencyNotInstalled("RL agents need stable-baselines3: pip install 'surrealist-gym[rl]'") from err
+    return getattr(stable_baselines3, Algorithm(algorithm).name)
+
+
+@dataclass(frozen=True, slots=True)
+class ProblemConfig:
+    """How training problems are drawn.
+
+    Attributes:
+        problem: replicate (hidden obstacle layouts) or generate (random seed placements).
+        budget: evaluations per episode (one problem).
+        runs: simulations per evaluation.
+        spread: hidden layouts are the seed mutated by an action uniform in ``[-spread, spread]`` per mutator
+            (1 = each mutator's full range); a generation seed's obstacle moves by up to ``spread`` x 8 [m].
+        seed_test: the seed test case (path or TestCase); None = case0 seed 1 (replicate) or the RQ2 seed.
+    """
+
+    problem: Problem = Problem.REPLICATE
+    budget: int = 15
+    runs: int = 1
+    spread: float = 0.3
+    seed_test: object = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "problem", Problem(self.problem))
+        if self.budget < 2 or self.runs < 1 or not 0 < self.spread <= 1:
+            raise ValueError(f"ProblemConfig: expected budget >= 2, runs >= 1, 0 < spread <= 1; got {self.budget}, "
+                             f"{self.runs}, {self.spread}")
+
+
+class ProceduralEnv(gym.Env):
+    """A Surrealist env whose problem is drawn anew at every reset (for training RL policies).
+
+    Spaces are those of the envs it draws (one action value per mutator of the seed's first obstacle), so a policy
+    trained here runs on ``Surrealist-Replicate-v0`` (6 mutators) or ``Surrealist-Generate-v0`` (2 mutators).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, config: ProblemConfig | None = None, sim_config=None, executor="inline", **overrides):
+        from surrealist_gym import data_path
+        from surrealist_gym.mutators import AUTHORS_ORDER, MOVE_KINDS, default_mutators
+        from surrealist_gym.testcase import TestCase, load_test
+
+        self.config = ProblemConfig(**overrides) if config is None else config
+        seed_test = self.config.seed_test
+        if seed_test is None:
+            replicate = self.config.problem is Problem.REPLICATE
+            seed_test = data_path("rq1-seed1.yaml" if replicate else "rq2-seed.yaml")
+        self.seed_test = seed_test if isinstance(seed_test, TestCase) else load_test(seed_test)
+        kinds = AUTHORS_ORDER if self.config.problem is Problem.REPLICATE else MOVE_KINDS
+        self.mutators = default_mutators(self.seed_test, kinds, obstacles=[0])
+        self.sim_config, self.executor = sim_config, executor
+        n = len(self.mutators)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(n + 3,), dtype=np.float32)
+        self.inner = None
+        self.problems = 0
+
+    def _mutated(self, action: np.ndarray):
+        """The seed mutated by an action in [-1, 1] (raises InvalidTestCase)."""
+        test = self.seed_test
+        for mutator, a in zip(self.mutators, action):
+            value = (mutator.high + mutator.low) / 2 + a * (mutator.high - mutator.low) / 2
+            test = mutator.apply(test, float(np.round(value, 9)))
+        return test
+
+    def _draw(self, seed: int):
+        """A new inner env: a problem drawn from ``self.np_random`` (a few tries until the draw is valid)."""
+        from surrealist_gym.envs.generate import GenerateEnv
+        from surrealist_gym.envs.replicate import ReplicateEnv
+        from surrealist_gym.errors import InvalidTestCase
+        from surrealist_gym.mutators import MOVE_KINDS, default_mutators
+        from surrealist_gym.sim import simulate
+
+        cfg = self.config
+        common = dict(runs=cfg.runs, budget=cfg.budget, mutators=self.mutators, executor=self.executor,
+                      random_seed=seed, sim_config=self.sim_config)
+        for _ in range(20):
+            action = self.np_random.uniform(-cfg.spread, cfg.spread, len(self.mutators))
+            try:
+                if cfg.problem is Problem.GENERATE:
+                    moves = default_mutators(self.seed_test, MOVE_KINDS, obstacles=[0])
+                    test = self.seed_test
+                    for mutator, a in zip(moves, action[:2]):
+                        test = mutator.apply(test, float(np.round(a * 8.0, 6)))
+                    return GenerateEnv(seed_test=test, **common)
+                hidden = self._mutated(action)
+            except InvalidTestCase:
+                continue
+            real = simulate(hidden, runs=1, seed=seed + 10_000, config=self.sim_config)[0]
+            if getattr(real.status, "value", real.status) == "success" and len(real.trajectory) > 1:
+                return ReplicateEnv(seed_test=self.seed_test, reference_trajectory=real.trajectory, **common)
+        raise SurrealistError(f"ProceduralEnv: no valid {cfg.problem.value} problem in 20 draws "
+                              f"(spread {cfg.spread}); lower the spread")
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        if self.inner is not None:
+            self.inner.close()
+        self.inner = self._draw(int(self.np_random.integers(0, 2**31 - 1)))
+        self.problems += 1
+        return self.inner.reset(seed=int(self.np_random.integers(0, 2**31 - 1)))
+
+    def step(self, action):
+        return self.inner.step(action)
+
+    def close(self):
+        if self.inner is not None:
+            self.inner.close()
+            self.inner = None
+
+
+def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, algorithm: Algorithm | str = "ppo",
+                 budget: int = 15, runs: int = 1, spread: float = 0.3, seed: int = 0, seed_test=None,
+                 sim_config=None, progress: Callable[[int], None] | None = None, **hyper) -> Path:
+    """Train a policy for ``steps`` env steps across procedurally drawn problems and save it (SB3 ``save``).
+
+    Args:
+        steps: environment steps (each is one evaluation of ``runs`` simulations, ~0.3 s per simulation).
+        out: where to write the policy (``.zip``).
+        problem: replicate or generate.
+        algorithm: ppo or sac.
+        budget, runs, spread, seed_test: the :class:`ProblemConfig` of the training problems.
+        seed: seeds the problems, the policy's initialisation and its sampling.
+        progress: called with the number of steps done, after each step.
+        **hyper: keyword arguments of the SB3 algorithm; PPO defaults suit short runs
+            (``n_steps=64, batch_size=32, n_epochs=5``).
+
+    Returns:
+        The path of the saved policy.
+    """
+    cls = _sb3(algorithm)
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    config = ProblemConfig(problem, budget, runs, spread, seed_test)
+    env = ProceduralEnv(config, sim_config=sim_config)
+    env.reset(seed=seed)
+    if Algorithm(algorithm) is Algorithm.PPO:
+        hyper = {"n_steps": 64, "batch_size": 32, "n_epochs": 5, "gamma": 0.95, **hyper}
+    else:
+        hyper = {"learning_starts": min(100, steps // 4), "buffer_size": 50_000, **hyper}
+    model = cls("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **hyper)
+
+    class _Progress(BaseCallback):
+        def _on_step(self) -> bool:
+            if progress is not None:
+                progress(self.num_timesteps)
+            return True
+
+    model.learn(total_timesteps=int(steps), callback=_Progress())
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    model.save(out)
+    env.close()
+    return out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
+
+
+class PPOAgent(Agent):
+    """A trained stable-baselines3 policy (PPO by default, or SAC) rolled out as a search agent."""
+
+    name = "ppo"
+
+    def __init__(self, policy, seed: int | None = None, algorithm: Algorithm | str = "ppo"):
+        super().__init__(seed)
+        self.algorithm = Algorithm(algorithm)
+        self.name = self.algorithm.value
+        if isinstance(policy, (str, os.PathLike)):
+            if not Path(policy).is_file():
+                raise SurrealistError(f"{policy}: no such policy file (train one with `surrealist train-ppo`)")
+            self.policy_path = str(policy)
+            policy = _sb3(self.algorithm).load(self.policy_path, device="cpu")
+        self.model = policy
+        self._obs = None
+        self._explore = False
+
+    def _ask(self) -> list[np.ndarray]:
+        action, _ = self.model.predict(self._obs, deterministic=not self._explore)
+        return [np.asarray(action, dtype=np.float64).reshape(-1)]
+
+    def _tell(self, actions, fitnesses, infos) -> None:
+        self._explore = bool(infos) and (bool(infos[-1].get("memo")) or infos[-1].get("invalid") is not None)
+
+    def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
+        """Roll the policy out on ``env`` until its budget is spent."""
+        expected = self.model.action_space.shape
+        if env.action_space.shape != expected:
+            raise SurrealistError(f"policy {getattr(self, 'policy_path', '')}: trained for {expected[0]} mutators, "
+                                  f"the env has {env.action_space.shape[0]}")
+        seed = seed if seed is not None else self.seed
+        self.model.set_random_seed(seed)
+        self._obs, info = env.reset(seed=seed)
+        self._explore = False
+        self.setup(env, info)
+        done = False
+        while not done:
+            actions = self.ask()
+            self._obs, reward, terminated, truncated, step_info = env.step(actions[0])
+            if callback is not None:
+                callback(step_info)
+            done = terminated or truncated
+            if done:
+                self._stop_reason = "budget spent" if self._env.budget_left <= 0 else "episode ended"
+            self.tell(actions, [reward], [step_info])
+        return self.result
