@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Sequence
@@ -37,6 +38,18 @@ class FailedRun:
     min_distance_2d: float = float("inf")
     duration: float = 0.0
     trajectory: Trajectory = field(default_factory=lambda: Trajectory(np.zeros(0), np.zeros((0, 3))))
+
+
+def _die_with_parent() -> None:
+    """Pool worker initializer: on Linux, end this worker when the process that started it dies (even kill -9)."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            import signal
+
+            ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
 
 
 def _fly_with_retry(submit, test, indices, seed, config) -> list:
@@ -89,7 +102,7 @@ class LocalPoolExecutor:
 
     def _submit(self, test, indices, seed, config):
         if self._pool is None:
-            self._pool = ProcessPoolExecutor(max_workers=self.workers)
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=_die_with_parent)
         return self._pool.submit(fly, test, indices, seed, config)
 
     def run(self, test, indices, seed, config) -> list:

@@ -1,8 +1,8 @@
 """Reproducible noise: per-run seeds, estimator errors and wind (Gazebo wind-plugin fields plus turbulence).
 
 Run ``i`` of a test draws everything from ``run_seed_sequence(test.key(), base_seed, i)``, so a run is
-reproduced exactly from (test, base seed, index). All series are drawn up front as arrays at the outer-loop rate,
-so the per-step loop only indexes them.
+reproduced exactly from (test, base seed, index). Series are drawn in blocks at the outer-loop rate as the flight
+needs them, so the per-step loop only indexes lists and a short flight draws only what it uses.
 """
 from __future__ import annotations
 
@@ -22,48 +22,68 @@ def run_seed_sequence(test_key: str, base_seed: int, index: int) -> np.random.Se
                                    *words])
 
 
-def _ou(rng: np.random.Generator, n: int, dims: int, std: float, tau: float, dt: float) -> np.ndarray:
-    """An (n, dims) stationary Ornstein-Uhlenbeck series with standard deviation std and correlation time tau."""
-    if std <= 0 or n == 0:
-        return np.zeros((n, dims))
-    from scipy.signal import lfilter
+class _OU:
+    """A stationary Ornstein-Uhlenbeck process (std, correlation time tau) drawn block by block."""
 
-    a = math.exp(-dt / tau)
-    w = rng.standard_normal((n, dims)) * std * math.sqrt(1 - a * a)
-    zi = rng.standard_normal((1, dims)) * std * a  # start in the stationary distribution
-    return lfilter([1.0], [1.0, -a], w, axis=0, zi=zi)[0]
+    def __init__(self, rng: np.random.Generator, dims: int, std: float, tau: float, dt: float):
+        self.rng, self.dims, self.std = rng, dims, std
+        self.a = math.exp(-dt / tau)
+        self.state = rng.standard_normal(dims) * std if std > 0 else np.zeros(dims)  # stationary start
+
+    def block(self, n: int) -> np.ndarray:
+        if self.std <= 0:
+            return np.zeros((n, self.dims))
+        from scipy.signal import lfilter
+
+        w = self.rng.standard_normal((n, self.dims)) * self.std * math.sqrt(1 - self.a * self.a)
+        out, zf = lfilter([1.0], [1.0, -self.a], w, axis=0, zi=(self.a * self.state)[None, :])
+        self.state = out[-1]
+        return out
 
 
 class NoiseSource:
-    """Noise series of one run, sampled at the outer-loop period ``dt`` for ``n`` steps.
+    """Noise series of one run at the outer-loop period ``dt``, drawn in blocks as the flight needs them.
 
-    Attributes:
-        pos_err: (n, 3) estimator position error, NED [m].
-        vel_err: (n, 3) estimator velocity error, NED [m/s].
-        yaw_err: (n,) estimator heading error [rad].
-        wind: (n, 3) wind velocity, NED [m/s].
-        rng: generator for the depth sensor's noise (None when sensor noise is off).
+    ``at(k)`` gives the estimator position error (NED, m), velocity error (NED, m/s), heading error (rad) and the
+    wind (NED, m/s) of outer step ``k``. ``rng`` is the depth sensor's generator (None when sensor noise is off).
+    Blocks are drawn in order from the run's own generators, so a run is reproduced exactly whatever its length.
     """
 
-    def __init__(self, seed: np.random.SeedSequence, config: NoiseConfig, wind, n: int, dt: float):
-        est, wnd, sens = (np.random.default_rng(s) for s in seed.spawn(3))
+    BLOCK = 250  # outer steps per block (5 s at 50 Hz); a multiple of the 0.1 s wind-plugin hold
+
+    def __init__(self, seed: np.random.SeedSequence, config: NoiseConfig, wind, dt: float):
+        self._est, self._wnd, sens = (np.random.default_rng(s) for s in seed.spawn(3))
+        self.config, self.plugin, self.dt = config, wind, dt
         c = config
-        self.pos_err = _ou(est, n, 3, c.pos_drift_std, c.pos_drift_tau_s, dt)
-        if c.pos_noise_std > 0:
-            self.pos_err += est.standard_normal((n, 3)) * c.pos_noise_std
-        self.vel_err = est.standard_normal((n, 3)) * c.vel_noise_std if c.vel_noise_std > 0 else np.zeros((n, 3))
-        self.yaw_err = est.standard_normal(n) * 0.01 if c.pos_noise_std > 0 else np.zeros(n)
-        self.wind = _ou(wnd, n, 3, c.turbulence_std, c.turbulence_tau_s, dt)
-        self.wind[:, 2] *= 0.3  # vertical turbulence is weaker near the ground
-        if wind is not None:
-            self.wind += _plugin_wind(wnd, wind, n, dt)
+        self._drift = _OU(self._est, 3, c.pos_drift_std, c.pos_drift_tau_s, dt)
+        self._turbulence = _OU(self._wnd, 3, c.turbulence_std, c.turbulence_tau_s, dt)
         self.rng = sens if c.sensor else None
         # plain lists: indexing them in the loop is several times cheaper than numpy rows
-        self.pos_list, self.vel_list = self.pos_err.tolist(), self.vel_err.tolist()
-        self.yaw_list, self.wind_list = self.yaw_err.tolist(), [tuple(w) for w in self.wind.tolist()]
+        self.pos_list, self.vel_list, self.yaw_list, self.wind_list = [], [], [], []
+
+    def at(self, k: int):
+        while k >= len(self.pos_list):
+            self._draw_block()
+        return self.pos_list[k], self.vel_list[k], self.yaw_list[k], self.wind_list[k]
+
+    def _draw_block(self) -> None:
+        n, c, est = self.BLOCK, self.config, self._est
+        pos = self._drift.block(n)
+        if c.pos_noise_std > 0:
+            pos += est.standard_normal((n, 3)) * c.pos_noise_std
+        vel = est.standard_normal((n, 3)) * c.vel_noise_std if c.vel_noise_std > 0 else np.zeros((n, 3))
+        yaw = est.standard_normal(n) * 0.01 if c.pos_noise_std > 0 else np.zeros(n)
+        wind = self._turbulence.block(n)
+        wind[:, 2] *= 0.3  # vertical turbulence is weaker near the ground
+        if self.plugin is not None:
+            wind += _plugin_wind(self._wnd, self.plugin, n, self.dt, len(self.pos_list) * self.dt)
+        self.pos_list += pos.tolist()
+        self.vel_list += vel.tolist()
+        self.yaw_list += yaw.tolist()
+        self.wind_list += [tuple(w) for w in wind.tolist()]
 
 
-def _plugin_wind(rng: np.random.Generator, wind, n: int, dt: float) -> np.ndarray:
+def _plugin_wind(rng: np.random.Generator, wind, n: int, dt: float, t0: float = 0.0) -> np.ndarray:
     """Gazebo wind plugin semantics: speed ~ N(mean, variance) capped at max, direction ~ unit(dir + N(0, var));
     a gust adds the same kind of wind during [gust_start, gust_start + gust_duration]. Redrawn every 0.1 s."""
     hold = max(1, int(round(0.1 / dt)))
@@ -72,7 +92,7 @@ def _plugin_wind(rng: np.random.Generator, wind, n: int, dt: float) -> np.ndarra
                 wind.direction_variance)
     gust = _draw(rng, m, wind.gust_velocity_mean, wind.gust_velocity_max, wind.gust_velocity_variance,
                  wind.gust_direction, wind.gust_direction_variance)
-    t = np.arange(m) * hold * dt
+    t = t0 + np.arange(m) * hold * dt
     active = (t >= wind.gust_start) & (t < wind.gust_start + wind.gust_duration)
     out[active] += gust[active]
     return np.repeat(out, hold, axis=0)[:n]

@@ -154,7 +154,6 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     vehicle = preset(cfg.vehicle)
     timeout = cfg.timeout_s if cfg.timeout_s is not None else auto_timeout(mission)
     outer_dt = 1.0 / cfg.outer_hz
-    n_outer = int(math.ceil(timeout * cfg.outer_hz)) + 2
     key = test.key()
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
     # modelled as converged: the controller's hover thrust is the vehicle's physical one.
@@ -178,7 +177,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             r.wind = (0.0, 0.0, 0.0)
             r.nav = Navigator(mission, params, cfg.takeoff_delay_s)
             r.planner = LocalPlanner(plan_cfg) if avoidance else None
-            r.noise = NoiseSource(run_seed_sequence(key, seed, index), cfg.noise, test.wind, n_outer, outer_dt)
+            r.noise = NoiseSource(run_seed_sequence(key, seed, index), cfg.noise, test.wind, outer_dt)
             r.q_sp, r.thrust = (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)), 0.0
             r.status, r.message, r.end_t = None, "", 0.0
             r.log, r.true, r.plan_out = [], [], None
@@ -260,7 +259,7 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
         for r in [r for r in active if r.status is not None]:
             r.active = False
             _record(r, r.end_t, *get_pose(r.body, physicsClientId=cid), *get_vel(r.body, physicsClientId=cid),
-                    rest_z, min(k, len(r.noise.pos_list) - 1))
+                    rest_z, k)
             world.remove(r.body)
             active.remove(r)
 
@@ -269,11 +268,9 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
     """Estimator, planner, navigator, position control and bookkeeping; False when the run ended."""
     nav = r.nav
     noise = r.noise
-    kk = min(k, len(noise.pos_list) - 1)
-    pe, ve = noise.pos_list[kk], noise.vel_list[kk]
-    r.wind = noise.wind_list[kk]
+    pe, ve, yaw_err, r.wind = noise.at(k)
     qx, qy, qz, qw = orn
-    yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz)) + noise.yaw_list[kk]
+    yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz)) + yaw_err
     if not (math.isfinite(pos[0]) and math.isfinite(pos[2])) or 1 - 2 * (qx * qx + qy * qy) < -0.1:
         r.status, r.end_t = RunStatus.ERROR, t
         r.message = f"vehicle flipped or state invalid at t={t:.2f} s"
@@ -326,7 +323,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
 
 
 def _record(r: _Run, t, pos, orn, lin, ang, rest_z, kk) -> None:
-    pe, ve = r.noise.pos_list[kk], r.noise.vel_list[kk]
+    pe, ve = r.noise.at(kk)[:2]
     qx, qy, qz, qw = orn
     yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz))
     if not r.log or r.log[-1][0] < t:

@@ -57,6 +57,7 @@ def test_killed_search_resumes_without_losing_evaluations(tmp_path):
         time.sleep(0.2)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
+    time.sleep(0.5)  # its pool worker ends with it (PR_SET_PDEATHSIG)
     before = [e.test_key for e in EvaluationStore(store)]
     assert len(before) >= 3
     assert main(["generate", "--resume", str(out)]) == 0
