@@ -15,7 +15,7 @@ from ..frozendict import FrozenDict
 from typing import Mapping
 
 import numpy as np
-import pybullet as pb
+from .pybullet_quiet import pb
 
 from ..errors import SimulationError
 from ..geometry import obstacle_distances

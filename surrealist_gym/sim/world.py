@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-import pybullet as pb
+from .pybullet_quiet import pb
 
 from ..testcase import Obstacle, Shape
 from .vehicle import GRAVITY, VehicleParams
