@@ -288,6 +288,8 @@ def load_test(path) -> TestCase:
         if not isinstance(inline, dict):
             raise InvalidTestCase(f"{name}: field 'params': expected a mapping NAME: value, got {inline!r}")
         params.update(inline)
+    if _uses_avoidance(robot, sim) and "COM_OBS_AVOID" not in params:
+        params["COM_OBS_AVOID"] = 1  # Aerialist's ROS set-up flies PX4-Avoidance
     commands_file = resolve("commands_file", mis.get("commands_file"))
     if mis.get("commands") is not None:
         commands = _parse_commands(mis["commands"], name)
@@ -324,14 +326,15 @@ def save_test(test: TestCase, path, legacy: bool = False) -> None:
 
     path = Path(path)
     base = path.resolve().parent
-    robot: dict = {"port": "ros"}
+    avoidance = bool(test.params.get("COM_OBS_AVOID", 0))
+    robot: dict = {"port": "ros" if avoidance else "sitl"}
     if test.params:
         robot["params"] = dict(test.params)
     if test.params_file:
         robot["params_file"] = _relative(test.params_file, base)
     if test.mission_file:
         robot["mission_file"] = _relative(test.mission_file, base)
-    sim: dict = {"simulator": "ros", "speed": 1, "headless": True,
+    sim: dict = {"simulator": "ros" if avoidance else "gazebo", "speed": 1, "headless": True,
                  "obstacles": [o.to_dict() for o in test.obstacles]}
     if test.home is not None:
         sim["home_position"] = list(test.home)
@@ -347,6 +350,12 @@ def save_test(test: TestCase, path, legacy: bool = False) -> None:
         doc["assertion"] = {"log_file": _relative(test.reference_log, base), "variable": "trajectory"}
     with open(path, "w", encoding="utf-8") as f:
         yaml.safe_dump(doc, f, sort_keys=False)
+
+
+def _uses_avoidance(robot: dict, sim: dict) -> bool:
+    """Aerialist runs PX4 with PX4-Avoidance when the robot port or the simulator is 'ros' (or 'avoidance')."""
+    return str(robot.get("port", "")).lower() in {"ros", "px4_ros", "avoidance"} or \
+        str(sim.get("simulator", "")).lower() == "ros"
 
 
 def _section(doc, name, key, legacy, allowed) -> dict:

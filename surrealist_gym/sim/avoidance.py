@@ -83,6 +83,12 @@ class AvoidanceConfig:
         max_turn_rate_deg_s: Fastest change of the commanded heading while avoiding [deg/s].
         waypoint_distance: Distance of the returned intermediate waypoint along the chosen direction [m].
         altitude_gain: While avoiding, vertical speed per metre of altitude error to the goal [1/s].
+        vertical_margin: While avoiding, keep at least this height above the top of remembered obstacle points
+            within ``vertical_radius`` horizontally [m] (0 = off). PX4-Avoidance's elevation costs make the real
+            PX4 Vision rise over nearby obstacle tops (case0: from 3.3 m to ~4.5 m beside a ~2.5 m container).
+        vertical_radius: Horizontal radius of that look-around [m].
+        vertical_reach: Only obstacles whose top is at most this far above the vehicle are climbed over [m];
+            taller ones (walls, buildings) are passed around laterally.
         max_climb_rate: Cap on that vertical speed [m/s].
         goal_tolerance: Within this distance of the goal the planner commands zero velocity [m].
     """
@@ -111,6 +117,9 @@ class AvoidanceConfig:
     max_turn_rate_deg_s: float = 90.0
     waypoint_distance: float = 2.0
     altitude_gain: float = 0.5
+    vertical_margin: float = 1.5
+    vertical_radius: float = 4.0
+    vertical_reach: float = 1.0
     max_climb_rate: float = 1.0
     goal_tolerance: float = 0.05
 
@@ -124,7 +133,8 @@ class AvoidanceConfig:
         for name in ("slow_down_distance", "near_distance", "slow_down_ramp", "range_min", "safety_margin",
                      "blocked_cost",
                      "yaw_cost_weight", "pitch_cost_weight", "velocity_cost_weight", "obstacle_cost_weight",
-                     "waypoint_distance", "altitude_gain", "max_climb_rate", "goal_tolerance"):
+                     "waypoint_distance", "altitude_gain", "max_climb_rate", "goal_tolerance", "vertical_margin",
+                     "vertical_radius", "vertical_reach"):
             value = getattr(self, name)
             if not value >= 0:
                 raise ValueError(f"AvoidanceConfig.{name}: expected a number >= 0, got {value!r}")
@@ -170,7 +180,8 @@ class LocalPlanner:
         self._cand_el = np.ascontiguousarray(np.degrees(ee))
         self._params = np.array([c.range_min, c.range_max, c.bin_deg, c.obstacle_cost_weight,
                                  c.obstacle_cost_center, c.smoothing_radius_deg, c.safety_margin, c.blocked_cost,
-                                 c.yaw_cost_weight, c.pitch_cost_weight, c.velocity_cost_weight])
+                                 c.yaw_cost_weight, c.pitch_cost_weight, c.velocity_cost_weight,
+                                 c.vertical_radius])
         self.reset()
 
     def reset(self) -> None:
@@ -212,7 +223,7 @@ class LocalPlanner:
         dist_goal_h = math.hypot(gx, gy)
         az_goal = math.atan2(gy, gx) if dist_goal_h > 1e-9 else (self._yaw or 0.0)
         el_goal = math.degrees(math.atan2(gz, dist_goal_h))
-        best, blocked, d_near, d_min = _plan(self._memory, pts, t, c.memory_time, c.voxel_size, px, py, pz, vx, vy, vz,
+        best, blocked, d_near, d_min, top = _plan(self._memory, pts, t, c.memory_time, c.voxel_size, px, py, pz, vx, vy, vz,
                                       math.degrees(az_goal), el_goal, self._cand, self._cand_az, self._cand_el,
                                       self._params)
         speed = min(speed_max, math.sqrt(2.0 * c.goal_brake_accel * dist_goal))
@@ -245,7 +256,10 @@ class LocalPlanner:
                 ramp = 0.0 if d_min < c.near_distance else max(0.0, min(1.0, ramp))
                 avoid = min(c.avoid_speed, speed)
                 speed = avoid + (speed - avoid) * ramp
-            climb = max(-c.max_climb_rate, min(c.max_climb_rate, c.altitude_gain * gz))
+            target_dz = gz
+            if c.vertical_margin > 0 and -np.inf < top <= pz + c.vertical_reach:
+                target_dz = max(gz, top + c.vertical_margin - pz)
+            climb = max(-c.max_climb_rate, min(c.max_climb_rate, c.altitude_gain * target_dz))
             ch = speed * math.cos(elev)
             ux, uy, uz = math.cos(heading) * math.cos(elev), math.sin(heading) * math.cos(elev), math.sin(elev)
             vel = (ch * math.cos(heading), ch * math.sin(heading), speed * math.sin(elev) + climb)
@@ -265,11 +279,13 @@ def _plan(memory, hits, t, memory_time, voxel, px, py, pz, vx, vy, vz, az_goal, 
     """Update the voxel memory, build the polar histogram and score the candidates.
 
     Returns (best candidate flat index or -1 when no obstacle is in range, whether it is blocked, distance to the
-    nearest remembered point ahead of it [m], distance to the nearest remembered point [m]).
+    nearest remembered point ahead of it [m], distance to the nearest remembered point [m], highest z of the
+    remembered points within the vertical radius horizontally [m], -inf if none).
     """
     rmin, rmax, bin_deg, w_obs, center, smooth, margin, blocked_cost = (params[0], params[1], params[2], params[3],
                                                                        params[4], params[5], params[6], params[7])
-    w_yaw, w_pitch, w_vel = params[8], params[9], params[10]
+    w_yaw, w_pitch, w_vel, v_radius = params[8], params[9], params[10], params[11]
+    top = -np.inf
     off = 1 << 20
     # 1. memory: insert the hits, forget stale voxels
     for i in range(hits.shape[0]):
@@ -299,6 +315,8 @@ def _plan(memory, hits, t, memory_time, voxel, px, py, pz, vx, vy, vz, az_goal, 
         d = math.sqrt(rx * rx + ry * ry + rz * rz)
         if d < rmin or d > rmax:
             continue
+        if rx * rx + ry * ry <= v_radius * v_radius and rz + pz > top:
+            top = rz + pz
         ia = int((math.atan2(ry, rx) + math.pi) / bin_rad) % n_az
         ie = min(int((math.asin(rz / d) + 0.5 * math.pi) / bin_rad), n_el - 1)
         cell = ie * n_az + ia
@@ -311,7 +329,7 @@ def _plan(memory, hits, t, memory_time, voxel, px, py, pz, vx, vy, vz, az_goal, 
             cell_u[cell, 1] = ry / d
             cell_u[cell, 2] = rz / d
     if n_occ == 0:
-        return -1, False, np.inf, np.inf
+        return -1, False, np.inf, np.inf, top
     # 3. candidate costs
     n_b = cand.shape[0]
     speed = math.sqrt(vx * vx + vy * vy + vz * vz)
@@ -374,4 +392,4 @@ def _plan(memory, hits, t, memory_time, voxel, px, py, pz, vx, vy, vz, az_goal, 
                  + cand[bb, ba, 2] * cell_u[cell, 2])
         if ahead > 0.0 and cell_d[cell] < d_near:
             d_near = cell_d[cell]
-    return best, blocked[bb, ba], d_near, d_min
+    return best, blocked[bb, ba], d_near, d_min, top

@@ -85,6 +85,9 @@ def test_stops_when_every_direction_is_blocked():
     assert math.hypot(*out.velocity[:2]) == 0.0
 
 
+LATERAL = AvoidanceConfig(vertical_margin=0.0)  # lateral detours only (no rising over low obstacles)
+
+
 def fly(obstacles, config=AvoidanceConfig(), steps=900, dt=0.05, noise_seed=None):
     """Kinematic closed loop at 20 Hz: scan at the commanded yaw, plan, position += velocity * dt."""
     sensor = DepthSensor(obstacles, DepthSensorConfig())
@@ -113,7 +116,7 @@ def _lateral(path):
 
 @pytest.mark.parametrize("obstacle", [CASE0_BOX, CONTAINER], ids=["case0-box", "container"])
 def test_closed_loop_detour_reaches_the_goal_with_clearance(obstacle):
-    path, speeds = fly([obstacle])
+    path, speeds = fly([obstacle], config=LATERAL)
     assert np.linalg.norm(path[-1] - GOAL) < 0.1
     clearance = obstacle_distances(path, [obstacle], dims=3).min()
     assert clearance > 0.5
@@ -128,9 +131,18 @@ def test_closed_loop_detour_reaches_the_goal_with_clearance(obstacle):
 
 def test_closed_loop_with_several_obstacles_and_noise():
     obstacles = [Obstacle(3.0, 3.0, 3.0, -5.0, 2.3), Obstacle(2.0, 2.0, 5.0, -11.5, 3.3, shape=Shape.CYLINDER)]
-    path, _ = fly(obstacles, noise_seed=1)
+    path, _ = fly(obstacles, config=LATERAL, noise_seed=1)
     assert np.linalg.norm(path[-1] - GOAL) < 0.1
     assert obstacle_distances(path, obstacles, dims=3).min() > 0.5
+
+
+def test_rises_over_a_low_obstacle_but_not_over_a_tall_one():
+    path, _ = fly([CASE0_BOX], steps=1400)  # default vertical_margin 1.5 m: the box top is 3 m
+    assert 3.5 < path[:, 2].max() <= 3.0 + 1.5 + 0.05
+    assert np.linalg.norm(path[-1] - GOAL) < 0.1
+    tall = Obstacle(CASE0_BOX.l, CASE0_BOX.w, 20.0, CASE0_BOX.x, CASE0_BOX.y, 0.0, CASE0_BOX.r)
+    path, _ = fly([tall])
+    assert np.ptp(path[:, 2]) < 1e-9 and np.linalg.norm(path[-1] - GOAL) < 0.1
 
 
 def test_closed_loop_is_deterministic():
