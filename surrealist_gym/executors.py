@@ -93,7 +93,24 @@ class InlineExecutor:
         pass
 
 
-class LocalPoolExecutor:
+class _ChunkedExecutor:
+    """Splits the runs of a test evenly over ``self.workers``; subclasses submit one chunk with ``_submit``."""
+
+    workers = 1
+
+    def _submit(self, test, indices, seed, config):
+        raise NotImplementedError
+
+    def run(self, test, indices, seed, config) -> list:
+        futures = [(chunk, self._submit(test, chunk, seed, config)) for chunk in _chunks(list(indices), self.workers)]
+        results = []
+        for chunk, future in futures:
+            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, self._submit, a), test, chunk, seed,
+                                           config))
+        return results
+
+
+class LocalPoolExecutor(_ChunkedExecutor):
     """A pool of local processes; the runs of one test are split evenly over the workers."""
 
     def __init__(self, workers: int | None = None):
@@ -104,14 +121,6 @@ class LocalPoolExecutor:
         if self._pool is None:
             self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=_die_with_parent)
         return self._pool.submit(fly, test, indices, seed, config)
-
-    def run(self, test, indices, seed, config) -> list:
-        futures = [(chunk, self._submit(test, chunk, seed, config)) for chunk in _chunks(list(indices), self.workers)]
-        results = []
-        for chunk, future in futures:
-            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, self._submit, a), test, chunk, seed,
-                                           config))
-        return results
 
     def close(self) -> None:
         if self._pool is not None:
@@ -132,7 +141,7 @@ class _Once:
         return self._submit(*self._args).result()
 
 
-class DaskExecutor:
+class DaskExecutor(_ChunkedExecutor):
     """Runs on a Dask cluster: a scheduler address (``tcp://host:port``) or a ``distributed.Client``."""
 
     def __init__(self, scheduler):
@@ -146,14 +155,6 @@ class DaskExecutor:
 
     def _submit(self, test, indices, seed, config):
         return self.client.submit(fly, test, indices, seed, config, pure=False)
-
-    def run(self, test, indices, seed, config) -> list:
-        futures = [(chunk, self._submit(test, chunk, seed, config)) for chunk in _chunks(list(indices), self.workers)]
-        results = []
-        for chunk, future in futures:
-            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, self._submit, a), test, chunk, seed,
-                                           config))
-        return results
 
     def close(self) -> None:
         if self._own:

@@ -17,7 +17,8 @@ from .errors import LogFormatError
 WINDOW_S = 0.5
 
 
-def _frozen(a, dtype=np.float64) -> np.ndarray:
+def frozen_array(a, dtype=np.float64) -> np.ndarray:
+    """A read-only copy of ``a``."""
     arr = np.array(a, dtype=dtype, copy=True)
     arr.setflags(write=False)
     return arr
@@ -38,8 +39,8 @@ class Trajectory:
     heading: np.ndarray | None = None
 
     def __post_init__(self):
-        t = _frozen(self.t)
-        xyz = _frozen(self.xyz)
+        t = frozen_array(self.t)
+        xyz = frozen_array(self.xyz)
         if xyz.ndim != 2 or xyz.shape[1] != 3:
             raise ValueError(f"Trajectory.xyz must have shape (N, 3), got {xyz.shape}")
         if t.shape != (xyz.shape[0],):
@@ -47,7 +48,7 @@ class Trajectory:
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "xyz", xyz)
         if self.heading is not None:
-            heading = _frozen(self.heading)
+            heading = frozen_array(self.heading)
             if heading.shape != t.shape:
                 raise ValueError(f"Trajectory.heading must have shape {t.shape}, got {heading.shape}")
             object.__setattr__(self, "heading", heading)

@@ -16,13 +16,7 @@ import numpy as np
 
 from ..errors import LogFormatError
 from ..mission import Mission
-from ..trajectory import Trajectory
-
-
-def _frozen(values, dtype) -> np.ndarray:
-    arr = np.array(values, dtype=dtype, copy=True)
-    arr.setflags(write=False)
-    return arr
+from ..trajectory import Trajectory, frozen_array as _frozen
 
 
 @dataclass(frozen=True, slots=True, eq=False)

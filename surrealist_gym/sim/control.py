@@ -46,6 +46,7 @@ def attitude_from_thrust(tx: float, ty: float, tz: float, yaw: float):
     return _quat_from_matrix(xx, yx, zx, xy, yy, zy, xz, yz, zz)
 
 
+@njit(cache=True)
 def _quat_from_matrix(r00, r01, r02, r10, r11, r12, r20, r21, r22):
     tr = r00 + r11 + r22
     if tr > 0:
@@ -402,19 +403,7 @@ def _attitude_from_thrust(tx, ty, tz, yaw):
     else:
         xx, xy, xz = xx / m, xy / m, xz / m
     yx, yy, yz = zy * xz - zz * xy, zz * xx - zx * xz, zx * xy - zy * xx
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = xx, yx, zx, xy, yy, zy, xz, yz, zz
-    tr = r00 + r11 + r22
-    if tr > 0:
-        s = 2.0 * math.sqrt(tr + 1.0)
-        return (0.25 * s, (r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s)
-    if r00 > r11 and r00 > r22:
-        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
-        return ((r21 - r12) / s, 0.25 * s, (r01 + r10) / s, (r02 + r20) / s)
-    if r11 > r22:
-        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
-        return ((r02 - r20) / s, (r01 + r10) / s, 0.25 * s, (r12 + r21) / s)
-    s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
-    return ((r10 - r01) / s, (r02 + r20) / s, (r12 + r21) / s, 0.25 * s)
+    return _quat_from_matrix(xx, yx, zx, xy, yy, zy, xz, yz, zz)
 
 
 @njit(cache=True)
