@@ -18,6 +18,8 @@ COMMANDS = {
     "simulate": ("surrealist_gym.cli.simulate", "fly a test case in the simulator and report each run"),
     "replicate": ("surrealist_gym.cli.replicate", "find obstacles that make the simulated flight match a real log"),
     "generate": ("surrealist_gym.cli.generate", "find nearby tests that make the UAV unsafe or crash"),
+    "compare": ("surrealist_gym.cli.compare", "run several search agents on the same problems and compare them"),
+    "train-ppo": ("surrealist_gym.cli.train_ppo", "train an RL policy (PPO/SAC) across generated problems"),
 }
 
 

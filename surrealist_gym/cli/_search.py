@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 import time
+from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
 
@@ -24,6 +26,20 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
     parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
     parser.add_argument("--resume", default=None, metavar="DIR",
                         help="resume an interrupted search from its results folder (same options)")
+
+
+@contextmanager
+def new_search_folder(args, command: str, keys: tuple[str, ...]):
+    """Yield (folder, options) from :func:`prepare`; a folder made here is removed again if setting up fails
+    (a bad log or test case leaves no empty results folder behind)."""
+    fresh = not args.resume and not (args.out and Path(args.out).exists())
+    out, options = prepare(args, command, keys)
+    try:
+        yield out, options
+    except BaseException:
+        if fresh:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
 
 
 def prepare(args, command: str, keys: tuple[str, ...]) -> tuple[Path, dict]:

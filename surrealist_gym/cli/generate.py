@@ -1,7 +1,7 @@
 """`surrealist generate TEST.yaml`: find nearby tests that make the UAV unsafe or crash (paper RQ2)."""
 from __future__ import annotations
 
-from ._search import add_search_arguments, executor_of, prepare, run_search
+from ._search import add_search_arguments, executor_of, new_search_folder, run_search
 
 KEYS = ("test", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed", "aggregate", "all_mutators")
 
@@ -21,14 +21,14 @@ def run(args) -> int:
     from ..mutators import AUTHORS_ORDER, default_mutators
     from ..testcase import load_test
 
-    out, options = prepare(args, "generate", KEYS)
-    mutators = None
-    if options["all_mutators"]:
-        from .. import data_path
-        seed = load_test(options["test"] or data_path("rq2-seed.yaml"))
-        mutators = default_mutators(seed, AUTHORS_ORDER)
-    env = GenerateEnv(seed_test=options["test"], runs=options["runs"], budget=options["budget"], mutators=mutators,
-                      aggregate=options["aggregate"], executor=executor_of(options),
-                      store=out / "evaluations.sqlite", random_seed=options["random_seed"],
-                      workers=options["workers"])
+    with new_search_folder(args, "generate", KEYS) as (out, options):
+        mutators = None
+        if options["all_mutators"]:
+            from .. import data_path
+            seed = load_test(options["test"] or data_path("rq2-seed.yaml"))
+            mutators = default_mutators(seed, AUTHORS_ORDER)
+        env = GenerateEnv(seed_test=options["test"], runs=options["runs"], budget=options["budget"],
+                          mutators=mutators, aggregate=options["aggregate"], executor=executor_of(options),
+                          store=out / "evaluations.sqlite", random_seed=options["random_seed"],
+                          workers=options["workers"])
     return run_search(env, options, out, "generate")

@@ -1,7 +1,7 @@
 """`surrealist replicate LOG`: find the obstacles that make the simulated flight match a real one (paper RQ1)."""
 from __future__ import annotations
 
-from ._search import add_search_arguments, executor_of, prepare, run_search
+from ._search import add_search_arguments, executor_of, new_search_folder, run_search
 
 KEYS = ("log", "seed", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed", "averaging")
 
@@ -20,9 +20,9 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..envs.replicate import ReplicateEnv
 
-    out, options = prepare(args, "replicate", KEYS)
-    env = ReplicateEnv(reference_log=options["log"], seed_test=options["seed"], runs=options["runs"],
-                       budget=options["budget"], averaging=options["averaging"], executor=executor_of(options),
-                       store=out / "evaluations.sqlite", random_seed=options["random_seed"],
-                       workers=options["workers"])
+    with new_search_folder(args, "replicate", KEYS) as (out, options):
+        env = ReplicateEnv(reference_log=options["log"], seed_test=options["seed"], runs=options["runs"],
+                           budget=options["budget"], averaging=options["averaging"], executor=executor_of(options),
+                           store=out / "evaluations.sqlite", random_seed=options["random_seed"],
+                           workers=options["workers"])
     return run_search(env, options, out, "replicate")

@@ -72,8 +72,10 @@ def test_killed_search_resumes_without_losing_evaluations(tmp_path):
     (["replicate", "/nonexistent/flight.ulg"], "flight.ulg"),
     (["generate", "--resume", "/nonexistent/folder"], "not a results folder"),
 ])
-def test_bad_input_is_one_line_exit_2(argv, needle, capsys):
+def test_bad_input_is_one_line_exit_2(argv, needle, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     assert main(argv) == 2
+    assert not (tmp_path / "results").exists() or not any((tmp_path / "results").iterdir())  # nothing left behind
     err = capsys.readouterr().err.strip()
     assert needle in err and "\n" not in err and err.startswith("error:")
 

@@ -1,0 +1,67 @@
+"""`surrealist compare`: run several agents on the same problems and seeds; Table 2 metrics, p-values, A12."""
+from __future__ import annotations
+
+import sys
+from datetime import datetime
+from pathlib import Path
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--env", default="Surrealist-Replicate-v0",
+                        help="env id (default Surrealist-Replicate-v0)")
+    parser.add_argument("--agents", default="greedy,random,cmaes",
+                        help="comma-separated agents: greedy, greedy-paper, random, cmaes, ppo:POLICY.zip, "
+                             "sac:POLICY.zip, module:Class or file.py:Class (default greedy,random,cmaes)")
+    parser.add_argument("--repetitions", type=int, default=10, help="searches per agent (default 10)")
+    parser.add_argument("--budget", type=int, default=100, help="evaluations per search (default 100)")
+    parser.add_argument("--runs", type=int, default=None, help="simulations per evaluation (default: the env's)")
+    parser.add_argument("--seed", default=None, metavar="TEST.yaml", help="seed test case (default: the env's)")
+    parser.add_argument("--log", default=None, help="reference flight log (replication; default: the env's)")
+    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    parser.add_argument("--parallel", type=int, default=1,
+                        help="searches run at the same time on the workers (default 1)")
+    parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
+                        help="run the simulations on a Dask cluster (tcp://host:port)")
+    parser.add_argument("--inline", action="store_true", help="simulate in this process (no worker processes)")
+    parser.add_argument("--out", default=None,
+                        help="results folder (default results/compare-<time>); run again with the same --out "
+                             "to resume")
+
+
+def run(args) -> int:
+    from tqdm import tqdm
+
+    from search.compare import compare
+
+    agents = [a.strip() for a in args.agents.split(",") if a.strip()]
+    out = Path(args.out or f"results/compare-{datetime.now():%Y%m%d-%H%M%S}")
+    env_kwargs = {}
+    if args.seed:
+        env_kwargs["seed_test"] = str(Path(args.seed).resolve())
+    if args.log:
+        env_kwargs["reference_log"] = str(Path(args.log).resolve())
+    executor = args.dask_scheduler or ("inline" if args.inline else "process")
+    bar = tqdm(total=len(agents) * args.repetitions * args.budget, unit="eval", desc="compare", dynamic_ncols=True,
+               file=sys.stderr, disable=None)
+    done: dict[tuple[str, int], int] = {}
+
+    def progress(event: dict) -> None:
+        done[(event["agent"], event["repetition"])] = min(int(event["evaluations"]), event["budget"])
+        bar.n = sum(done.values())
+        bar.set_postfix(agent=event["agent"], rep=event["repetition"], refresh=False)
+        bar.refresh()
+
+    try:
+        result = compare(args.env, agents, repetitions=args.repetitions, budget=args.budget, runs=args.runs,
+                         out=out, env_kwargs=env_kwargs, executor=executor, workers=args.workers,
+                         parallel=args.parallel, progress=progress)
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"interrupted: finished searches and every evaluation are stored; resume with --out {out}",
+              file=sys.stderr)
+        return 130
+    bar.close()
+    print((out / "compare.md").read_text(), end="")
+    print(f"\n{len(result.searches)} searches ({result.new_simulations} new simulations); results in {out}/: "
+          f"compare.md, compare.csv, pairwise.csv, searches.csv, convergence.png")
+    return 0

@@ -1,0 +1,56 @@
+"""`surrealist train-ppo`: train an RL policy across procedurally generated problems (random hidden layouts)."""
+from __future__ import annotations
+
+import sys
+import time
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--steps", type=int, default=2000, help="env steps (evaluations) to train for (default 2000)")
+    parser.add_argument("--out", default="policy.zip", help="where to save the policy (default policy.zip)")
+    parser.add_argument("--problem", default="replicate", choices=["replicate", "generate"],
+                        help="training problems: hidden layouts of case0 (replicate) or RQ2 seeds (generate)")
+    parser.add_argument("--algorithm", default="ppo", choices=["ppo", "sac"], help="SB3 algorithm (default ppo)")
+    parser.add_argument("--episode-budget", type=int, default=15, help="evaluations per episode (default 15)")
+    parser.add_argument("--runs", type=int, default=1, help="simulations per evaluation (default 1)")
+    parser.add_argument("--spread", type=float, default=0.3,
+                        help="how far hidden layouts lie from the seed, in action units (default 0.3)")
+    parser.add_argument("--seed", default=None, metavar="TEST.yaml", help="seed test case (default: the problem's)")
+    parser.add_argument("--random-seed", type=int, default=0, help="seed of problems, policy and sampling")
+    parser.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+
+
+def run(args) -> int:
+    from tqdm import tqdm
+
+    from ..errors import DependencyNotInstalled
+    try:
+        import torch
+    except ImportError as err:
+        raise DependencyNotInstalled("train-ppo needs torch and stable-baselines3: pip install 'surrealist-gym[rl]'") \
+            from err
+
+    from search.rl import train_policy
+
+    torch.set_num_threads(max(1, args.threads))
+    bar = tqdm(total=args.steps, unit="step", desc=f"train {args.algorithm}", dynamic_ncols=True, file=sys.stderr,
+               disable=None)
+
+    def progress(steps: int) -> None:
+        bar.n = min(steps, bar.total)
+        bar.refresh()
+
+    start = time.perf_counter()
+    try:
+        path = train_policy(args.steps, args.out, problem=args.problem, algorithm=args.algorithm,
+                            budget=args.episode_budget, runs=args.runs, spread=args.spread, seed=args.random_seed,
+                            seed_test=args.seed, progress=progress)
+    except KeyboardInterrupt:
+        bar.close()
+        print("interrupted: no policy saved", file=sys.stderr)
+        return 130
+    bar.close()
+    print(f"trained {args.algorithm} for {args.steps} steps on {args.problem} problems in "
+          f"{time.perf_counter() - start:.0f} s; policy in {path}")
+    print(f"use it: surrealist compare --agents greedy,{args.algorithm}:{path} ...")
+    return 0
