@@ -45,6 +45,7 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         "seed_runs": [r.to_dict() for r in seed_eval.runs], "best_runs": [r.to_dict() for r in best_eval.runs],
         "best_unsafe_rate": _rate(best_eval, lambda r: r.min_distance_2d < UNSAFE_DISTANCE_M),
         "best_crash_rate": _rate(best_eval, lambda r: r.status == "collision"),
+        "best_stuck_rate": _rate(best_eval, lambda r: r.status in ("stuck", "timeout")),
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
     reference = getattr(env, "reference", None)

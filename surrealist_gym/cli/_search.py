@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from collections import Counter
 import sys
 import time
 from contextlib import contextmanager
@@ -98,6 +99,12 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     for key, value in summary["best_terms"].items():
         if isinstance(value, float):
             print(f"  best {key}: {value:.2f} (seed {summary['seed_terms'].get(key, float('nan')):.2f})")
+    for label in ("seed", "best"):
+        runs = summary[f"{label}_runs"]
+        statuses = Counter(r["status"] for r in runs)
+        closest = min((r["min_distance_2d"] for r in runs), default=float("nan"))
+        print(f"  {label} runs: " + ", ".join(f"{n} {s}" for s, n in statuses.most_common())
+              + f"; closest approach {closest:.2f} m")
     print(f"results in {out}/: best.yaml, evaluations.csv, summary.json, figure1.png, fitness.png, "
           f"min_distances.png")
     return 0
