@@ -20,6 +20,7 @@ COMMANDS = {
     "generate": ("surrealist_gym.cli.generate", "find nearby tests that make the UAV unsafe or crash"),
     "compare": ("surrealist_gym.cli.compare", "run several search agents on the same problems and compare them"),
     "train-ppo": ("surrealist_gym.cli.train_ppo", "train an RL policy (PPO/SAC) across generated problems"),
+    "surrogate": ("surrealist_gym.cli.surrogate", "train or evaluate a surrogate model on evaluation stores"),
 }
 
 

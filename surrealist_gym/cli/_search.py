@@ -24,6 +24,9 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
     parser.add_argument("--preset", default="authors", choices=["paper", "authors"],
                         help="greedy hyper-parameters: paper Table 1, or the authors' own run (default)")
     parser.add_argument("--random-seed", type=int, default=0, help="base seed of the simulation noise")
+    parser.add_argument("--surrogate", default=None, metavar="MODEL|online",
+                        help="pre-screen mutations with a surrogate model folder (surrealist surrogate train) "
+                             "or one trained online; skipped candidates cost no simulations")
     parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
     parser.add_argument("--resume", default=None, metavar="DIR",
                         help="resume an interrupted search from its results folder (same options)")
@@ -73,6 +76,10 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     from ..results import write_results
 
     agent = AdaptiveGreedy(options["preset"])
+    if options.get("surrogate"):
+        from surrogates.prescreen import wrap
+
+        agent = wrap(agent, options["surrogate"], env)
     bar = tqdm(total=options["budget"], unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)
     start = time.perf_counter()
@@ -92,6 +99,8 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     bar.n = min(result.evaluations, bar.total)
     bar.close()
     summary = write_results(out, env, result, time.perf_counter() - start, problem)
+    if hasattr(agent, "skipped"):
+        (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
     env.close()
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
           f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "

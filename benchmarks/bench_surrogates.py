@@ -1,0 +1,146 @@
+"""Greedy vs greedy with pre-screening: simulations needed to reach greedy's final fitness, and held-out accuracy.
+
+    python benchmarks/bench_surrogates.py search --problem rq1-seed1 --repetitions 10 --mode pretrained
+    python benchmarks/bench_surrogates.py accuracy --problem rq1-seed1
+
+``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
+budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
+greedy runs with the same settings; ``pretrained`` starts from an ensemble trained on the OTHER repetitions'
+stores (never on repetition N) and retrains every 20 evaluations, ``online`` starts without a model. Its store
+starts as a copy of repetition N's, so a test greedy alone already simulated is read back instead of flown again
+(the simulation is deterministic given test and seed, so the numbers are the same; the env still counts it as an
+evaluation). Simulations = evaluations x runs.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import surrealist_gym as sg
+from search import AdaptiveGreedy
+from surrealist_gym.envs.generate import GenerateEnv
+from surrealist_gym.envs.replicate import ReplicateEnv
+from surrealist_gym.statistics import compare, vargha_delaney_a12
+from surrealist_gym.store import EvaluationStore
+from surrogates.dataset import Featurizer, load_dataset
+from surrogates.models import evaluate_model, train_model
+from surrogates.prescreen import PrescreenConfig, Prescreened
+
+PAPER = Path("results/paper")
+
+
+def _stores(problem: str, reps) -> list[Path]:
+    return [PAPER / f"{problem}-rep{r}.sqlite" for r in reps if (PAPER / f"{problem}-rep{r}.sqlite").is_file()]
+
+
+def _featurizer(problem: str) -> Featurizer:
+    return Featurizer.for_problem("generate" if problem == "rq2" else "replicate",
+                                  None if problem == "rq2" else sg.data_path(f"{problem}.yaml"))
+
+
+def greedy_alone(problem: str, rep: int) -> dict:
+    """Greedy's curve from its store: best fitness after each evaluation."""
+    with EvaluationStore(PAPER / f"{problem}-rep{rep}.sqlite") as store:
+        fit = [-np.inf if e.fitness is None else e.fitness for e in store]
+    best = np.maximum.accumulate(fit)
+    final = float(best[-1])
+    return {"final": final, "evaluations": len(fit), "to_final": int(np.argmax(best >= final)) + 1}
+
+
+def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int) -> dict:
+    cached = out / f"{problem}-{mode}-rep{rep}.json"
+    if cached.is_file():
+        return json.loads(cached.read_text())
+    store = out / f"{problem}-{mode}-rep{rep}.sqlite"
+    shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
+    featurizer = _featurizer(problem)
+    if mode == "pretrained":
+        others = _stores(problem, [r for r in range(reps) if r != rep])
+        model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
+        config = PrescreenConfig(retrain_every=20)
+    else:
+        model, config = "online", PrescreenConfig(min_points=10, retrain_every=10)
+    if problem == "rq2":
+        env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline"), "paper"
+    else:
+        env = ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, store=store,
+                           random_seed=rep, executor="inline")
+        preset = "authors"
+    agent = Prescreened(AdaptiveGreedy(preset), model, config, seed=rep)
+    curve: list[float] = []
+    start = time.perf_counter()
+    result = agent.run(env, seed=rep, callback=lambda info: curve.append(
+        (info["evaluations"], info["best_fitness"])))
+    row = {"final": result.best_fitness, "evaluations": result.evaluations,
+           "to_best": result.evaluations_to_best, "skipped": len(agent.skipped), "retrains": agent.retrains,
+           "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations, "runs": env.unwrapped.evaluator.runs,
+           "wall_s": time.perf_counter() - start, "stop": result.stop_reason}
+    env.close()
+    cached.write_text(json.dumps(row))
+    return row
+
+
+def search(args) -> None:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for rep in range(args.repetitions):
+        g = greedy_alone(args.problem, rep)
+        p = prescreened(args.problem, rep, args.mode, out, 10)
+        reach = [e for e, best in p["curve"] if best is not None and best >= g["final"]]
+        sims_p = (reach[0] if reach else p["evaluations"]) * p["runs"]
+        row = {"rep": rep, "greedy_final": g["final"], "greedy_sims": g["to_final"] * p["runs"],
+               "pre_final": p["final"], "pre_sims_to_reach": sims_p, "reached": bool(reach),
+               "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "wall_s": p["wall_s"]}
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    gs, ps = [r["greedy_sims"] for r in rows], [r["pre_sims_to_reach"] for r in rows]
+    gf, pf = [r["greedy_final"] for r in rows], [r["pre_final"] for r in rows]
+    print(f"\n{args.problem}, {args.mode}, {len(rows)} repetitions")
+    print(f"simulations to reach greedy's final fitness: greedy {np.mean(gs):.0f}, pre-screened {np.mean(ps):.0f} "
+          f"({1 - np.mean(ps) / np.mean(gs):+.0%} fewer); reached in {sum(r['reached'] for r in rows)}/{len(rows)}")
+    if len(rows) >= 3:
+        p, test = compare(gs, ps)
+        print(f"  p = {p:.3g} ({test}), A12(greedy sims > pre-screened sims) = {vargha_delaney_a12(gs, ps):.2f}")
+        p, test = compare(pf, gf)
+        print(f"final fitness: greedy {np.mean(gf):.2f}, pre-screened {np.mean(pf):.2f}; p = {p:.3g} ({test}), "
+              f"A12(pre-screened > greedy) = {vargha_delaney_a12(pf, gf):.2f}")
+
+
+def accuracy(args) -> None:
+    featurizer = _featurizer(args.problem)
+    stores = _stores(args.problem, range(10))
+    data = load_dataset(stores, featurizer)
+    for kind in ("ensemble", "knn"):
+        rhos = []
+        for fold in range(args.folds):
+            held = [len(stores) - 1 - fold]
+            train = data.subset(~np.isin(data.groups, held))
+            test = data.subset(np.isin(data.groups, held))
+            m = evaluate_model(train_model(train, featurizer, kind, seed=fold), test)
+            rhos.append(m["spearman"])
+            print(kind, f"held-out {stores[held[0]].name}:", {k: round(v, 3) for k, v in m.items()}, flush=True)
+        print(f"{kind}: mean held-out Spearman {np.mean(rhos):.3f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("what", choices=["search", "accuracy"])
+    parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
+    parser.add_argument("--repetitions", type=int, default=10)
+    parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
+    parser.add_argument("--folds", type=int, default=3)
+    parser.add_argument("--out", default="results/surrogates")
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    search(args) if args.what == "search" else accuracy(args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,80 @@
+"""`surrealist surrogate train|eval`: train a surrogate model on evaluation stores, or measure one on held-out stores.
+
+    surrealist surrogate train results/paper/rq1-seed1-rep[0-7].sqlite --out models/rq1-seed1
+    surrealist surrogate eval models/rq1-seed1 results/paper/rq1-seed1-rep8.sqlite results/paper/rq1-seed1-rep9.sqlite
+"""
+from __future__ import annotations
+
+
+def add_arguments(parser) -> None:
+    sub = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+    train = sub.add_parser("train", help="train a model on one or more evaluation stores",
+                           description="train a model on one or more evaluation stores (.sqlite)")
+    train.add_argument("stores", nargs="+", metavar="STORE", help="evaluation stores of one problem")
+    train.add_argument("--out", required=True, metavar="MODEL", help="model folder to write (weights.pt, meta.json)")
+    train.add_argument("--problem", default="replicate", choices=["replicate", "generate"],
+                       help="what the stores searched: replicate (features against the mission and the reference "
+                            "flight) or generate (default replicate)")
+    train.add_argument("--seed", default=None, metavar="TEST.yaml",
+                       help="the problem's seed test, for its mission (default: the bundled rq1-seed1 / rq2 seed)")
+    train.add_argument("--log", default=None, help="reference flight log (replicate; default: the seed's, or case0)")
+    train.add_argument("--kind", default="ensemble", choices=["ensemble", "knn"],
+                       help="MLP ensemble (torch) or the k-nearest-neighbours baseline (default ensemble)")
+    train.add_argument("--target", default="fitness", choices=["fitness", "min_distance", "unsafe", "crash"],
+                       help="what to predict (default fitness)")
+    train.add_argument("--members", type=int, default=None, help="ensemble members (default 5)")
+    train.add_argument("--epochs", type=int, default=None, help="ensemble training steps (default 300)")
+    train.add_argument("--k", type=int, default=None, help="neighbours of the knn baseline (default 7)")
+    train.add_argument("--holdout", type=int, default=0, metavar="N",
+                       help="first train without the last N stores and report how well it predicts them")
+    train.add_argument("--random-seed", type=int, default=0, help="seed of the training (default 0)")
+    ev = sub.add_parser("eval", help="measure a model on evaluation stores it was not trained on",
+                        description="held-out R2, Spearman rank correlation and calibration of a model")
+    ev.add_argument("model", metavar="MODEL", help="model folder written by `surrealist surrogate train`")
+    ev.add_argument("stores", nargs="+", metavar="STORE", help="evaluation stores of the model's problem")
+
+
+def _print_metrics(label: str, m: dict) -> None:
+    print(f"{label}: {m['n']} evaluations, R2 {m['r2']:.3f}, Spearman {m['spearman']:.3f}, MAE {m['mae']:.3g}; "
+          f"calibration: {m['within_1sd']:.0%} within 1 sd (68% ideal), {m['within_2sd']:.0%} within 2 sd "
+          f"(95% ideal), NLL {m['nll']:.3f}")
+
+
+def run(args) -> int:
+    import warnings
+
+    import numpy as np
+
+    from surrogates.dataset import Featurizer, load_dataset
+    from surrogates.models import SurrogateModel, evaluate_model
+
+    if args.action == "eval":
+        model = SurrogateModel.load(args.model)
+        _print_metrics(f"{args.model} ({model.kind}, {model.target})",
+                       evaluate_model(model, load_dataset(args.stores, model.featurizer)))
+        return 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        featurizer = Featurizer.for_problem(args.problem, args.seed, args.log)
+    data = load_dataset(args.stores, featurizer)
+    options = {"members": args.members, "epochs": args.epochs} if args.kind == "ensemble" else {"k": args.k}
+    config = {k: v for k, v in options.items() if v is not None}
+    metrics = {}
+    if args.holdout:
+        if not 0 < args.holdout < len(args.stores):
+            from ..errors import SurrealistError
+            raise SurrealistError(f"--holdout {args.holdout}: expected 1 to {len(args.stores) - 1} "
+                                  f"(stores given: {len(args.stores)})")
+        held = np.arange(len(args.stores) - args.holdout, len(args.stores))
+        trial = SurrogateModel(featurizer, args.kind, args.target, config, args.random_seed)
+        trial.fit_dataset(data.subset(~np.isin(data.groups, held)))
+        metrics = evaluate_model(trial, data.subset(np.isin(data.groups, held)))
+        _print_metrics(f"held-out ({args.holdout} of {len(args.stores)} stores)", metrics)
+    model = SurrogateModel(featurizer, args.kind, args.target, config, args.random_seed).fit_dataset(data)
+    model.metrics = {"holdout": metrics} if metrics else {}
+    model.metrics["train"] = evaluate_model(model, data)
+    _print_metrics("training set", model.metrics["train"])
+    out = model.save(args.out)
+    print(f"model ({args.kind}, {args.target}, {len(model.train_y)} evaluations, {data.X.shape[1]} features) "
+          f"in {out}/: weights.pt, meta.json")
+    return 0

@@ -1,0 +1,291 @@
+"""Datasets for surrogate models: features of each stored test, and the outcomes it had.
+
+A store holds a test's obstacles only; the mission (and, for replication, the reference trajectory) comes from
+the problem the store was searched on, so a dataset is built from ``(stores, context)`` where the
+:class:`Featurizer` carries that context. Its features are invariant to the order of the obstacles: the
+obstacles are sorted by their position along the mission (then across it) and laid out in fixed slots, and
+pooled features (the minimum clearances over all obstacles) follow them.
+
+Per obstacle [m, or unitless]: size ``l, w, h``, position ``x, y, z``, ``sin r, cos r, sin 2r, cos 2r``,
+footprint area, the along-track position of its centre (fraction of the mission path), its signed lateral
+offset from the nearest mission segment, its half extent across that segment, the gap between its footprint and
+the segment (negative when it blocks the straight path), the footprint distance to the mission path and to the
+reference trajectory (if known), how many reference points pass within 3 m of it, the extent of its footprint
+along and across the path (corners projected on the nearest segment), and the mean lateral offset of the
+reference where it passes beside the obstacle.
+
+Example:
+    >>> import surrealist_gym as sg
+    >>> featurizer = Featurizer.for_problem("generate")
+    >>> featurizer.transform([sg.testcase.load_test(sg.data_path("rq2-seed.yaml"))]).shape
+    (1, 53)
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from surrealist_gym.errors import SurrealistError
+from surrealist_gym.geometry import obstacle_distances
+from surrealist_gym.store import EvaluationStore
+from surrealist_gym.testcase import Obstacle, TestCase, _parse_obstacles
+
+PER_OBSTACLE = ("present", "l", "w", "h", "x", "y", "z", "sin_r", "cos_r", "sin_2r", "cos_2r", "area",
+                "along", "lateral", "half_across", "gap", "dist_path", "dist_reference", "near_reference",
+                "along_min", "along_max", "lateral_min", "lateral_max", "ref_lateral")
+POOLED = ("n_obstacles", "min_gap", "min_dist_path", "min_dist_reference", "sum_near_reference")
+TARGETS = ("fitness", "min_distance", "unsafe", "crash")
+UNSAFE_DISTANCE = 1.5  # [m], the paper's threshold
+NEAR = 3.0             # [m], radius of the "reference points near the obstacle" count
+TRAJECTORY_POINTS = 32  # resampled length of the trajectory target
+
+
+class DatasetError(SurrealistError):
+    """A store or model context cannot be turned into a dataset."""
+
+
+@dataclass(frozen=True)
+class Featurizer:
+    """Turns test cases into fixed-length feature vectors, given the mission path and (optionally) a reference.
+
+    Args:
+        path: (K, 2) mission path in the local frame [m] (the positions of the mission items, in order).
+        reference: (N, 2 or 3) reference trajectory [m], or None (generation has no reference).
+        slots: obstacle slots; tests with more obstacles keep the first ``slots`` in canonical order.
+    """
+
+    path: np.ndarray
+    reference: np.ndarray | None = None
+    slots: int = 2
+
+    def __post_init__(self):
+        path = np.asarray(self.path, dtype=np.float64).reshape(-1, 2)
+        if len(path) < 2:
+            raise DatasetError(f"featurizer: the mission path needs at least 2 positions, got {len(path)}")
+        object.__setattr__(self, "path", path)
+        if self.reference is not None:
+            ref = np.asarray(self.reference, dtype=np.float64)
+            object.__setattr__(self, "reference", ref[:, :2].copy() if len(ref) else None)
+        dense = [np.linspace(a, b, max(2, int(np.ceil(np.linalg.norm(b - a) / 0.5)) + 1))
+                 for a, b in zip(path[:-1], path[1:])]
+        object.__setattr__(self, "_dense", np.concatenate(dense))
+        lengths = np.linalg.norm(np.diff(path, axis=0), axis=1)
+        object.__setattr__(self, "_cumulative", np.concatenate([[0.0], np.cumsum(lengths)]))
+
+    # --- construction -----------------------------------------------------------------------------------------
+    @classmethod
+    def for_test(cls, test: TestCase, reference=None, slots: int | None = None) -> "Featurizer":
+        """The featurizer of a problem's seed test (its mission) and reference trajectory."""
+        if test.mission is None or len(test.mission.waypoints) < 2:
+            raise DatasetError("featurizer: the seed test has no mission with 2 positions to measure obstacles "
+                               "against")
+        path = [(x, y) for x, y, _ in test.mission.waypoints]
+        ref = None if reference is None else np.asarray(reference, dtype=np.float64)
+        return cls(np.asarray(path), ref, slots if slots is not None else max(1, len(test.obstacles)))
+
+    @classmethod
+    def for_env(cls, env) -> "Featurizer":
+        """The featurizer of a Surrealist env (its seed test, and its reference trajectory if it replicates)."""
+        env = env.unwrapped
+        reference = getattr(env, "reference", None)
+        return cls.for_test(env.seed_test, None if reference is None else np.asarray(reference))
+
+    @classmethod
+    def for_problem(cls, problem: str = "replicate", seed_test=None, log=None) -> "Featurizer":
+        """The featurizer of the bundled problems: ``replicate`` (case0, its reference) or ``generate`` (RQ2)."""
+        import warnings
+
+        import surrealist_gym as sg
+        from surrealist_gym.testcase import load_test
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            if problem == "replicate":
+                test = load_test(seed_test or sg.data_path("rq1-seed1.yaml"))
+                from surrealist_gym.logs import read_flight
+                flight = read_flight(log or test.reference_log or sg.data_path("case0.ulg"))
+                return cls.for_test(test, np.asarray(flight.trajectory))
+            if problem == "generate":
+                return cls.for_test(load_test(seed_test or sg.data_path("rq2-seed.yaml")))
+        raise DatasetError(f"problem {problem!r}: expected 'replicate' or 'generate'")
+
+    def to_dict(self) -> dict:
+        """A JSON-able form (saved in a model's metadata)."""
+        return {"path": self.path.tolist(), "reference": None if self.reference is None else
+                np.round(self.reference, 4).tolist(), "slots": self.slots}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "Featurizer":
+        return cls(np.asarray(data["path"]), None if data.get("reference") is None else
+                   np.asarray(data["reference"]), int(data["slots"]))
+
+    # --- features ---------------------------------------------------------------------------------------------
+    @property
+    def names(self) -> list[str]:
+        """Feature names, in column order."""
+        return [f"o{i}.{n}" for i in range(self.slots) for n in PER_OBSTACLE] + list(POOLED)
+
+    def transform(self, tests: Iterable) -> np.ndarray:
+        """(n, features) for test cases, or obstacle tuples, or stored ``{"obstacles": [...]}`` dicts."""
+        rows = [self.features(_obstacles_of(t)) for t in tests]
+        return np.asarray(rows, dtype=np.float64).reshape(len(rows), len(self.names))
+
+    def features(self, obstacles: Sequence[Obstacle]) -> np.ndarray:
+        """The feature vector of one layout of obstacles."""
+        rows = [self._obstacle_features(o) for o in obstacles]
+        rows.sort(key=lambda r: (round(r[12], 6), round(r[13], 6), r[4], r[5]))  # along, lateral, x, y
+        out = np.zeros((self.slots, len(PER_OBSTACLE)))
+        for i, row in enumerate(rows[:self.slots]):
+            out[i] = row
+        if rows:
+            arr = np.asarray(rows)
+            pooled = [len(rows), arr[:, 15].min(), arr[:, 16].min(), arr[:, 17].min(), arr[:, 18].sum()]
+        else:
+            pooled = [0.0, 50.0, 50.0, 50.0, 0.0]
+        return np.concatenate([out.ravel(), pooled])
+
+    def _obstacle_features(self, o: Obstacle) -> list[float]:
+        rad = math.radians(o.r)
+        centre = np.array([o.x, o.y])
+        a, b = self.path[:-1], self.path[1:]
+        seg = b - a
+        length2 = np.maximum((seg ** 2).sum(axis=1), 1e-12)
+        t = np.clip(((centre - a) * seg).sum(axis=1) / length2, 0.0, 1.0)
+        nearest = a + t[:, None] * seg
+        k = int(np.argmin(np.linalg.norm(centre - nearest, axis=1)))
+        direction = seg[k] / math.sqrt(length2[k])
+        rel = centre - a[k]
+        lateral = float(direction[0] * rel[1] - direction[1] * rel[0])  # + to the right of the path (NED)
+        along = (self._cumulative[k] + t[k] * math.sqrt(length2[k])) / max(self._cumulative[-1], 1e-9)
+        theta = rad - math.atan2(direction[1], direction[0])
+        if o.shape.value == "cylinder":
+            half_across = o.l / 2
+        else:
+            half_across = abs(o.l / 2 * math.sin(theta)) + abs(o.w / 2 * math.cos(theta))
+        gap = abs(lateral) - half_across
+        dist_path = float(obstacle_distances(self._dense, [o]).min())
+        if self.reference is not None:
+            d_ref = obstacle_distances(self.reference, [o])[:, 0]
+            dist_ref, near = float(d_ref.min()), float((d_ref < NEAR).sum())
+        else:
+            dist_ref, near = dist_path, 0.0
+        area = o.l * o.w if o.shape.value == "box" else math.pi * o.l * o.l / 4
+        corners = np.asarray(o.footprint()) - a[k]
+        c_along = corners @ direction
+        c_lat = direction[0] * corners[:, 1] - direction[1] * corners[:, 0]
+        ref_lateral = 0.0
+        if self.reference is not None:  # where the reference passed, across the path, beside the obstacle
+            r_rel = self.reference - a[k]
+            r_along = r_rel @ direction
+            r_lat = direction[0] * r_rel[:, 1] - direction[1] * r_rel[:, 0]
+            beside = (r_along >= c_along.min() - 1.0) & (r_along <= c_along.max() + 1.0)
+            ref_lateral = float(r_lat[beside].mean()) if beside.any() else 0.0
+        return [1.0, o.l, o.w, o.h, o.x, o.y, o.z, math.sin(rad), math.cos(rad), math.sin(2 * rad),
+                math.cos(2 * rad), area, along, lateral, half_across, gap, dist_path, dist_ref, near,
+                float(c_along.min()), float(c_along.max()), float(c_lat.min()), float(c_lat.max()), ref_lateral]
+
+
+def _obstacles_of(item) -> tuple[Obstacle, ...]:
+    if isinstance(item, TestCase):
+        return item.obstacles
+    if isinstance(item, dict):
+        return _parse_obstacles(item.get("obstacles"), "stored test")
+    return tuple(item)
+
+
+# --- datasets ------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Dataset:
+    """Features and targets of stored evaluations.
+
+    Attributes:
+        X: (n, features) feature matrix.
+        targets: ``fitness`` (maximised), ``min_distance`` (smallest 2-D footprint distance over the runs [m]),
+            ``unsafe`` and ``crash`` (share of runs closer than 1.5 m / that collided), each (n,).
+        trajectories: (n, 32, 3) judged trajectory resampled to 32 points [m] (NaN when not stored).
+        groups: (n,) index of the store each row comes from (for held-out splits by store).
+        keys: test key of each row.
+        names: feature names.
+    """
+
+    X: np.ndarray
+    targets: dict[str, np.ndarray]
+    trajectories: np.ndarray
+    groups: np.ndarray
+    keys: tuple[str, ...]
+    names: tuple[str, ...] = field(default=())
+
+    def __len__(self) -> int:
+        return len(self.X)
+
+    def subset(self, mask) -> "Dataset":
+        """The rows selected by a boolean mask or index array."""
+        idx = np.arange(len(self))[mask]
+        return Dataset(self.X[idx], {k: v[idx] for k, v in self.targets.items()}, self.trajectories[idx],
+                       self.groups[idx], tuple(self.keys[i] for i in idx), self.names)
+
+    def target(self, name: str = "fitness") -> tuple[np.ndarray, np.ndarray]:
+        """``(X, y)`` for one target, without the rows whose value is unknown (fitness of an unflown test)."""
+        if name not in self.targets:
+            raise DatasetError(f"target {name!r}: expected one of {', '.join(TARGETS)}")
+        y = self.targets[name]
+        ok = np.isfinite(y)
+        return self.X[ok], y[ok]
+
+
+def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
+    """A dataset from one or more evaluation stores (paths or EvaluationStore) searched on one problem."""
+    X, fit, mind, unsafe, crash, trajs, groups, keys = [], [], [], [], [], [], [], []
+    for g, source in enumerate(stores):
+        store = source if isinstance(source, EvaluationStore) else _open(source)
+        try:
+            for ev in store:
+                try:
+                    X.append(featurizer.features(_obstacles_of(ev.test)))
+                except SurrealistError as err:
+                    raise DatasetError(f"{store.path}: evaluation {ev.id}: {err}") from err
+                runs = ev.runs or ()
+                fit.append(np.nan if ev.fitness is None else float(ev.fitness))
+                mind.append(min((float(r["min_distance_2d"]) for r in runs), default=np.nan))
+                n = max(len(runs), 1)
+                unsafe.append(sum(float(r["min_distance_2d"]) < UNSAFE_DISTANCE for r in runs) / n)
+                crash.append(sum(r.get("status") == "collision" for r in runs) / n)
+                trajs.append(_resample((ev.info or {}).get("trajectory")))
+                groups.append(g)
+                keys.append(ev.test_key)
+        finally:
+            if store is not source:
+                store.close()
+    if not X:
+        raise DatasetError(f"{', '.join(map(str, stores))}: no evaluations stored")
+    return Dataset(np.asarray(X), {"fitness": np.asarray(fit), "min_distance": np.asarray(mind),
+                                   "unsafe": np.asarray(unsafe), "crash": np.asarray(crash)},
+                   np.asarray(trajs), np.asarray(groups), tuple(keys), tuple(featurizer.names))
+
+
+def _open(path) -> EvaluationStore:
+    from pathlib import Path
+
+    if not Path(path).is_file():
+        raise DatasetError(f"{path}: no such evaluation store")
+    try:
+        store = EvaluationStore(path)
+    except SurrealistError as err:
+        raise DatasetError(str(err)) from err
+    try:
+        len(store)
+    except Exception as err:  # sqlite3.DatabaseError on a file that is not an evaluation store
+        store.close()
+        raise DatasetError(f"{path}: not an evaluation store ({err})") from err
+    return store
+
+
+def _resample(trajectory) -> np.ndarray:
+    if not trajectory:
+        return np.full((TRAJECTORY_POINTS, 3), np.nan)
+    arr = np.asarray(trajectory, dtype=np.float64).reshape(-1, 3)
+    s = np.linspace(0, len(arr) - 1, TRAJECTORY_POINTS)
+    return np.stack([np.interp(s, np.arange(len(arr)), arr[:, i]) for i in range(3)], axis=1)

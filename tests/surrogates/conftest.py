@@ -1,0 +1,44 @@
+"""Copies of real evaluation stores (results/paper) for the surrogate tests; the originals are never touched."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+PAPER = Path(__file__).resolve().parents[2] / "results" / "paper"
+
+
+def _copy(tmp_path_factory, name: str) -> Path:
+    source = PAPER / name
+    if not source.is_file():
+        pytest.skip(f"{source} is missing (run benchmarks/reproduce_paper.py)")
+    dest = tmp_path_factory.mktemp("stores") / name
+    shutil.copy(source, dest)
+    return dest
+
+
+@pytest.fixture(scope="session")
+def rq1_stores(tmp_path_factory) -> list[Path]:
+    return [_copy(tmp_path_factory, f"rq1-seed1-rep{i}.sqlite") for i in (0, 1)]
+
+
+@pytest.fixture(scope="session")
+def rq2_store(tmp_path_factory) -> Path:
+    return _copy(tmp_path_factory, "rq2-rep0.sqlite")
+
+
+@pytest.fixture(scope="session")
+def replicate_featurizer():
+    from surrogates.dataset import Featurizer
+    return Featurizer.for_problem("replicate")
+
+
+@pytest.fixture(scope="session")
+def generate_featurizer():
+    import warnings
+
+    from surrogates.dataset import Featurizer
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return Featurizer.for_problem("generate")

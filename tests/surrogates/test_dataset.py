@@ -1,0 +1,52 @@
+"""Features of stored tests: order invariance, relative-to-mission values, targets from real stores."""
+import numpy as np
+import pytest
+
+from surrealist_gym.testcase import Obstacle
+from surrogates.dataset import PER_OBSTACLE, DatasetError, Featurizer, load_dataset
+
+
+def test_features_do_not_depend_on_obstacle_order(generate_featurizer):
+    a = Obstacle(4, 3, 20, 17.0, 17.5, 0, 10)
+    b = Obstacle(7, 5, 20, -6.0, 17.5, 0, 0)
+    f = generate_featurizer
+    assert np.array_equal(f.features([a, b]), f.features([b, a]))
+    assert len(f.names) == f.features([a, b]).size == 2 * len(PER_OBSTACLE) + 5
+
+
+def test_relative_features_of_a_box_on_a_straight_path():
+    f = Featurizer(np.array([[0.0, 0.0], [20.0, 0.0]]), slots=1)
+    row = dict(zip(f.names, f.features([Obstacle(2, 2, 5, 10.0, 3.0)])))
+    assert row["o0.along"] == pytest.approx(0.5)
+    assert row["o0.lateral"] == pytest.approx(3.0)          # right of the path (east of a northward leg)
+    assert row["o0.gap"] == pytest.approx(2.0)              # |3| - half width 1
+    assert row["o0.dist_path"] == pytest.approx(2.0)
+    assert row["n_obstacles"] == 1
+
+
+def test_featurizer_round_trip(replicate_featurizer):
+    f = Featurizer.from_dict(replicate_featurizer.to_dict())
+    obstacles = [Obstacle(3, 3, 3, -8.6, 1.7, 0, 158.8)]
+    assert np.allclose(f.features(obstacles), replicate_featurizer.features(obstacles), atol=1e-3)
+
+
+def test_dataset_from_real_stores(rq1_stores, replicate_featurizer):
+    data = load_dataset(rq1_stores, replicate_featurizer)
+    assert len(data) > 150 and data.X.shape == (len(data), len(replicate_featurizer.names))
+    assert set(np.unique(data.groups)) == {0, 1}
+    X, y = data.target("fitness")
+    assert np.all(y < 0) and len(X) == len(y)
+    assert np.all(data.targets["min_distance"] >= 0) and np.all((0 <= data.targets["unsafe"]) &
+                                                                (data.targets["unsafe"] <= 1))
+    assert data.trajectories.shape == (len(data), 32, 3) and np.isfinite(data.trajectories[0]).all()
+    first = data.subset(data.groups == 0)
+    assert len(first) + len(data.subset(data.groups == 1)) == len(data)
+
+
+def test_bad_store_is_one_line_error(tmp_path, replicate_featurizer):
+    bad = tmp_path / "bad.sqlite"
+    bad.write_text("not sqlite at all" * 100)
+    with pytest.raises(DatasetError, match="bad.sqlite"):
+        load_dataset([bad], replicate_featurizer)
+    with pytest.raises(DatasetError, match="no such evaluation store"):
+        load_dataset([tmp_path / "missing.sqlite"], replicate_featurizer)
