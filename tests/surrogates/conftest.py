@@ -1,4 +1,5 @@
-"""Copies of real evaluation stores (results/paper) for the surrogate tests; the originals are never touched."""
+"""Copies of real evaluation stores for the surrogate tests: tests/data/stores holds three stores made by
+`python benchmarks/reproduce_paper.py` (RQ1 seed 1 repetitions 0 and 1, RQ2 repetition 0); tests work on copies."""
 from __future__ import annotations
 
 import shutil
@@ -6,13 +7,11 @@ from pathlib import Path
 
 import pytest
 
-PAPER = Path(__file__).resolve().parents[2] / "results" / "paper"
+STORES = Path(__file__).resolve().parents[1] / "data" / "stores"
 
 
 def _copy(tmp_path_factory, name: str) -> Path:
-    source = PAPER / name
-    if not source.is_file():
-        pytest.skip(f"{source} is missing (run benchmarks/reproduce_paper.py)")
+    source = STORES / name
     dest = tmp_path_factory.mktemp("stores") / name
     shutil.copy(source, dest)
     return dest
