@@ -1,5 +1,15 @@
-"""Search agents: the paper's adaptive greedy (reference), and agents that plug into the same interface."""
-from .base import Agent, SearchResult
-from .greedy import AdaptiveGreedy, GreedyConfig
+"""Search agents: the paper's adaptive greedy (reference), and agents that plug into the same interface.
 
-__all__ = ["Agent", "AdaptiveGreedy", "GreedyConfig", "SearchResult"]
+``make_agent("random")`` builds any of them by name; ``compare(...)`` runs several on the same problems.
+"""
+from .base import Agent, SearchResult
+from .cmaes import CMAES, CMAESConfig
+from .compare import CompareResult, compare
+from .greedy import AdaptiveGreedy, GreedyConfig
+from .random import RandomConfig, RandomSearch
+from .registry import agent_names, make_agent, register_agent
+from .rl import PPOAgent, ProceduralEnv, train_policy
+
+__all__ = ["Agent", "AdaptiveGreedy", "CMAES", "CMAESConfig", "CompareResult", "GreedyConfig", "PPOAgent",
+           "ProceduralEnv", "RandomConfig", "RandomSearch", "SearchResult", "agent_names", "compare", "make_agent",
+           "register_agent", "train_policy"]

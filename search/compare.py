@@ -1,0 +1,349 @@
+"""Compare agents on one problem: every agent, every repetition, the same env seeds; Table 2 metrics and statistics.
+
+Repetition ``r`` of every agent runs on the env built with ``random_seed=r`` (the simulation noise) and the agent
+seeded with ``r``, so agents differ only in what they propose. Each search stores its evaluations in its own SQLite
+file under ``OUT/searches/``; a finished search is cached as JSON beside it, so calling :func:`compare` again on the
+same folder does no simulation for it, and an interrupted one replays its stored evaluations (the env answers them
+without simulating) and goes on. Writes ``compare.md``, ``compare.csv`` (per agent), ``pairwise.csv``,
+``searches.csv`` (per search) and ``convergence.png`` (best fitness against simulations, median and quartiles).
+
+Example:
+    >>> compare("Surrealist-Generate-v0", ["greedy", "random"], repetitions=3, budget=10, runs=1,
+    ...         out="results/cmp", executor="inline")                                     # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import math
+import re
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from surrealist_gym.errors import SurrealistError
+
+from .registry import agent_label, make_agent
+
+SETTINGS_FILE = "compare.json"
+# (metric key, column title, format); a metric absent from every search of a problem is left out of the tables
+METRICS = (
+    ("best_fitness", "best fitness", ".2f"),
+    ("evaluations_to_best", "evaluations to best", ".1f"),
+    ("simulations_to_best", "simulations to best", ".1f"),
+    ("best_dtw", "best DTW", ".1f"),
+    ("dtw_reduction", "DTW reduction", ".1%"),
+    ("best_frechet", "best Fréchet [m]", ".2f"),
+    ("frechet_reduction", "Fréchet reduction", ".1%"),
+    ("best_min_distance", "best min distance [m]", ".2f"),
+    ("min_distance_reduction", "min distance reduction", ".1%"),
+    ("crash_rate", "crash rate", ".0%"),
+    ("unsafe_rate", "unsafe rate", ".0%"),
+    ("wall_seconds", "wall time [s]", ".1f"),
+)
+PAIRED = (("best_fitness", "final fitness"), ("simulations_to_best", "simulations to best"))
+
+
+@dataclass(frozen=True, slots=True)
+class SearchRecord:
+    """One finished search: its metrics and its convergence trace ``(evaluations, simulations, best fitness)``."""
+
+    agent: str
+    repetition: int
+    metrics: dict
+    trace: tuple
+    new_simulations: int = 0  # simulated by this call (0 for a search read back from its JSON)
+
+    def to_json(self) -> dict:
+        return {"agent": self.agent, "repetition": self.repetition, "metrics": self.metrics,
+                "trace": [list(t) for t in self.trace]}
+
+
+@dataclass(frozen=True, slots=True)
+class CompareResult:
+    """What :func:`compare` wrote: the searches, per-agent summary rows and pairwise statistics."""
+
+    searches: tuple[SearchRecord, ...]
+    summary: tuple[dict, ...]
+    pairwise: tuple[dict, ...]
+    out: Path
+
+    @property
+    def new_simulations(self) -> int:
+        return sum(s.new_simulations for s in self.searches)
+
+
+class _Shared:
+    """An executor shared by the searches: each env's close() leaves it open."""
+
+    def __init__(self, executor):
+        self.executor, self.workers = executor, getattr(executor, "workers", 1)
+
+    def run(self, *args):
+        return self.executor.run(*args)
+
+    def close(self):
+        pass
+
+
+def _slug(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_")
+
+
+def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: int = 100, runs: int | None = None,
+            out="results/compare", env_kwargs: dict | None = None, executor=None, workers: int | None = None,
+            parallel: int = 1, progress: Callable[[dict], None] | None = None) -> CompareResult:
+    """Run every agent ``repetitions`` times on the same problems, then write the tables and the plot.
+
+    Args:
+        env_id: a registered Surrealist env id.
+        agents: agent names for :func:`~search.registry.make_agent` (``greedy``, ``random``, ``cmaes``,
+            ``ppo:POLICY.zip``, ...).
+        repetitions: searches per agent; repetition r uses env seed r and agent seed r.
+        budget: evaluations per search.
+        runs: simulations per evaluation (None = the env's default).
+        out: results folder; calling again on it resumes (budget, runs, env and env_kwargs must match).
+        env_kwargs: further keyword arguments of the env (JSON values, e.g. ``{"seed_test": "seed2.yaml"}``).
+        executor: "process" (default), "inline", a Dask address or a ``distributed.Client``.
+        workers: local worker processes (process executor).
+        parallel: searches run at the same time (threads sharing the executor; useful when runs < workers).
+        progress: called with ``{"agent", "repetition", "evaluations", "budget", "done"}`` after every step.
+    """
+    from surrealist_gym.executors import InlineExecutor, make_executor
+
+    if repetitions < 1 or budget < 1 or not agents:
+        raise ValueError(f"compare: expected agents, repetitions >= 1 and budget >= 1; got {list(agents)}, "
+                         f"{repetitions}, {budget}")
+    for name in agents:  # fail early on a bad name, before any simulation
+        make_agent(name, seed=0)
+    out = Path(out)
+    (out / "searches").mkdir(parents=True, exist_ok=True)
+    settings = {"env_id": env_id, "budget": budget, "runs": runs, "env_kwargs": env_kwargs or {}}
+    _check_settings(out / SETTINGS_FILE, settings)
+    real = make_executor(executor, workers)
+    shared = _Shared(real)
+    lock = threading.Lock()
+    tasks = [(name, rep) for name in agents for rep in range(repetitions)]
+
+    def one(task):
+        return _one_search(env_id, task[0], task[1], budget, runs, env_kwargs or {}, shared, out, progress, lock)
+
+    try:
+        if parallel > 1 and not isinstance(real, InlineExecutor):
+            with ThreadPoolExecutor(max_workers=parallel) as pool:
+                records = list(pool.map(one, tasks))
+        else:
+            records = [one(task) for task in tasks]
+    finally:
+        real.close()
+    summary, pairwise = _summarise(records, list(agents))
+    _write_reports(out, settings, records, summary, pairwise, list(agents))
+    return CompareResult(tuple(records), tuple(summary), tuple(pairwise), out)
+
+
+def _check_settings(path: Path, settings: dict) -> None:
+    if path.is_file():
+        saved = json.loads(path.read_text())
+        if saved != json.loads(json.dumps(settings)):
+            raise SurrealistError(f"{path}: the folder holds a comparison with other settings ({saved}); "
+                                  f"use another --out or the same settings")
+    else:
+        path.write_text(json.dumps(settings, indent=2) + "\n")
+
+
+def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, progress, lock) -> SearchRecord:
+    import gymnasium as gym
+
+    stem = out / "searches" / f"{_slug(name)}-rep{rep}"
+    cached = stem.with_suffix(".json")
+    if cached.is_file():
+        data = json.loads(cached.read_text())
+        if progress is not None:
+            with lock:
+                progress({"agent": name, "repetition": rep, "evaluations": budget, "budget": budget, "done": True})
+        return SearchRecord(name, rep, data["metrics"], tuple(tuple(t) for t in data["trace"]))
+    kwargs = dict(env_kwargs, budget=budget, random_seed=rep, store=str(stem.with_suffix(".sqlite")),
+                  executor=executor)
+    if runs is not None:
+        kwargs["runs"] = runs
+    env = gym.make(env_id, **kwargs)
+    agent = make_agent(name, seed=rep)
+    trace = []
+
+    def callback(info: dict) -> None:
+        trace.append((int(info["evaluations"]), int(info["simulations"]), float(info["best_fitness"])))
+        if progress is not None:
+            with lock:
+                progress({"agent": name, "repetition": rep, "evaluations": info["evaluations"], "budget": budget,
+                          "done": False})
+
+    start = time.perf_counter()
+    result = agent.run(env, seed=rep, callback=callback)
+    wall = time.perf_counter() - start
+    base = env.unwrapped
+    seed_eval = base.seed_evaluation
+    trace.insert(0, (1, len(seed_eval.runs), float(seed_eval.fitness)))
+    metrics = _metrics(base, result, trace, wall)
+    record = SearchRecord(name, rep, metrics, tuple(trace), base.evaluator.simulations)
+    env.close()
+    cached.write_text(json.dumps(record.to_json()) + "\n")
+    if progress is not None:
+        with lock:
+            progress({"agent": name, "repetition": rep, "evaluations": budget, "budget": budget, "done": True})
+    return record
+
+
+def _metrics(env, result, trace, wall: float) -> dict:
+    """Table 2 metrics of one search."""
+    from surrealist_gym.fitness import UNSAFE_DISTANCE_M
+
+    seed, best = env.seed_evaluation, env.best
+    sims_to_best = next(s for e, s, f in trace if f >= best.fitness)
+    metrics = {"seed_fitness": seed.fitness, "best_fitness": best.fitness, "evaluations": result.evaluations,
+               "evaluations_to_best": result.evaluations_to_best, "simulations": trace[-1][1],
+               "simulations_to_best": sims_to_best, "wall_seconds": round(wall, 3)}
+    if "dtw" in best.terms:
+        for key in ("dtw", "frechet"):
+            metrics[f"best_{key}"], metrics[f"seed_{key}"] = best.terms[key], seed.terms[key]
+            metrics[f"{key}_reduction"] = _reduction(best.terms[key], seed.terms[key])
+    if "min_dist" in best.terms or "sum_dist" in best.terms:
+        best_min = min(r.min_distance_2d for r in best.runs)
+        seed_min = min(r.min_distance_2d for r in seed.runs)
+        metrics.update(best_min_distance=best_min, seed_min_distance=seed_min,
+                       min_distance_reduction=_reduction(best_min, seed_min),
+                       crash_rate=sum(r.status == "collision" for r in best.runs) / len(best.runs),
+                       unsafe_rate=sum(r.min_distance_2d < UNSAFE_DISTANCE_M for r in best.runs) / len(best.runs))
+    return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in metrics.items()}
+
+
+def _reduction(best: float, seed: float) -> float:
+    return 1.0 - best / seed if seed else float("nan")
+
+
+def _values(records, agent: str, key: str) -> list[float]:
+    vals = [r.metrics.get(key) for r in records if r.agent == agent]
+    return [float(v) for v in vals if v is not None and math.isfinite(float(v))]
+
+
+def _summarise(records, agents: list[str]) -> tuple[list[dict], list[dict]]:
+    from surrealist_gym.statistics import a12_magnitude, compare as significance, vargha_delaney_a12
+
+    summary = []
+    for agent in agents:
+        row = {"agent": agent, "label": agent_label(agent), "searches": sum(r.agent == agent for r in records)}
+        for key, _, _ in METRICS:
+            vals = _values(records, agent, key)
+            if vals:
+                row[f"{key}_mean"], row[f"{key}_std"] = float(np.mean(vals)), float(np.std(vals, ddof=0))
+                row[f"{key}_median"] = float(np.median(vals))
+        summary.append(row)
+    pairwise = []
+    for a, b in itertools.combinations(agents, 2):
+        row = {"agent_a": a, "agent_b": b}
+        for key, _ in PAIRED:
+            xa, xb = _values(records, a, key), _values(records, b, key)
+            try:
+                p, test = significance(xa, xb)
+            except ValueError:  # fewer than 3 values per agent: no test
+                p, test = float("nan"), "n/a"
+            a12 = vargha_delaney_a12(xa, xb) if xa and xb else float("nan")
+            row.update({f"{key}_p": p, f"{key}_test": test, f"{key}_a12": a12,
+                        f"{key}_magnitude": a12_magnitude(a12) if math.isfinite(a12) else "n/a"})
+        pairwise.append(row)
+    return summary, pairwise
+
+
+def _write_reports(out: Path, settings: dict, records, summary, pairwise, agents) -> None:
+    present = [(k, t, f) for k, t, f in METRICS if any(f"{k}_mean" in row for row in summary)]
+    with open(out / "compare.csv", "w", newline="") as f:
+        keys = ["agent", "label", "searches"] + [f"{k}_{s}" for k, _, _ in present for s in ("mean", "std", "median")]
+        writer = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(summary)
+    with open(out / "pairwise.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(pairwise[0]) if pairwise else ["agent_a", "agent_b"])
+        writer.writeheader()
+        writer.writerows(pairwise)
+    with open(out / "searches.csv", "w", newline="") as f:
+        keys = sorted({k for r in records for k in r.metrics})
+        writer = csv.writer(f)
+        writer.writerow(["agent", "repetition"] + keys)
+        for r in records:
+            writer.writerow([r.agent, r.repetition] + [r.metrics.get(k, "") for k in keys])
+    (out / "compare.md").write_text(_markdown(settings, summary, pairwise, present))
+    _plot_convergence(out / "convergence.png", records, agents, settings["env_id"])
+
+
+def _fmt(value, spec: str) -> str:
+    return "n/a" if value is None or not math.isfinite(value) else format(value, spec)
+
+
+def _markdown(settings, summary, pairwise, present) -> str:
+    lines = [f"# Comparison on {settings['env_id']}", "",
+             f"Budget {settings['budget']} evaluations, runs per evaluation: {settings['runs'] or 'env default'}, "
+             f"env options: {settings['env_kwargs'] or 'defaults'}. Mean ± standard deviation over the "
+             f"repetitions (repetition r: env seed r, agent seed r).", "",
+             "| agent | searches | " + " | ".join(t for _, t, _ in present) + " |",
+             "|---|---|" + "---|" * len(present)]
+    for row in summary:
+        cells = [f"{_fmt(row.get(f'{k}_mean'), f)} ± {_fmt(row.get(f'{k}_std'), f)}" for k, _, f in present]
+        lines.append(f"| {row['label']} | {row['searches']} | " + " | ".join(cells) + " |")
+    lines += ["", "Pairwise: p-value (Shapiro-Wilk, then ANOVA or Mann-Whitney U) and Vargha-Delaney A12 "
+              "(probability that a value of A exceeds one of B; higher fitness is better, fewer simulations are "
+              "better).", "",
+              "| A | B | final fitness p | A12 | simulations to best p | A12 |", "|---|---|---|---|---|---|"]
+    for row in pairwise:
+        cells = []
+        for key, _ in PAIRED:
+            cells += [f"{_fmt(row[f'{key}_p'], '.3g')} ({row[f'{key}_test']})",
+                      f"{_fmt(row[f'{key}_a12'], '.2f')} ({row[f'{key}_magnitude']})"]
+        lines.append(f"| {agent_label(row['agent_a'])} | {agent_label(row['agent_b'])} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def convergence_curves(records, agent: str) -> tuple[np.ndarray, np.ndarray]:
+    """Simulations grid and best-fitness curves (one row per search of ``agent``; NaN before its first point)."""
+    traces = [r.trace for r in records if r.agent == agent]
+    top = max((t[-1][1] for t in traces), default=0)
+    grid = np.arange(0, top + 1)
+    curves = np.full((len(traces), grid.size), np.nan)
+    for i, trace in enumerate(traces):
+        sims = np.array([t[1] for t in trace])
+        best = np.maximum.accumulate(np.array([t[2] for t in trace]))
+        idx = np.searchsorted(sims, grid, side="right") - 1
+        curves[i, idx >= 0] = best[idx[idx >= 0]]
+    return grid, curves
+
+
+def _plot_convergence(path: Path, records, agents, title: str) -> None:
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as err:
+        from surrealist_gym.errors import DependencyNotInstalled
+        raise DependencyNotInstalled("the convergence plot needs matplotlib: pip install matplotlib") from err
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for agent in agents:
+        grid, curves = convergence_curves(records, agent)
+        if not curves.size:
+            continue
+        ok = np.isfinite(curves).any(axis=0)
+        with np.errstate(all="ignore"):
+            q1, med, q3 = (np.nanpercentile(curves[:, ok], q, axis=0) for q in (25, 50, 75))
+        line, = ax.plot(grid[ok], med, label=agent_label(agent), drawstyle="steps-post")
+        ax.fill_between(grid[ok], q1, q3, color=line.get_color(), alpha=0.2, step="post")
+    ax.set_xlabel("simulations")
+    ax.set_ylabel("best fitness (median, quartiles)")
+    ax.set_title(title)
+    ax.legend()
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

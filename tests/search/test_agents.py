@@ -1,0 +1,102 @@
+"""Every agent on one tiny-budget problem: spends the budget, never loses the seed, same seed -> same search."""
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import surrealist_gym  # noqa: F401 - registers the envs
+from search import CMAES, Agent, PPOAgent, RandomSearch, make_agent, register_agent
+from search.registry import agent_label
+from surrealist_gym.errors import SurrealistError, UnknownAgent
+
+BUDGET = 5
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
+
+
+def _env(budget=BUDGET):
+    return gym.make("Surrealist-Generate-v0", budget=budget, runs=1, executor="inline")
+
+
+@pytest.fixture(scope="module")
+def policy(tmp_path_factory):
+    pytest.importorskip("stable_baselines3")
+    from search.rl import train_policy
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return train_policy(16, tmp_path_factory.mktemp("rl") / "ppo.zip", problem="generate", budget=3,
+                            n_steps=8, batch_size=8, n_epochs=1)
+
+
+@pytest.fixture(params=["greedy", "greedy-paper", "random", "cmaes", "ppo"])
+def agent_name(request, policy):
+    return f"ppo:{policy}" if request.param == "ppo" else request.param
+
+
+def test_agent_spends_the_budget_and_keeps_the_seed(agent_name):
+    steps = []
+    result = make_agent(agent_name, seed=1).run(_env(), seed=1, callback=steps.append)
+    assert result.evaluations == BUDGET and steps[-1]["budget_left"] == 0
+    assert result.best_fitness >= result.history[0] and result.best_fitness == max(result.history)
+    assert 1 <= result.evaluations_to_best <= BUDGET
+
+
+def test_same_seed_same_search(agent_name):
+    a = make_agent(agent_name, seed=2).run(_env(), seed=2)
+    b = make_agent(agent_name, seed=2).run(_env(), seed=2)
+    assert a.history == b.history and np.array_equal(a.best_action, b.best_action)
+
+
+def test_random_and_cmaes_propose_actions_in_the_box():
+    env = _env()
+    _, info = env.reset(seed=0)
+    for agent in (RandomSearch(seed=0, batch=3), CMAES(seed=0, popsize=4)):
+        agent.setup(env, info)
+        actions = agent.ask()
+        assert len(actions) == (3 if isinstance(agent, RandomSearch) else 4)
+        assert all(a.shape == (2,) and np.all(np.abs(a) <= 1) for a in actions)
+        agent.tell(actions[:1], [info["fitness"]], [info])  # a prefix (budget spent) is accepted
+
+
+def test_cmaes_without_restarts_stops_on_its_own_criteria():
+    agent = CMAES(seed=0, sigma0=1e-9, restarts=False, popsize=2)
+    result = agent.run(_env(20), seed=0)
+    assert result.evaluations <= 20 and agent.stop()
+
+
+def test_policy_for_other_mutators_is_rejected(policy):
+    env = gym.make("Surrealist-Replicate-v0", budget=3, runs=1, executor="inline")
+    with pytest.raises(SurrealistError, match="trained for 2 mutators, the env has 6"):
+        PPOAgent(policy).run(env)
+
+
+def test_registry_names_hints_and_custom_agents(tmp_path):
+    assert agent_label("ppo:some/where.zip") == "ppo" and agent_label("pkg.mod:Mine") == "Mine"
+    with pytest.raises(UnknownAgent, match="did you mean 'cmaes'"):
+        make_agent("cmaess")
+    with pytest.raises(UnknownAgent, match="ppo:POLICY.zip"):
+        make_agent("ppo")
+    with pytest.raises(SurrealistError, match="no such policy"):
+        make_agent("ppo:missing.zip")
+
+    class Zero(Agent):
+        def _ask(self):
+            return [np.zeros(len(self._env.mutators))]
+
+        def _tell(self, actions, fitnesses, infos):
+            self._finish("nothing to try")
+
+    register_agent("zero", Zero)
+    assert make_agent("zero", seed=0).run(_env()).stop_reason == "nothing to try"
+    source = tmp_path / "mine.py"
+    source.write_text("from search import RandomSearch\nclass Mine(RandomSearch):\n    name = 'mine'\n")
+    assert make_agent(f"{source}:Mine", seed=0).name == "mine"
+    with pytest.raises(UnknownAgent, match="cannot import"):
+        make_agent(f"{source}:Missing")
