@@ -93,7 +93,8 @@ class _Shared:
 
 
 def _slug(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_")
+    """A file-name stem for an agent name; no dots, so ``with_suffix`` never eats the repetition number."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_")
 
 
 def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: int = 100, runs: int | None = None,

@@ -1,3 +1,4 @@
+from pathlib import Path
 """A tiny comparison (2 agents x 2 repetitions) writes its reports; running it again simulates nothing."""
 import csv
 import json
@@ -106,3 +107,10 @@ def test_cli_compare(tmp_path, capsys):
     assert main(args) == 0 and "(0 new simulations)" in capsys.readouterr().out
     assert main(args[:4] + ["random,grredy"] + args[5:]) == 2
     assert "did you mean 'greedy'" in capsys.readouterr().err
+
+
+def test_agent_names_with_dots_keep_one_store_per_repetition():
+    from search.compare import _slug
+
+    stem = Path("searches") / f"{_slug('ppo:results/policies/ppo-replicate.zip')}-rep3"
+    assert stem.with_suffix(".sqlite").name.endswith("-rep3.sqlite")
