@@ -1,5 +1,5 @@
-from pathlib import Path
 """A tiny comparison (2 agents x 2 repetitions) writes its reports; running it again simulates nothing."""
+from pathlib import Path
 import csv
 import json
 import warnings
