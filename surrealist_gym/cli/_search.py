@@ -23,6 +23,9 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
                         help="run the simulations on a Dask cluster (tcp://host:port)")
     parser.add_argument("--preset", default="authors", choices=["paper", "authors"],
                         help="greedy hyper-parameters: paper Table 1, or the authors' own run (default)")
+    parser.add_argument("--agent", default="greedy",
+                        help="search agent: greedy (default), greedy-paper, random, cmaes, ppo:POLICY.zip, "
+                             "module:Class")
     parser.add_argument("--random-seed", type=int, default=0, help="base seed of the simulation noise")
     parser.add_argument("--surrogate", default=None, metavar="MODEL|online",
                         help="pre-screen mutations with a surrogate model folder (surrealist surrogate train) "
@@ -57,6 +60,10 @@ def prepare(args, command: str, keys: tuple[str, ...]) -> tuple[Path, dict]:
         if options.get("command") != command:
             raise SurrealistError(f"{saved}: a '{options.get('command')}' search, not '{command}'")
         return out, options
+    if getattr(args, "agent", "greedy") not in (None, "greedy"):
+        from search.registry import make_agent
+
+        make_agent(args.agent)  # an unknown agent fails here, before any folder or worker exists
     out = Path(args.out or f"results/{command}-{datetime.now():%Y%m%d-%H%M%S}")
     options = {"command": command, **{k: getattr(args, k) for k in keys}}
     for key in ("log", "test", "seed"):
@@ -75,7 +82,13 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
 
     from ..results import write_results
 
-    agent = AdaptiveGreedy(options["preset"])
+    name = options.get("agent") or "greedy"
+    if name == "greedy":
+        agent = AdaptiveGreedy(options["preset"])
+    else:
+        from search.registry import make_agent
+
+        agent = make_agent(name, seed=options["random_seed"])
     if options.get("surrogate"):
         from surrogates.prescreen import wrap
 

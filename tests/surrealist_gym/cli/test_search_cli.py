@@ -88,3 +88,12 @@ def test_bad_yaml_via_subprocess(tmp_path):
     assert proc.returncode == 2
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "bad.yaml" in lines[0] and "'h' must be positive" in lines[0]
+
+
+def test_another_agent_from_the_command_line(tmp_path):
+    out = tmp_path / "rand"
+    assert main(["generate", "--agent", "random", "--budget", "3", "--runs", "1", "--workers", "1",
+                 "--out", str(out)]) == 0
+    assert json.loads((out / "summary.json").read_text())["evaluations"] <= 3
+    assert main(["generate", "--agent", "randon", "--out", str(tmp_path / "bad")]) == 2
+    assert not (tmp_path / "bad").exists()
