@@ -103,17 +103,23 @@ class Agent(ABC):
             actions = self.ask()
             fitnesses, infos = [], []
             for action in actions:
-                _, reward, terminated, truncated, step_info = env.step(action)
+                reward, step_info, done = self._step(env, action, callback)
                 fitnesses.append(reward)
                 infos.append(step_info)
-                if callback is not None:
-                    callback(step_info)
-                if terminated or truncated:
-                    done = True
-                    self._stop_reason = self._stop_reason or "budget spent"
+                if done:
                     break
             self.tell(actions[:len(fitnesses)], fitnesses, infos)
         return self.result
+
+    def _step(self, env, action, callback=None) -> tuple[float, dict, bool]:
+        """One real evaluation through the env: (fitness, info, episode over); notes why the search stops."""
+        _, reward, terminated, truncated, info = env.step(action)
+        if callback is not None:
+            callback(info)
+        done = terminated or truncated
+        if done:
+            self._stop_reason = self._stop_reason or "budget spent"
+        return float(reward), info, done
 
     # --- hooks --------------------------------------------------------------------------------------------------
     def _setup(self, info: dict) -> None:

@@ -108,14 +108,10 @@ class Prescreened(Agent):
                 if skip is not None:
                     told.append((action, skip["told_fitness"], skip["info"]))
                     continue
-                _, reward, terminated, truncated, step_info = env.step(action)
-                told.append((action, float(reward), step_info))
-                real.append((action, float(reward), step_info))
-                if callback is not None:
-                    callback(step_info)
-                if terminated or truncated:
-                    done = True
-                    self._stop_reason = self._stop_reason or "budget spent"
+                reward, step_info, done = self._step(env, action, callback)
+                told.append((action, reward, step_info))
+                real.append((action, reward, step_info))
+                if done:
                     break
             self.tell([a for a, _, _ in real], [f for _, f, _ in real], [i for _, _, i in real])
             self.inner.tell([a for a, _, _ in told], [f for _, f, _ in told], [i for _, _, i in told])

@@ -28,24 +28,6 @@ def qmul(a, b):
             aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
 
 
-def attitude_from_thrust(tx: float, ty: float, tz: float, yaw: float):
-    """PX4 ``bodyzToAttitude``: the quaternion whose body z axis is opposite the thrust vector, with heading yaw."""
-    n = math.sqrt(tx * tx + ty * ty + tz * tz)
-    if n < 1e-9:
-        zx, zy, zz = 0.0, 0.0, 1.0
-    else:
-        zx, zy, zz = -tx / n, -ty / n, -tz / n
-    cx, cy = -math.sin(yaw), math.cos(yaw)  # y axis of the yaw-only frame
-    xx, xy, xz = cy * zz, -cx * zz, cx * zy - cy * zx  # y_C x z_B
-    m = math.sqrt(xx * xx + xy * xy + xz * xz)
-    if m < 1e-9:
-        xx, xy, xz = 1.0, 0.0, 0.0
-    else:
-        xx, xy, xz = xx / m, xy / m, xz / m
-    yx, yy, yz = zy * xz - zz * xy, zz * xx - zx * xz, zx * xy - zy * xx
-    return _quat_from_matrix(xx, yx, zx, xy, yy, zy, xz, yz, zz)
-
-
 @njit(cache=True)
 def _quat_from_matrix(r00, r01, r02, r10, r11, r12, r20, r21, r22):
     tr = r00 + r11 + r22
@@ -389,7 +371,8 @@ def position_params(p: dict):
 
 
 @njit(cache=True)
-def _attitude_from_thrust(tx, ty, tz, yaw):
+def attitude_from_thrust(tx, ty, tz, yaw):
+    """PX4 ``bodyzToAttitude``: the quaternion whose body z axis is opposite the thrust vector, with heading yaw."""
     n = math.sqrt(tx * tx + ty * ty + tz * tz)
     if n < 1e-9:
         zx, zy, zz = 0.0, 0.0, 1.0
@@ -450,5 +433,5 @@ def position_step(pos, vel, pos_sp, vel_ff, acc_ff, yaw_sp, dt, P, S):
     S[0] += ex * P[3] * dt
     S[1] += ey * P[3] * dt
     S[2] = max(-g, min(g, S[2] + ez * P[6] * dt))
-    q = _attitude_from_thrust(tx, ty, tz, yaw_sp)
+    q = attitude_from_thrust(tx, ty, tz, yaw_sp)
     return (q[0], q[1], q[2], q[3], math.sqrt(tx * tx + ty * ty + tz * tz))
