@@ -1,4 +1,4 @@
-"""CMA-ES (pycma) over the action vector in [-1, 1], started at the seed test (action 0).
+"""CMA-ES (pycma) over the action vector within ``env.action_bounds()``, started at the seed test (action 0).
 
 ``ask`` is pycma's ``ask`` (a population of candidate actions within the bounds), ``tell`` is pycma's ``tell``
 on the negated fitness (pycma minimises). An invalid test comes back from the env with its penalty fitness. When
@@ -54,6 +54,7 @@ class CMAES(Agent):
 
     def _setup(self, info: dict) -> None:
         self.restarts = 0
+        self._low, self._high = self._env.action_bounds()
         self._es = self._new_es(np.zeros(len(self._env.mutators)))
 
     def _new_es(self, x0: np.ndarray):
@@ -61,7 +62,7 @@ class CMAES(Agent):
             import cma
         except ImportError as err:
             raise DependencyNotInstalled("the CMA-ES agent needs pycma: pip install cma") from err
-        options = {"bounds": [-1.0, 1.0], "seed": int(self.rng.integers(1, 2**31 - 1)), "verbose": -9,
+        options = {"bounds": [list(self._low), list(self._high)], "seed": int(self.rng.integers(1, 2**31 - 1)), "verbose": -9,
                    "verb_log": 0, "verb_disp": 0}
         if self.config.popsize is not None:
             options["popsize"] = self.config.popsize
@@ -75,8 +76,8 @@ class CMAES(Agent):
                 self._finish("cma: " + ", ".join(sorted(self._es.stop())))
                 return []
             self.restarts += 1
-            self._es = self._new_es(self.rng.uniform(-1.0, 1.0, len(self._env.mutators)))
-        return [np.clip(np.asarray(x, dtype=np.float64), -1.0, 1.0) for x in self._es.ask()]
+            self._es = self._new_es(self.rng.uniform(self._low, self._high))
+        return [np.clip(np.asarray(x, dtype=np.float64), self._low, self._high) for x in self._es.ask()]
 
     def _tell(self, actions, fitnesses, infos) -> None:
         if len(actions) == self._es.popsize:  # a prefix: the budget ran out

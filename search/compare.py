@@ -186,8 +186,8 @@ def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, prog
 
     start = time.perf_counter()
     result = agent.run(env, seed=rep, callback=callback)
-    wall = time.perf_counter() - start
     base = env.unwrapped
+    wall = time.perf_counter() - start + base.evaluator.replayed_seconds  # a resumed search counts its first part
     seed_eval = base.seed_evaluation
     trace.insert(0, (1, len(seed_eval.runs), float(seed_eval.fitness)))
     metrics = _metrics(base, result, trace, wall)

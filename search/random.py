@@ -1,4 +1,4 @@
-"""Random search: uniform actions in [-1, 1], i.e. uniform mutator values within each mutator's range.
+"""Random search: uniform mutator values within each mutator's valid range (``env.action_bounds()``).
 
 The baseline that the UAV Testing Competition's 2025 winner was built on. Each ``ask`` proposes a batch of
 independent uniform vectors drawn from the agent's seeded generator; ``tell`` learns nothing.
@@ -41,9 +41,11 @@ class RandomSearch(Agent):
         super().__init__(seed)
         self.config = RandomConfig(**overrides) if config is None else config
 
+    def _setup(self, info: dict) -> None:
+        self._low, self._high = self._env.action_bounds()
+
     def _ask(self) -> list[np.ndarray]:
-        n = len(self._env.mutators)
-        return [self.rng.uniform(-1.0, 1.0, n) for _ in range(self.config.batch)]
+        return [self.rng.uniform(self._low, self._high) for _ in range(self.config.batch)]
 
     def _tell(self, actions, fitnesses, infos) -> None:
         pass

@@ -124,6 +124,7 @@ class Evaluator:
         self.store = store
         self._memo: dict[str, Evaluation] = {}
         self.simulations = 0
+        self.replayed_seconds = 0.0  # simulation time of the evaluations read back from the store
 
     def evaluate(self, test: TestCase) -> Evaluation:
         key = test.key()
@@ -133,6 +134,7 @@ class Evaluator:
             stored = self.store.get(key)
             if stored is not None:
                 evaluation = _from_stored(test, stored)
+                self.replayed_seconds += stored.sim_seconds
                 self._memo[key] = evaluation
                 return evaluation
         start = time.perf_counter()

@@ -68,6 +68,17 @@ class Mutator:
     def name(self) -> str:
         return f"obstacle{self.obstacle}.{self.kind.value}"
 
+    def valid_range(self, test: TestCase) -> tuple[float, float]:
+        """The part of ``[low, high]`` that keeps the obstacle's size at least ``min_step`` on ``test``.
+
+        Resizes by less than ``min_step - size`` are invalid whatever the other mutators do; agents that sample
+        the range (random search, CMA-ES) draw from this part. Overlaps with other obstacles are still possible.
+        """
+        if self.kind not in (MutatorKind.RESIZE_L, MutatorKind.RESIZE_W, MutatorKind.RESIZE_H):
+            return self.low, self.high
+        size = getattr(test.obstacles[self.obstacle], _FIELD[self.kind])
+        return min(max(self.low, self.min_step - size), self.high), self.high
+
     def apply(self, test: TestCase, value: float) -> TestCase:
         """A new test case with this mutator applied by ``value``; raises InvalidTestCase if the result is invalid."""
         if not 0 <= self.obstacle < len(test.obstacles):

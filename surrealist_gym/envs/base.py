@@ -108,6 +108,11 @@ class SurrealistEnv(gym.Env):
         """The action in [-1, 1] of mutator values (metres, degrees); values beyond a mutator's range are clipped."""
         return np.clip((np.asarray(values, dtype=np.float64) - self._centre) / self._half_range, -1.0, 1.0)
 
+    def action_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per-mutator action bounds within [-1, 1] that keep every obstacle of the seed a valid size."""
+        low, high = zip(*(m.valid_range(self._seed_test) for m in self._mutators))
+        return self.action_for(low), self.action_for(high)
+
     def test_for(self, action) -> TestCase:
         """The test case an action stands for (raises InvalidTestCase if it is invalid)."""
         test = self._seed_test

@@ -65,6 +65,20 @@ def test_random_and_cmaes_propose_actions_in_the_box():
         agent.tell(actions[:1], [info["fitness"]], [info])  # a prefix (budget spent) is accepted
 
 
+def test_random_and_cmaes_sample_only_valid_sizes():
+    env = gym.make("Surrealist-Replicate-v0", budget=3, runs=1, executor="inline")
+    base = env.unwrapped
+    low, high = base.action_bounds()
+    assert np.all(low[3:] > -1) and np.array_equal(low[:3], [-1, -1, -1]) and np.all(high == 1)
+    info = {"fitness": -100.0, "evaluations": 1}
+    for agent in (RandomSearch(seed=0, batch=50), CMAES(  # one obstacle: every sample must be a valid test
+                  seed=0, popsize=50, sigma0=2.0)):
+        agent.setup(env, info)
+        for action in agent.ask():
+            assert np.all(action >= low) and np.all(action <= high)
+            base.test_for(action)  # raises InvalidTestCase if not
+
+
 def test_cmaes_without_restarts_stops_on_its_own_criteria():
     agent = CMAES(seed=0, sigma0=1e-9, restarts=False, popsize=2)
     result = agent.run(_env(20), seed=0)

@@ -42,3 +42,12 @@ def test_move_only_on_first_obstacle():
     mutators = default_mutators(two, kinds=(MutatorKind.MOVE_X, MutatorKind.MOVE_Y), obstacles=[0])
     assert [m.name for m in mutators] == ["obstacle0.x", "obstacle0.y"]
     assert len(AUTHORS_ORDER) == 6
+
+
+def test_valid_range_keeps_the_size_positive(seed):
+    resize = Mutator(0, MutatorKind.RESIZE_L)
+    low, high = resize.valid_range(seed)
+    assert (low, high) == (pytest.approx(0.1 - 3.0), 20.0)
+    assert resize.apply(seed, low).obstacles[0].l == pytest.approx(0.1)
+    assert Mutator(0, MutatorKind.MOVE_X).valid_range(seed) == (-20.0, 20.0)
+    assert Mutator(0, MutatorKind.ROTATE).valid_range(seed) == (-180.0, 180.0)
