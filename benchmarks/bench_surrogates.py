@@ -1,7 +1,7 @@
 """Greedy vs greedy with pre-screening: simulations needed to reach greedy's final fitness, and held-out accuracy.
 
-    python benchmarks/bench_surrogates.py search --problem rq1-seed1 --repetitions 10 --mode pretrained
-    python benchmarks/bench_surrogates.py accuracy --problem rq1-seed1
+    python benchmarks/bench_surrogates.py search --problem rq1-seed1 --repetitions 10 --mode pretrained [--lowfi]
+    python benchmarks/bench_surrogates.py accuracy --problem rq1-seed1 [--lowfi]
 
 ``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
 budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
@@ -9,7 +9,12 @@ greedy runs with the same settings; ``pretrained`` starts from an ensemble train
 stores (never on repetition N) and retrains every 20 evaluations, ``online`` starts without a model. Its store
 starts as a copy of repetition N's, so a test greedy alone already simulated is read back instead of flown again
 (the simulation is deterministic given test and seed, so the numbers are the same; the env still counts it as an
-evaluation). Simulations = evaluations x runs.
+evaluation). Simulations = evaluations x runs. ``--lowfi`` adds the low-fidelity flight outcomes to the features
+(multi-fidelity surrogate); the low-fidelity flights are counted and timed separately.
+
+``accuracy``: leave-one-repetition-out over the 10 stores of the problem: for each repetition, a model trained on
+the other nine predicts it; printed are the Spearman rank correlation per held-out repetition, their mean, and the
+Spearman of all out-of-fold predictions pooled.
 """
 from __future__ import annotations
 
@@ -39,9 +44,16 @@ def _stores(problem: str, reps) -> list[Path]:
     return [PAPER / f"{problem}-rep{r}.sqlite" for r in reps if (PAPER / f"{problem}-rep{r}.sqlite").is_file()]
 
 
-def _featurizer(problem: str) -> Featurizer:
-    return Featurizer.for_problem("generate" if problem == "rq2" else "replicate",
-                                  None if problem == "rq2" else sg.data_path(f"{problem}.yaml"))
+_FEATURIZERS: dict = {}
+
+
+def _featurizer(problem: str, lowfi: bool = False) -> Featurizer:
+    """One featurizer per problem and kind, so the low-fidelity flights are cached across repetitions."""
+    if (problem, lowfi) not in _FEATURIZERS:
+        _FEATURIZERS[problem, lowfi] = Featurizer.for_problem(
+            "generate" if problem == "rq2" else "replicate", None if problem == "rq2" else
+            sg.data_path(f"{problem}.yaml"), lowfi=lowfi)
+    return _FEATURIZERS[problem, lowfi]
 
 
 def greedy_alone(problem: str, rep: int) -> dict:
@@ -53,19 +65,20 @@ def greedy_alone(problem: str, rep: int) -> dict:
     return {"final": final, "evaluations": len(fit), "to_final": int(np.argmax(best >= final)) + 1}
 
 
-def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int) -> dict:
-    cached = out / f"{problem}-{mode}-rep{rep}.json"
+def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False) -> dict:
+    label = f"{mode}-lowfi" if lowfi else mode
+    cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
-    store = out / f"{problem}-{mode}-rep{rep}.sqlite"
+    store = out / f"{problem}-{label}-rep{rep}.sqlite"
     shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
-    featurizer = _featurizer(problem)
+    featurizer = _featurizer(problem, lowfi)
     if mode == "pretrained":
         others = _stores(problem, [r for r in range(reps) if r != rep])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
         config = PrescreenConfig(retrain_every=20)
     else:
-        model, config = "online", PrescreenConfig(min_points=10, retrain_every=10)
+        model, config = "online", PrescreenConfig(min_points=10, retrain_every=10, lowfi=lowfi)
     if problem == "rq2":
         env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline"), "paper"
     else:
@@ -74,13 +87,15 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int) -> dict
         preset = "authors"
     agent = Prescreened(AdaptiveGreedy(preset), model, config, seed=rep)
     curve: list[float] = []
+    lowfi_before = featurizer.lowfi.runs if featurizer.lowfi is not None else 0
     start = time.perf_counter()
     result = agent.run(env, seed=rep, callback=lambda info: curve.append(
         (info["evaluations"], info["best_fitness"])))
     row = {"final": result.best_fitness, "evaluations": result.evaluations,
            "to_best": result.evaluations_to_best, "skipped": len(agent.skipped), "retrains": agent.retrains,
            "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations, "runs": env.unwrapped.evaluator.runs,
-           "wall_s": time.perf_counter() - start, "stop": result.stop_reason}
+           "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
+           "lowfi_runs": (agent._featurizer.lowfi.runs - lowfi_before) if agent._featurizer.lowfi is not None else 0}
     env.close()
     cached.write_text(json.dumps(row))
     return row
@@ -92,17 +107,19 @@ def search(args) -> None:
     rows = []
     for rep in range(args.repetitions):
         g = greedy_alone(args.problem, rep)
-        p = prescreened(args.problem, rep, args.mode, out, 10)
+        p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi)
         reach = [e for e, best in p["curve"] if best is not None and best >= g["final"]]
         sims_p = (reach[0] if reach else p["evaluations"]) * p["runs"]
         row = {"rep": rep, "greedy_final": g["final"], "greedy_sims": g["to_final"] * p["runs"],
                "pre_final": p["final"], "pre_sims_to_reach": sims_p, "reached": bool(reach),
-               "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "wall_s": p["wall_s"]}
+               "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "wall_s": p["wall_s"],
+               "lowfi_runs": p.get("lowfi_runs", 0)}
         rows.append(row)
         print(json.dumps(row), flush=True)
     gs, ps = [r["greedy_sims"] for r in rows], [r["pre_sims_to_reach"] for r in rows]
     gf, pf = [r["greedy_final"] for r in rows], [r["pre_final"] for r in rows]
-    print(f"\n{args.problem}, {args.mode}, {len(rows)} repetitions")
+    print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, {len(rows)} repetitions; "
+          f"low-fidelity flights per search {np.mean([r['lowfi_runs'] for r in rows]):.0f}")
     print(f"simulations to reach greedy's final fitness: greedy {np.mean(gs):.0f}, pre-screened {np.mean(ps):.0f} "
           f"({1 - np.mean(ps) / np.mean(gs):+.0%} fewer); reached in {sum(r['reached'] for r in rows)}/{len(rows)}")
     if len(rows) >= 3:
@@ -114,19 +131,28 @@ def search(args) -> None:
 
 
 def accuracy(args) -> None:
-    featurizer = _featurizer(args.problem)
+    from scipy.stats import spearmanr
+
+    featurizer = _featurizer(args.problem, args.lowfi)
     stores = _stores(args.problem, range(10))
+    start = time.perf_counter()
     data = load_dataset(stores, featurizer)
+    print(f"{args.problem}: {len(data)} evaluations, {data.X.shape[1]} features, featurized in "
+          f"{time.perf_counter() - start:.1f} s", flush=True)
+    y = data.targets["fitness"]
     for kind in ("ensemble", "knn"):
-        rhos = []
-        for fold in range(args.folds):
-            held = [len(stores) - 1 - fold]
-            train = data.subset(~np.isin(data.groups, held))
-            test = data.subset(np.isin(data.groups, held))
-            m = evaluate_model(train_model(train, featurizer, kind, seed=fold), test)
+        rhos, pooled = [], np.full(len(data), np.nan)
+        for fold in range(min(args.folds, len(stores))):
+            held = np.isin(data.groups, [len(stores) - 1 - fold])
+            model = train_model(data.subset(~held), featurizer, kind, seed=fold)
+            m = evaluate_model(model, data.subset(held))
+            pooled[held] = model.predict_fitness(data.X[held])
             rhos.append(m["spearman"])
-            print(kind, f"held-out {stores[held[0]].name}:", {k: round(v, 3) for k, v in m.items()}, flush=True)
-        print(f"{kind}: mean held-out Spearman {np.mean(rhos):.3f}")
+            print(kind, f"held-out {stores[len(stores) - 1 - fold].name}:", {k: round(v, 3) for k, v in m.items()},
+                  flush=True)
+        ok = np.isfinite(pooled) & np.isfinite(y)
+        print(f"{kind}: mean held-out Spearman {np.mean(rhos):.3f} (per repetition, {len(rhos)} folds); "
+              f"pooled out-of-fold Spearman {spearmanr(pooled[ok], y[ok]).statistic:.3f} ({ok.sum()} evaluations)")
 
 
 def main() -> None:
@@ -135,7 +161,8 @@ def main() -> None:
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
-    parser.add_argument("--folds", type=int, default=3)
+    parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
+    parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--out", default="results/surrogates")
     args = parser.parse_args()
     warnings.simplefilter("ignore")

@@ -14,6 +14,9 @@ reference trajectory (if known), how many reference points pass within 3 m of it
 along and across the path (corners projected on the nearest segment), and the mean lateral offset of the
 reference where it passes beside the obstacle.
 
+With ``lowfi`` (a :class:`~surrogates.lowfi.LowFidelity`), the outcomes of one low-fidelity flight of the test
+follow (DTW and Fréchet to the reference, clearances, collision, duration, extent): a multi-fidelity surrogate.
+
 Example:
     >>> import surrealist_gym as sg
     >>> featurizer = Featurizer.for_problem("generate")
@@ -32,6 +35,9 @@ from surrealist_gym.errors import SurrealistError
 from surrealist_gym.geometry import obstacle_distances
 from surrealist_gym.store import EvaluationStore
 from surrealist_gym.testcase import Obstacle, TestCase, _parse_obstacles
+
+from .lowfi import NAMES as LOWFI_NAMES
+from .lowfi import LowFidelity
 
 PER_OBSTACLE = ("present", "l", "w", "h", "x", "y", "z", "sin_r", "cos_r", "sin_2r", "cos_2r", "area",
                 "along", "lateral", "half_across", "gap", "dist_path", "dist_reference", "near_reference",
@@ -55,11 +61,13 @@ class Featurizer:
         path: (K, 2) mission path in the local frame [m] (the positions of the mission items, in order).
         reference: (N, 2 or 3) reference trajectory [m], or None (generation has no reference).
         slots: obstacle slots; tests with more obstacles keep the first ``slots`` in canonical order.
+        lowfi: a low-fidelity simulator of the problem whose outcomes are appended to the features, or None.
     """
 
     path: np.ndarray
     reference: np.ndarray | None = None
     slots: int = 2
+    lowfi: LowFidelity | None = None
 
     def __post_init__(self):
         path = np.asarray(self.path, dtype=np.float64).reshape(-1, 2)
@@ -77,24 +85,26 @@ class Featurizer:
 
     # --- construction -----------------------------------------------------------------------------------------
     @classmethod
-    def for_test(cls, test: TestCase, reference=None, slots: int | None = None) -> "Featurizer":
-        """The featurizer of a problem's seed test (its mission) and reference trajectory."""
+    def for_test(cls, test: TestCase, reference=None, slots: int | None = None, lowfi: bool = False) -> "Featurizer":
+        """The featurizer of a problem's seed test (its mission) and reference trajectory; ``lowfi`` adds the
+        outcomes of a low-fidelity flight of each test."""
         if test.mission is None or len(test.mission.waypoints) < 2:
             raise DatasetError("featurizer: the seed test has no mission with 2 positions to measure obstacles "
                                "against")
         path = [(x, y) for x, y, _ in test.mission.waypoints]
         ref = None if reference is None else np.asarray(reference, dtype=np.float64)
-        return cls(np.asarray(path), ref, slots if slots is not None else max(1, len(test.obstacles)))
+        return cls(np.asarray(path), ref, slots if slots is not None else max(1, len(test.obstacles)),
+                   LowFidelity(test, ref) if lowfi else None)
 
     @classmethod
-    def for_env(cls, env) -> "Featurizer":
+    def for_env(cls, env, lowfi: bool = False) -> "Featurizer":
         """The featurizer of a Surrealist env (its seed test, and its reference trajectory if it replicates)."""
         env = env.unwrapped
         reference = getattr(env, "reference", None)
-        return cls.for_test(env.seed_test, None if reference is None else np.asarray(reference))
+        return cls.for_test(env.seed_test, None if reference is None else np.asarray(reference), lowfi=lowfi)
 
     @classmethod
-    def for_problem(cls, problem: str = "replicate", seed_test=None, log=None) -> "Featurizer":
+    def for_problem(cls, problem: str = "replicate", seed_test=None, log=None, lowfi: bool = False) -> "Featurizer":
         """The featurizer of the bundled problems: ``replicate`` (case0, its reference) or ``generate`` (RQ2)."""
         import warnings
 
@@ -107,26 +117,38 @@ class Featurizer:
                 test = load_test(seed_test or sg.data_path("rq1-seed1.yaml"))
                 from surrealist_gym.logs import read_flight
                 flight = read_flight(log or test.reference_log or sg.data_path("case0.ulg"))
-                return cls.for_test(test, np.asarray(flight.trajectory))
+                return cls.for_test(test, np.asarray(flight.trajectory), lowfi=lowfi)
             if problem == "generate":
-                return cls.for_test(load_test(seed_test or sg.data_path("rq2-seed.yaml")))
+                return cls.for_test(load_test(seed_test or sg.data_path("rq2-seed.yaml")), lowfi=lowfi)
         raise DatasetError(f"problem {problem!r}: expected 'replicate' or 'generate'")
 
     def to_dict(self) -> dict:
-        """A JSON-able form (saved in a model's metadata)."""
+        """A JSON-able form (saved in a model's metadata; a low-fidelity simulator is saved by ``save``)."""
         return {"path": self.path.tolist(), "reference": None if self.reference is None else
-                np.round(self.reference, 4).tolist(), "slots": self.slots}
+                np.round(self.reference, 4).tolist(), "slots": self.slots, "lowfi": self.lowfi is not None}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "Featurizer":
+    def from_dict(cls, data: dict, folder=None) -> "Featurizer":
+        """The featurizer of ``to_dict``; a low-fidelity one reads its simulator from ``folder`` (see ``save``)."""
+        lowfi = None
+        if data.get("lowfi"):
+            if folder is None:
+                raise DatasetError("featurizer: a low-fidelity featurizer needs the folder it was saved to")
+            lowfi = LowFidelity.load(folder)
         return cls(np.asarray(data["path"]), None if data.get("reference") is None else
-                   np.asarray(data["reference"]), int(data["slots"]))
+                   np.asarray(data["reference"]), int(data["slots"]), lowfi)
+
+    def save(self, folder) -> None:
+        """Write what ``to_dict`` leaves out (the low-fidelity simulator's problem) to ``folder``."""
+        if self.lowfi is not None:
+            self.lowfi.save(folder)
 
     # --- features ---------------------------------------------------------------------------------------------
     @property
     def names(self) -> list[str]:
         """Feature names, in column order."""
-        return [f"o{i}.{n}" for i in range(self.slots) for n in PER_OBSTACLE] + list(POOLED)
+        names = [f"o{i}.{n}" for i in range(self.slots) for n in PER_OBSTACLE] + list(POOLED)
+        return names + list(LOWFI_NAMES) if self.lowfi is not None else names
 
     def transform(self, tests: Iterable) -> np.ndarray:
         """(n, features) for test cases, or obstacle tuples, or stored ``{"obstacles": [...]}`` dicts."""
@@ -145,7 +167,10 @@ class Featurizer:
             pooled = [len(rows), arr[:, 15].min(), arr[:, 16].min(), arr[:, 17].min(), arr[:, 18].sum()]
         else:
             pooled = [0.0, 50.0, 50.0, 50.0, 0.0]
-        return np.concatenate([out.ravel(), pooled])
+        parts = [out.ravel(), pooled]
+        if self.lowfi is not None:
+            parts.append(self.lowfi.outcomes(obstacles))
+        return np.concatenate(parts)
 
     def _obstacle_features(self, o: Obstacle) -> list[float]:
         rad = math.radians(o.r)

@@ -58,10 +58,10 @@ class EnsembleConfig:
     """
 
     members: int = 5
-    hidden: int = 32
+    hidden: int = 16
     epochs: int = 300
     lr: float = 3e-3
-    weight_decay: float = 1e-2
+    weight_decay: float = 0.1
 
 
 class EnsembleRegressor:
@@ -276,6 +276,7 @@ class SurrogateModel:
                 "log_scale": self.log_scale, "config": asdict(self.regressor.config),
                 "features": self.featurizer.names, "n_train": int(len(self.train_y)), "metrics": self.metrics,
                 "featurizer": self.featurizer.to_dict()}
+        self.featurizer.save(out)
         (out / "meta.json").write_text(json.dumps(meta, indent=1) + "\n")
         return out
 
@@ -290,7 +291,7 @@ class SurrogateModel:
                 raise ValueError(f"meta.json format is {meta.get('format') if isinstance(meta, dict) else meta!r}, "
                                  f"expected {FORMAT}")
             tensors = torch.load(folder / "weights.pt", weights_only=True, map_location="cpu")
-            model = cls(Featurizer.from_dict(meta["featurizer"]), meta["kind"], meta["target"], meta["config"],
+            model = cls(Featurizer.from_dict(meta["featurizer"], folder), meta["kind"], meta["target"], meta["config"],
                         meta["seed"])
             state = {k.split(".", 1)[1]: v for k, v in tensors.items() if k.startswith("regressor.")}
             if model.kind == "knn":

@@ -52,6 +52,8 @@ class PrescreenConfig:
             an online model always retrains).
         max_skips: consecutive skips after which the next candidate is simulated anyway.
         kind: model kind of an online model (``ensemble`` or ``knn``).
+        lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
+            candidate screened; see :mod:`surrogates.lowfi`).
     """
 
     rule: str = "ei"
@@ -61,6 +63,7 @@ class PrescreenConfig:
     retrain_every: int = 5
     max_skips: int = 20
     kind: str = "ensemble"
+    lowfi: bool = True
 
     def __post_init__(self):
         if self.rule not in ("ei", "pi"):
@@ -127,7 +130,7 @@ class Prescreened(Agent):
         self.skipped = []
         self.retrains = 0
         self._consecutive = 0
-        self._featurizer = self._initial.featurizer if self._initial is not None else Featurizer.for_env(self._env)
+        self._featurizer = self._initial.featurizer if self._initial is not None else Featurizer.for_env(self._env, self.config.lowfi)
         self._X: list[np.ndarray] = []
         self._y: list[float] = []
         self._since_retrain = 0

@@ -18,6 +18,9 @@ def add_arguments(parser) -> None:
     train.add_argument("--seed", default=None, metavar="TEST.yaml",
                        help="the problem's seed test, for its mission (default: the bundled rq1-seed1 / rq2 seed)")
     train.add_argument("--log", default=None, help="reference flight log (replicate; default: the seed's, or case0)")
+    train.add_argument("--lowfi", action="store_true",
+                       help="add the outcomes of a low-fidelity flight of each test to its features (multi-fidelity; "
+                            "~0.1 s of CPU per test)")
     train.add_argument("--kind", default="ensemble", choices=["ensemble", "knn"],
                        help="MLP ensemble (torch) or the k-nearest-neighbours baseline (default ensemble)")
     train.add_argument("--target", default="fitness", choices=["fitness", "min_distance", "unsafe", "crash"],
@@ -55,7 +58,9 @@ def run(args) -> int:
         return 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        featurizer = Featurizer.for_problem(args.problem, args.seed, args.log)
+        featurizer = Featurizer.for_problem(args.problem, args.seed, args.log, lowfi=args.lowfi)
+    if args.lowfi:
+        print("featurizing with one low-fidelity flight per stored test (~0.1 s each) ...", flush=True)
     data = load_dataset(args.stores, featurizer)
     options = {"members": args.members, "epochs": args.epochs} if args.kind == "ensemble" else {"k": args.k}
     config = {k: v for k, v in options.items() if v is not None}

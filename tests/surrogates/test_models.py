@@ -16,13 +16,14 @@ def data(rq1_stores, replicate_featurizer):
 
 @pytest.fixture(scope="module")
 def ensemble(data, replicate_featurizer):
-    return train_model(data.subset(data.groups == 0), replicate_featurizer, "ensemble", config=SMALL, seed=0)
+    return train_model(data.subset(np.arange(len(data)) % 4 != 0), replicate_featurizer, "ensemble", config=SMALL,
+                       seed=0)
 
 
 def test_ensemble_learns_the_fitness(ensemble, data):
-    train = evaluate_model(ensemble, data.subset(data.groups == 0))
-    held_out = evaluate_model(ensemble, data.subset(data.groups == 1))
-    assert train["spearman"] > 0.7 and held_out["spearman"] > 0.3
+    train = evaluate_model(ensemble, data.subset(np.arange(len(data)) % 4 != 0))
+    held_out = evaluate_model(ensemble, data.subset(np.arange(len(data)) % 4 == 0))  # every 4th evaluation
+    assert train["spearman"] > 0.7 and held_out["spearman"] > 0.5
     mean, std = ensemble.predict(data.X[:5])
     assert np.all(np.isfinite(mean)) and np.all(std > 0)
     assert ensemble.log_scale and np.all(ensemble.predict_fitness(data.X[:5]) < 0)

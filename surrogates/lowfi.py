@@ -1,0 +1,97 @@
+"""A low-fidelity simulator whose outcomes are features for the surrogate models (multi-fidelity surrogates).
+
+Our own simulator at coarse rates (position loop 10 Hz, planner and log 5 Hz, attitude loop 50 Hz) with no noise
+flies a test once in ~0.1 s of CPU, about a tenth of a 5-run evaluation. Its flight does not replace the real
+simulation: the models learn how the real fitness follows from it (and from the obstacles' geometry). The UAV
+Testing Competition's 2025 winner used the same idea with a low-fidelity simulator of its own.
+
+Outcomes (``NAMES``): DTW and Fréchet distance of the low-fidelity trajectory to the reference (replication; 0
+without a reference) and their logarithms, the smallest 2-D and 3-D distance to the obstacles, collision, the
+flight's duration and its highest point and lateral extent. Results are cached by test key.
+
+Example:
+    >>> import surrealist_gym as sg
+    >>> from surrealist_gym.testcase import load_test
+    >>> lowfi = LowFidelity(load_test(sg.data_path("rq2-seed.yaml")))
+    >>> len(lowfi.outcomes(lowfi.seed_test.obstacles)) == len(NAMES)
+    True
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from surrealist_gym.metrics import dtw, frechet
+from surrealist_gym.sim import NoiseConfig, SimConfig
+from surrealist_gym.sim.config import resolve_params
+from surrealist_gym.testcase import TestCase
+
+NAMES = ("lowfi_dtw", "lowfi_frechet", "lowfi_log_dtw", "lowfi_log_frechet", "lowfi_min_dist_2d",
+         "lowfi_min_dist", "lowfi_collision", "lowfi_duration", "lowfi_max_z", "lowfi_min_y", "lowfi_max_y")
+LOW_FIDELITY = SimConfig(noise=NoiseConfig.off(), control_hz=50.0, outer_hz=10.0, planner_hz=5.0, log_hz=5.0,
+                         use_reference_params=False)
+
+
+class LowFidelity:
+    """Flies test cases of one problem with the low-fidelity simulator and measures the outcomes.
+
+    Args:
+        seed_test: the problem's seed test (mission, parameters, commands; its obstacles are replaced). The
+            parameters of its reference log are frozen into it, so the problem is self-contained.
+        reference: the reference trajectory (N, 3) of a replication problem, or None.
+        config: the simulator configuration (default ``LOW_FIDELITY``).
+    """
+
+    def __init__(self, seed_test: TestCase, reference=None, config: SimConfig = LOW_FIDELITY):
+        params = resolve_params(seed_test, replace(config, use_reference_params=True))
+        self.seed_test = replace(seed_test, params=params, params_file=None, reference_log=None)
+        self.reference = None if reference is None else np.asarray(reference, dtype=np.float64)
+        self.config = config
+        self.runs = 0
+        self._cache: dict[str, np.ndarray] = {}
+
+    def outcomes(self, obstacles) -> np.ndarray:
+        """The outcome vector (``NAMES``) of the seed test with these obstacles."""
+        from surrealist_gym.sim import simulate
+
+        test = self.seed_test.with_obstacles(obstacles)
+        key = test.key()
+        if key not in self._cache:
+            run = simulate(test, runs=1, seed=0, config=self.config)[0]
+            self.runs += 1
+            xyz = np.asarray(run.trajectory, dtype=np.float64).reshape(-1, 3)
+            if self.reference is not None and len(xyz):
+                d, f = dtw(self.reference, xyz), frechet(self.reference, xyz)
+            else:
+                d = f = 0.0
+            status = str(getattr(run.status, "value", run.status))
+            top = (xyz[:, 2].max(), xyz[:, 1].min(), xyz[:, 1].max()) if len(xyz) else (0.0, 0.0, 0.0)
+            self._cache[key] = np.array([d, f, np.log1p(d), np.log1p(f), min(run.min_distance_2d, 50.0),
+                                         min(run.min_distance, 50.0), float(status == "collision"), run.duration,
+                                         *top])
+        return self._cache[key]
+
+    def save(self, folder) -> None:
+        """Write the problem (seed test with its mission and frozen parameters; the reference) to ``folder``."""
+        from surrealist_gym.mission import write_plan
+        from surrealist_gym.testcase import save_test
+
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        test = self.seed_test
+        if test.mission is not None:
+            write_plan(test.mission, folder / "lowfi-mission.plan")
+            test = replace(test, mission_file=str((folder / "lowfi-mission.plan").resolve()))
+        save_test(test, folder / "lowfi-seed.yaml")
+        if self.reference is not None:
+            np.save(folder / "lowfi-reference.npy", self.reference)
+
+    @classmethod
+    def load(cls, folder) -> "LowFidelity":
+        from surrealist_gym.testcase import load_test
+
+        folder = Path(folder)
+        ref = folder / "lowfi-reference.npy"
+        return cls(load_test(folder / "lowfi-seed.yaml"), np.load(ref) if ref.is_file() else None)
