@@ -137,14 +137,17 @@ def accuracy(args) -> None:
     stores = _stores(args.problem, range(10))
     start = time.perf_counter()
     data = load_dataset(stores, featurizer)
-    print(f"{args.problem}: {len(data)} evaluations, {data.X.shape[1]} features, featurized in "
-          f"{time.perf_counter() - start:.1f} s", flush=True)
+    extra = load_dataset(_stores(args.also, range(10)), featurizer) if args.also else None
+    print(f"{args.problem}: {len(data)} evaluations, {data.X.shape[1]} features"
+          f"{f', plus {len(extra)} evaluations of {args.also} in every training set' if extra else ''}, featurized "
+          f"in {time.perf_counter() - start:.1f} s", flush=True)
     y = data.targets["fitness"]
     for kind in ("ensemble", "knn"):
         rhos, pooled = [], np.full(len(data), np.nan)
         for fold in range(min(args.folds, len(stores))):
             held = np.isin(data.groups, [len(stores) - 1 - fold])
-            model = train_model(data.subset(~held), featurizer, kind, seed=fold)
+            train = data.subset(~held) if extra is None else data.subset(~held).concat(extra)
+            model = train_model(train, featurizer, kind, seed=fold)
             m = evaluate_model(model, data.subset(held))
             pooled[held] = model.predict_fitness(data.X[held])
             rhos.append(m["spearman"])
@@ -163,6 +166,8 @@ def main() -> None:
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
+    parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],
+                        help="accuracy: add every store of this problem (same flight and mission) to each training set")
     parser.add_argument("--out", default="results/surrogates")
     args = parser.parse_args()
     warnings.simplefilter("ignore")

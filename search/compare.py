@@ -295,10 +295,12 @@ def _markdown(settings, summary, pairwise, present) -> str:
     for row in summary:
         cells = [f"{_fmt(row.get(f'{k}_mean'), f)} ± {_fmt(row.get(f'{k}_std'), f)}" for k, _, f in present]
         lines.append(f"| {row['label']} | {row['searches']} | " + " | ".join(cells) + " |")
-    lines += ["", "Pairwise: p-value (Shapiro-Wilk, then ANOVA or Mann-Whitney U) and Vargha-Delaney A12 "
-              "(probability that a value of A exceeds one of B; higher fitness is better, fewer simulations are "
-              "better).", "",
-              "| A | B | final fitness p | A12 | simulations to best p | A12 |", "|---|---|---|---|---|---|"]
+    lines += ["", "Pairwise: p-value (Shapiro-Wilk, then ANOVA or Mann-Whitney U) and Vargha-Delaney A12, the "
+              "probability that a search of A has the larger value than one of B: on final fitness, A12 > 0.5 "
+              "means A finds fitter tests; on simulations to best, A12 > 0.5 means A needs MORE simulations to "
+              "reach its best.", "",
+              "| A | B | final fitness p | A12 (A fitter) | simulations to best p | A12 (A needs more) |",
+              "|---|---|---|---|---|---|"]
     for row in pairwise:
         cells = []
         for key, _ in PAIRED:

@@ -252,6 +252,16 @@ class Dataset:
         return Dataset(self.X[idx], {k: v[idx] for k, v in self.targets.items()}, self.trajectories[idx],
                        self.groups[idx], tuple(self.keys[i] for i in idx), self.names)
 
+    def concat(self, other: "Dataset") -> "Dataset":
+        """The rows of both datasets (same features); the other's store indices follow this one's."""
+        if self.names != other.names:
+            raise DatasetError("datasets with different features cannot be joined")
+        offset = int(self.groups.max()) + 1 if len(self) else 0
+        return Dataset(np.concatenate([self.X, other.X]),
+                       {k: np.concatenate([v, other.targets[k]]) for k, v in self.targets.items()},
+                       np.concatenate([self.trajectories, other.trajectories]),
+                       np.concatenate([self.groups, other.groups + offset]), self.keys + other.keys, self.names)
+
     def target(self, name: str = "fitness") -> tuple[np.ndarray, np.ndarray]:
         """``(X, y)`` for one target, without the rows whose value is unknown (fitness of an unflown test)."""
         if name not in self.targets:

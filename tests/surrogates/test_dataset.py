@@ -50,3 +50,10 @@ def test_bad_store_is_one_line_error(tmp_path, replicate_featurizer):
         load_dataset([bad], replicate_featurizer)
     with pytest.raises(DatasetError, match="no such evaluation store"):
         load_dataset([tmp_path / "missing.sqlite"], replicate_featurizer)
+
+
+def test_datasets_of_two_stores_join(rq1_stores, replicate_featurizer):
+    a, b = (load_dataset([s], replicate_featurizer) for s in rq1_stores)
+    both = a.concat(b)
+    assert len(both) == len(a) + len(b) and set(both.groups) == {0, 1}
+    assert np.array_equal(both.X[len(a):], b.X) and both.keys[len(a):] == b.keys
