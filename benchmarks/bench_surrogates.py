@@ -65,8 +65,9 @@ def greedy_alone(problem: str, rep: int) -> dict:
     return {"final": final, "evaluations": len(fit), "to_final": int(np.argmax(best >= final)) + 1}
 
 
-def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False) -> dict:
-    label = f"{mode}-lowfi" if lowfi else mode
+def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
+                also: str | None = None) -> dict:
+    label = (f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -74,7 +75,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
     featurizer = _featurizer(problem, lowfi)
     if mode == "pretrained":
-        others = _stores(problem, [r for r in range(reps) if r != rep])
+        others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
         config = PrescreenConfig(retrain_every=20)
     else:
@@ -107,7 +108,7 @@ def search(args) -> None:
     rows = []
     for rep in range(args.repetitions):
         g = greedy_alone(args.problem, rep)
-        p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi)
+        p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also)
         reach = [e for e, best in p["curve"] if best is not None and best >= g["final"]]
         sims_p = (reach[0] if reach else p["evaluations"]) * p["runs"]
         row = {"rep": rep, "greedy_final": g["final"], "greedy_sims": g["to_final"] * p["runs"],
@@ -167,7 +168,7 @@ def main() -> None:
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],
-                        help="accuracy: add every store of this problem (same flight and mission) to each training set")
+                        help="add every store of this problem (same flight and mission) to each training set")
     parser.add_argument("--out", default="results/surrogates")
     args = parser.parse_args()
     warnings.simplefilter("ignore")

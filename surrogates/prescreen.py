@@ -7,7 +7,9 @@ or probability of improvement (``pi``, skip when P(improvement) < ``threshold``)
 simulated and costs no budget: the inner agent is told a pessimistic fitness (the prediction minus ``pessimism``
 standard deviations, never above the best) with ``info["skipped"] = True`` and ``info["memo"] = True`` (so
 budget-aware agents do not count it), and it is logged in :attr:`Prescreened.skipped`. Promising candidates go
-through ``env.step`` as usual. In online mode (no model to start from) or with ``retrain_every`` set, the model is
+through ``env.step`` as usual, the most promising of one ``ask`` first (by predicted mean), each screened against
+the best so far including the earlier results of the same ``ask`` (the inner agent is told the results in the
+order it asked). In online mode (no model to start from) or with ``retrain_every`` set, the model is
 retrained on its training data plus the real evaluations of the episode every ``retrain_every`` evaluations once
 ``min_points`` exist. ``max_skips`` consecutive skips force the next candidate to be simulated, so an agent that
 never stops on its own (random search) still spends its budget.
@@ -22,6 +24,7 @@ Example:
 """
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 from dataclasses import asdict, dataclass
@@ -105,17 +108,21 @@ class Prescreened(Agent):
         while not done and not self.stop():
             self._candidates = candidates = self.inner.ask()
             self.ask()
-            told, real = [], []
-            for action in candidates:
-                skip = self._screen(action)
-                if skip is not None:
-                    told.append((action, skip["told_fitness"], skip["info"]))
-                    continue
-                reward, step_info, done = self._step(env, action, callback)
-                told.append((action, reward, step_info))
-                real.append((action, reward, step_info))
+            results: list[tuple | None] = [None] * len(candidates)
+            real = []
+            best = self.best[1]
+            for i in self._most_promising_first(candidates):  # a better first result raises the bar for the rest
                 if done:
                     break
+                skip = self._screen(candidates[i], best)
+                if skip is not None:
+                    results[i] = (candidates[i], skip["told_fitness"], skip["info"])
+                    continue
+                reward, step_info, done = self._step(env, candidates[i], callback)
+                results[i] = (candidates[i], reward, step_info)
+                real.append(results[i])
+                best = max(best, reward)
+            told = list(itertools.takewhile(lambda r: r is not None, results))  # in the order asked
             self.tell([a for a, _, _ in real], [f for _, f, _ in real], [i for _, _, i in real])
             self.inner.tell([a for a, _, _ in told], [f for _, f, _ in told], [i for _, _, i in told])
         if not self._stop_reason:
@@ -147,11 +154,8 @@ class Prescreened(Agent):
         self._maybe_retrain()
 
     # --- screening -----------------------------------------------------------------------------------------------
-    def _screen(self, action) -> dict | None:
-        """None to simulate the candidate, else the log entry of a skip (with what the inner agent is told)."""
-        if self.model is None or self._consecutive >= self.config.max_skips:
-            self._consecutive = 0
-            return None
+    def _prediction(self, action) -> tuple | None:
+        """(test, mean, std) on the model's scale, or None when the candidate is free (invalid or a memo hit)."""
         try:
             test = self._env.test_for(action)
         except InvalidTestCase:
@@ -159,8 +163,25 @@ class Prescreened(Agent):
         if test.key() in self._env._episode_keys:
             return None  # a memo hit costs nothing
         mean, std = self.model.predict(self._featurizer.transform([test]))
-        mean, std = float(mean[0]), max(float(std[0]), 1e-9)
-        best = float(self.model.to_scale(self.best[1]))
+        return test, float(mean[0]), max(float(std[0]), 1e-9)
+
+    def _most_promising_first(self, candidates) -> list[int]:
+        """Candidate indices, free ones first, then by predicted fitness (the order asked without a model)."""
+        if self.model is None or len(candidates) < 2:
+            return list(range(len(candidates)))
+        predictions = [self._prediction(a) for a in candidates]
+        return sorted(range(len(candidates)), key=lambda i: -np.inf if predictions[i] is None else -predictions[i][1])
+
+    def _screen(self, action, best_fitness: float) -> dict | None:
+        """None to simulate the candidate, else the log entry of a skip (with what the inner agent is told)."""
+        if self.model is None or self._consecutive >= self.config.max_skips:
+            self._consecutive = 0
+            return None
+        prediction = self._prediction(action)
+        if prediction is None:
+            return None
+        test, mean, std = prediction
+        best = float(self.model.to_scale(best_fitness))
         z = (mean - best) / std
         cdf = 0.5 * (1.0 + math.erf(z / math.sqrt(2.0)))
         if self.config.rule == "pi":
@@ -174,7 +195,7 @@ class Prescreened(Agent):
             return None
         self._consecutive += 1
         told = float(self.model.from_scale(min(mean - self.config.pessimism * std, best)))
-        told = min(told, self.best[1] - 1e-9 * max(1.0, abs(self.best[1])))
+        told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
         env = self._env
         entry = {"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
                  "obstacles": [o.to_list() for o in test.obstacles], "predicted_mean": mean, "predicted_std": std,
