@@ -10,7 +10,8 @@ stores (never on repetition N) and retrains every 20 evaluations, ``online`` sta
 starts as a copy of repetition N's, so a test greedy alone already simulated is read back instead of flown again
 (the simulation is deterministic given test and seed, so the numbers are the same; the env still counts it as an
 evaluation). Simulations = evaluations x runs. ``--lowfi`` adds the low-fidelity flight outcomes to the features
-(multi-fidelity surrogate); the low-fidelity flights are counted and timed separately.
+(multi-fidelity surrogate); the low-fidelity flights flown during each search are counted (those made while
+building the training set are not) and their time is part of the search's wall time.
 
 ``accuracy``: leave-one-repetition-out over the 10 stores of the problem: for each repetition, a model trained on
 the other nine predicts it; printed are the Spearman rank correlation per held-out repetition, their mean, and the
@@ -171,6 +172,8 @@ def main() -> None:
                         help="add every store of this problem (same flight and mission) to each training set")
     parser.add_argument("--out", default="results/surrogates")
     args = parser.parse_args()
+    if args.also == args.problem:
+        parser.error("--also must name the OTHER seed (the held-out repetition would leak into training)")
     warnings.simplefilter("ignore")
     search(args) if args.what == "search" else accuracy(args)
 

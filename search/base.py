@@ -76,10 +76,11 @@ class Agent(ABC):
         self._pending = None
         for action, fitness, info in zip(actions, fitnesses, infos):
             self._history.append(float(fitness))
-            self._evaluations = int(info.get("evaluations", self._evaluations))
+            count = int(info.get("evaluations", self._evaluations))  # told out of order by a pre-screener
+            self._evaluations = max(self._evaluations, count)
             if fitness > self._best[1]:
                 self._best = (np.asarray(action, dtype=np.float64), float(fitness), info)
-                self._evaluations_to_best = self._evaluations
+                self._evaluations_to_best = count
         self._tell(list(actions), [float(f) for f in fitnesses], list(infos))
 
     def stop(self) -> dict:

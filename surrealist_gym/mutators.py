@@ -74,7 +74,8 @@ class Mutator:
         Resizes by less than ``min_step - size`` are invalid whatever the other mutators do; agents that sample
         the range (random search, CMA-ES) draw from this part. Overlaps with other obstacles are still possible.
         """
-        if self.kind not in (MutatorKind.RESIZE_L, MutatorKind.RESIZE_W, MutatorKind.RESIZE_H):
+        resize = self.kind in (MutatorKind.RESIZE_L, MutatorKind.RESIZE_W, MutatorKind.RESIZE_H)
+        if not resize or not 0 <= self.obstacle < len(test.obstacles):
             return self.low, self.high
         size = getattr(test.obstacles[self.obstacle], _FIELD[self.kind])
         return min(max(self.low, self.min_step - size), self.high), self.high

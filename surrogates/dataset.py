@@ -26,7 +26,7 @@ Example:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterable, Sequence
 
 import numpy as np
@@ -117,6 +117,7 @@ class Featurizer:
                 test = load_test(seed_test or sg.data_path("rq1-seed1.yaml"))
                 from surrealist_gym.logs import read_flight
                 flight = read_flight(log or test.reference_log or sg.data_path("case0.ulg"))
+                test = replace(test, reference_log=str(flight.path))  # its parameters, as the env flies them
                 return cls.for_test(test, np.asarray(flight.trajectory), lowfi=lowfi)
             if problem == "generate":
                 return cls.for_test(load_test(seed_test or sg.data_path("rq2-seed.yaml")), lowfi=lowfi)

@@ -41,14 +41,16 @@ class LowFidelity:
         seed_test: the problem's seed test (mission, parameters, commands; its obstacles are replaced). The
             parameters of its reference log are frozen into it, so the problem is self-contained.
         reference: the reference trajectory (N, 3) of a replication problem, or None.
-        config: the simulator configuration (default ``LOW_FIDELITY``).
+    The configuration is ``LOW_FIDELITY`` (fixed, so a saved model featurizes as it was trained).
     """
 
-    def __init__(self, seed_test: TestCase, reference=None, config: SimConfig = LOW_FIDELITY):
-        params = resolve_params(seed_test, replace(config, use_reference_params=True))
-        self.seed_test = replace(seed_test, params=params, params_file=None, reference_log=None)
+    config = LOW_FIDELITY
+
+    def __init__(self, seed_test: TestCase, reference=None):
+        params = resolve_params(seed_test, replace(self.config, use_reference_params=True))
+        self.seed_test = replace(seed_test, params=params, params_file=None, reference_log=None,
+                                 commands_file=None, mission_file=None)
         self.reference = None if reference is None else np.asarray(reference, dtype=np.float64)
-        self.config = config
         self.runs = 0
         self._cache: dict[str, np.ndarray] = {}
 

@@ -111,10 +111,11 @@ class Prescreened(Agent):
             results: list[tuple | None] = [None] * len(candidates)
             real = []
             best = self.best[1]
-            for i in self._most_promising_first(candidates):  # a better first result raises the bar for the rest
+            order, predictions = self._most_promising_first(candidates)
+            for i in order:  # a better first result raises the bar for the rest
                 if done:
                     break
-                skip = self._screen(candidates[i], best)
+                skip = self._screen(candidates[i], best, predictions[i])
                 if skip is not None:
                     results[i] = (candidates[i], skip["told_fitness"], skip["info"])
                     continue
@@ -165,19 +166,23 @@ class Prescreened(Agent):
         mean, std = self.model.predict(self._featurizer.transform([test]))
         return test, float(mean[0]), max(float(std[0]), 1e-9)
 
-    def _most_promising_first(self, candidates) -> list[int]:
-        """Candidate indices, free ones first, then by predicted fitness (the order asked without a model)."""
-        if self.model is None or len(candidates) < 2:
-            return list(range(len(candidates)))
+    def _most_promising_first(self, candidates) -> tuple[list[int], list]:
+        """Candidate indices, free ones first, then by predicted fitness (the order asked without a model), and
+        the predictions (``_prediction`` of each candidate; None without a model)."""
+        if self.model is None:
+            return list(range(len(candidates))), [None] * len(candidates)
         predictions = [self._prediction(a) for a in candidates]
-        return sorted(range(len(candidates)), key=lambda i: -np.inf if predictions[i] is None else -predictions[i][1])
 
-    def _screen(self, action, best_fitness: float) -> dict | None:
+        def priority(i):
+            p = predictions[i]
+            return -np.inf if p is None else (-p[1] if np.isfinite(p[1]) else np.inf)
+        return sorted(range(len(candidates)), key=priority), predictions
+
+    def _screen(self, action, best_fitness: float, prediction) -> dict | None:
         """None to simulate the candidate, else the log entry of a skip (with what the inner agent is told)."""
         if self.model is None or self._consecutive >= self.config.max_skips:
             self._consecutive = 0
             return None
-        prediction = self._prediction(action)
         if prediction is None:
             return None
         test, mean, std = prediction

@@ -36,8 +36,11 @@ def test_featurizer_appends_the_outcomes_and_round_trips(featurizer, tmp_path):
     x = featurizer.transform([test])
     assert x.shape == (1, len(plain.names) + len(NAMES)) and featurizer.names[-len(NAMES):] == list(NAMES)
     assert np.allclose(x[0, :len(plain.names)], plain.transform([test])[0])
-    featurizer.save(tmp_path)
-    again = Featurizer.from_dict(featurizer.to_dict(), tmp_path)
+    featurizer.save(tmp_path / "saved")
+    text = (tmp_path / "saved" / "lowfi-seed.yaml").read_text()
+    assert "commands_file" not in text and "params_file" not in text and "log_file" not in text  # self-contained
+    (tmp_path / "saved").rename(tmp_path / "moved")
+    again = Featurizer.from_dict(featurizer.to_dict(), tmp_path / "moved")
     assert np.allclose(again.transform([test]), x, atol=1e-3)  # the mission survives the .plan round trip
 
 

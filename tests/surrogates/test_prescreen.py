@@ -84,7 +84,7 @@ def test_free_then_most_promising_candidates_first(model):
     agent = Prescreened(AdaptiveGreedy("paper"), model, seed=0)
     agent.setup(env, info)
     candidates = [np.array([0.1, 0.0]), np.array([-0.1, 0.3]), np.array([0.0, -1.0])]  # the last one overlaps
-    order = agent._most_promising_first(candidates)
-    means = [agent._prediction(a)[1] for a in candidates[:2]]
-    assert agent._prediction(candidates[2]) is None and order[0] == 2
+    order, predictions = agent._most_promising_first(candidates)
+    means = [p[1] for p in predictions[:2]]
+    assert predictions[2] is None and order[0] == 2
     assert order[1:] == sorted([0, 1], key=lambda i: -means[i])
