@@ -224,25 +224,14 @@ class PPOAgent(Agent):
             policy = _sb3(self.algorithm).load(self.policy_path, device="cpu")
         self.model = policy
         self._obs = None
-        self._stalled = 0
-
-    def _setup(self, info: dict) -> None:
-        self._low, self._high = self._env.action_bounds()
-        self._stalled = 0
+        self._explore = False
 
     def _ask(self) -> list[np.ndarray]:
-        """The policy's action (deterministic); after a memo hit or an invalid test, a sampled one plus Gaussian
-        noise whose sd doubles with each further wasted step (0.05, 0.1, ... up to 1), so the budget is spent.
-        Actions are kept within ``env.action_bounds()`` (no resize below the smallest valid size)."""
-        action, _ = self.model.predict(self._obs, deterministic=self._stalled == 0)
-        action = np.asarray(action, dtype=np.float64).reshape(-1)
-        if self._stalled:
-            action = action + self.rng.normal(0.0, min(1.0, 0.05 * 2.0 ** (self._stalled - 1)), action.shape)
-        return [np.clip(action, self._low, self._high)]
+        action, _ = self.model.predict(self._obs, deterministic=not self._explore)
+        return [np.asarray(action, dtype=np.float64).reshape(-1)]
 
     def _tell(self, actions, fitnesses, infos) -> None:
-        wasted = bool(infos) and (bool(infos[-1].get("memo")) or infos[-1].get("invalid") is not None)
-        self._stalled = self._stalled + 1 if wasted else 0
+        self._explore = bool(infos) and (bool(infos[-1].get("memo")) or infos[-1].get("invalid") is not None)
 
     def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
         """Roll the policy out on ``env`` until its budget is spent."""
@@ -253,6 +242,7 @@ class PPOAgent(Agent):
         seed = seed if seed is not None else self.seed
         self.model.set_random_seed(seed)
         self._obs, info = env.reset(seed=seed)
+        self._explore = False
         self.setup(env, info)
         done = False
         while not done:
