@@ -19,6 +19,7 @@ Example:
 from __future__ import annotations
 
 import os
+import threading
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -208,6 +209,9 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     return out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
 
 
+_TORCH_RNG = threading.Lock()  # searches run in threads (compare --parallel) share torch's global generator
+
+
 class PPOAgent(Agent):
     """A trained stable-baselines3 policy (PPO by default, or SAC) rolled out as a search agent."""
 
@@ -227,7 +231,13 @@ class PPOAgent(Agent):
         self._explore = False
 
     def _ask(self) -> list[np.ndarray]:
-        action, _ = self.model.predict(self._obs, deterministic=not self._explore)
+        if not self._explore:
+            action, _ = self.model.predict(self._obs, deterministic=True)
+        else:  # sample with torch's global generator, seeded from this agent's: reproducible beside other threads
+            import torch
+            with _TORCH_RNG:
+                torch.manual_seed(int(self.rng.integers(2**31 - 1)))
+                action, _ = self.model.predict(self._obs, deterministic=False)
         return [np.asarray(action, dtype=np.float64).reshape(-1)]
 
     def _tell(self, actions, fitnesses, infos) -> None:
@@ -240,7 +250,6 @@ class PPOAgent(Agent):
             raise SurrealistError(f"policy {getattr(self, 'policy_path', '')}: trained for {expected[0]} mutators, "
                                   f"the env has {env.action_space.shape[0]}")
         seed = seed if seed is not None else self.seed
-        self.model.set_random_seed(seed)
         self._obs, info = env.reset(seed=seed)
         self._explore = False
         self.setup(env, info)

@@ -114,3 +114,15 @@ def test_registry_names_hints_and_custom_agents(tmp_path):
     assert make_agent(f"{source}:Mine", seed=0).name == "mine"
     with pytest.raises(UnknownAgent, match="cannot import"):
         make_agent(f"{source}:Missing")
+
+
+def test_ppo_searches_in_parallel_threads_are_reproducible(policy):
+    from concurrent.futures import ThreadPoolExecutor
+
+    def search(seed):
+        return make_agent(f"ppo:{policy}", seed=seed).run(_env(8), seed=seed).history
+
+    alone = [search(seed) for seed in (4, 5)]
+    with ThreadPoolExecutor(2) as pool:
+        together = list(pool.map(search, (4, 5)))
+    assert together == alone
