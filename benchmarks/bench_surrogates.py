@@ -57,6 +57,10 @@ def _featurizer(problem: str, lowfi: bool = False) -> Featurizer:
     return _FEATURIZERS[problem, lowfi]
 
 
+def _lowfi_runs(featurizer) -> int:
+    return featurizer.lowfi.runs if featurizer.lowfi is not None else 0
+
+
 def greedy_alone(problem: str, rep: int) -> dict:
     """Greedy's curve from its store: best fitness after each evaluation."""
     with EvaluationStore(PAPER / f"{problem}-rep{rep}.sqlite") as store:
@@ -89,7 +93,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
         preset = "authors"
     agent = Prescreened(AdaptiveGreedy(preset), model, config, seed=rep)
     curve: list[float] = []
-    lowfi_before = featurizer.lowfi.runs if featurizer.lowfi is not None else 0
+    lowfi_before = _lowfi_runs(featurizer)  # an online model featurizes with a featurizer of its own
     start = time.perf_counter()
     result = agent.run(env, seed=rep, callback=lambda info: curve.append(
         (info["evaluations"], info["best_fitness"])))
@@ -97,7 +101,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
            "to_best": result.evaluations_to_best, "skipped": len(agent.skipped), "retrains": agent.retrains,
            "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations, "runs": env.unwrapped.evaluator.runs,
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
-           "lowfi_runs": (agent._featurizer.lowfi.runs - lowfi_before) if agent._featurizer.lowfi is not None else 0}
+           "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0)}
     env.close()
     cached.write_text(json.dumps(row))
     return row

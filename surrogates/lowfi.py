@@ -30,8 +30,7 @@ from surrealist_gym.testcase import TestCase
 
 NAMES = ("lowfi_dtw", "lowfi_frechet", "lowfi_log_dtw", "lowfi_log_frechet", "lowfi_min_dist_2d",
          "lowfi_min_dist", "lowfi_collision", "lowfi_duration", "lowfi_max_z", "lowfi_min_y", "lowfi_max_y")
-LOW_FIDELITY = SimConfig(noise=NoiseConfig.off(), control_hz=50.0, outer_hz=10.0, planner_hz=5.0, log_hz=5.0,
-                         use_reference_params=False)
+LOW_FIDELITY = SimConfig(noise=NoiseConfig.off(), control_hz=50.0, outer_hz=10.0, planner_hz=5.0, log_hz=5.0)
 
 
 class LowFidelity:
@@ -47,7 +46,7 @@ class LowFidelity:
     config = LOW_FIDELITY
 
     def __init__(self, seed_test: TestCase, reference=None):
-        params = resolve_params(seed_test, replace(self.config, use_reference_params=True))
+        params = resolve_params(seed_test, self.config)  # frozen in: the stored seed test has no log to read
         self.seed_test = replace(seed_test, params=params, params_file=None, reference_log=None,
                                  commands_file=None, mission_file=None)
         self.reference = None if reference is None else np.asarray(reference, dtype=np.float64)
