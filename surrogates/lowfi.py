@@ -5,8 +5,9 @@ flies a test once in ~0.1 s of CPU, about a tenth of a 5-run evaluation. Its fli
 simulation: the models learn how the real fitness follows from it (and from the obstacles' geometry). The UAV
 Testing Competition's 2025 winner used the same idea with a low-fidelity simulator of its own.
 
-Outcomes (``NAMES``): DTW and Fréchet distance of the low-fidelity trajectory to the reference (replication; 0
-without a reference) and their logarithms, the smallest 2-D and 3-D distance to the obstacles, collision, the
+Outcomes (``NAMES``): the problem's fitness of the low-fidelity flight (replication: -DTW to the reference;
+generation: paper eq. 2 of the one run), DTW and Fréchet distance of the trajectory to the reference (0 without a
+reference) and their logarithms, the smallest 2-D and 3-D distance to the obstacles, collision, the
 flight's duration and its highest point and lateral extent. Results are cached by test key.
 
 Example:
@@ -23,13 +24,16 @@ from pathlib import Path
 
 import numpy as np
 
+from surrealist_gym.fitness import generation_fitness
 from surrealist_gym.metrics import dtw, frechet
 from surrealist_gym.sim import NoiseConfig, SimConfig
 from surrealist_gym.sim.config import resolve_params
 from surrealist_gym.testcase import TestCase
 
-NAMES = ("lowfi_dtw", "lowfi_frechet", "lowfi_log_dtw", "lowfi_log_frechet", "lowfi_min_dist_2d",
+NAMES = ("lowfi_fitness", "lowfi_dtw", "lowfi_frechet", "lowfi_log_dtw", "lowfi_log_frechet", "lowfi_min_dist_2d",
          "lowfi_min_dist", "lowfi_collision", "lowfi_duration", "lowfi_max_z", "lowfi_min_y", "lowfi_max_y")
+FITNESS = NAMES[0]
+NO_FLIGHT_FITNESS = -1000.0  # a flight with no trajectory (finite: the outcomes are model features)
 LOW_FIDELITY = SimConfig(noise=NoiseConfig.off(), control_hz=50.0, outer_hz=10.0, planner_hz=5.0, log_hz=5.0)
 
 
@@ -67,12 +71,22 @@ class LowFidelity:
                 d, f = dtw(self.reference, xyz), frechet(self.reference, xyz)
             else:
                 d = f = 0.0
+            if not len(xyz):
+                fitness = NO_FLIGHT_FITNESS
+            elif self.reference is not None:
+                fitness = -d
+            else:
+                fitness = generation_fitness([xyz], test.obstacles).fitness
             status = str(getattr(run.status, "value", run.status))
             top = (xyz[:, 2].max(), xyz[:, 1].min(), xyz[:, 1].max()) if len(xyz) else (0.0, 0.0, 0.0)
-            self._cache[key] = np.array([d, f, np.log1p(d), np.log1p(f), min(run.min_distance_2d, 50.0),
+            self._cache[key] = np.array([fitness, d, f, np.log1p(d), np.log1p(f), min(run.min_distance_2d, 50.0),
                                          min(run.min_distance, 50.0), float(status == "collision"), run.duration,
                                          *top])
         return self._cache[key]
+
+    def fitness(self, obstacles) -> float:
+        """The problem's fitness of the low-fidelity flight with these obstacles (``lowfi_fitness``)."""
+        return float(self.outcomes(obstacles)[0])
 
     def save(self, folder) -> None:
         """Write the problem (seed test with its mission and frozen parameters; the reference) to ``folder``."""

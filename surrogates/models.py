@@ -219,6 +219,7 @@ class SurrogateModel:
         self.log_scale = False
         self.train_X: np.ndarray | None = None
         self.train_y: np.ndarray | None = None
+        self.train_groups: np.ndarray | None = None  # the store (search) each training row comes from
         self.metrics: dict = {}
 
     # --- scale ---------------------------------------------------------------------------------------------------
@@ -232,21 +233,23 @@ class SurrogateModel:
         return -np.expm1(-t) if self.log_scale else t
 
     # --- training and prediction -----------------------------------------------------------------------------
-    def fit(self, X: np.ndarray, y: np.ndarray) -> "SurrogateModel":
-        """Train on features X and raw target values y (fitness etc.)."""
+    def fit(self, X: np.ndarray, y: np.ndarray, groups=None) -> "SurrogateModel":
+        """Train on features X and raw target values y (fitness etc.); ``groups`` names the search each row comes
+        from (rows of one search in the order evaluated; default: all one search)."""
         X, y = np.asarray(X, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        groups = np.zeros(len(y), dtype=np.int64) if groups is None else np.asarray(groups, dtype=np.int64)
         ok = np.isfinite(y)
-        X, y = X[ok], y[ok]
+        X, y, groups = X[ok], y[ok], groups[ok]
         if len(y) < 2:
             raise SurrealistError(f"surrogate: need at least 2 evaluations with a known {self.target}, got {len(y)}")
         self.log_scale = self.target == "fitness" and bool((y <= 0).all())
-        self.train_X, self.train_y = X, y
+        self.train_X, self.train_y, self.train_groups = X, y, groups
         self.regressor.fit(X, self.to_scale(y), seed=self.seed)
         return self
 
     def fit_dataset(self, dataset: Dataset) -> "SurrogateModel":
-        X, y = dataset.target(self.target)
-        return self.fit(X, y)
+        dataset.target(self.target)  # checks the name
+        return self.fit(dataset.X, dataset.targets[self.target], dataset.groups)
 
     def predict(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation on the modelled scale (see :meth:`to_scale`)."""
@@ -270,7 +273,8 @@ class SurrogateModel:
         out.mkdir(parents=True, exist_ok=True)
         tensors = {f"regressor.{k}": torch.as_tensor(np.asarray(v)) if not torch.is_tensor(v) else v
                    for k, v in self.regressor.state.items()}
-        tensors.update({"train_X": torch.as_tensor(self.train_X), "train_y": torch.as_tensor(self.train_y)})
+        tensors.update({"train_X": torch.as_tensor(self.train_X), "train_y": torch.as_tensor(self.train_y),
+                        "train_groups": torch.as_tensor(self.train_groups)})
         torch.save(tensors, out / "weights.pt")
         meta = {"format": FORMAT, "kind": self.kind, "target": self.target, "seed": self.seed,
                 "log_scale": self.log_scale, "config": asdict(self.regressor.config),
@@ -298,6 +302,7 @@ class SurrogateModel:
                 state = {k: v.numpy() for k, v in state.items()}
             model.regressor.state = state
             model.train_X, model.train_y = tensors["train_X"].numpy(), tensors["train_y"].numpy()
+            model.train_groups = tensors["train_groups"].numpy()
             model.log_scale = bool(meta["log_scale"])
             model.metrics = meta.get("metrics", {})
         except SurrealistError:

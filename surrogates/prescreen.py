@@ -1,18 +1,28 @@
-"""Pre-screening: a wrapper around any agent that simulates only the candidates a surrogate finds promising.
+"""Pre-screening: a wrapper around any agent that simulates only the candidates worth a simulation.
 
-:class:`Prescreened` asks the inner agent for candidates, scores each with the surrogate (mean and standard
-deviation of the fitness on the model's scale) and applies an uncertainty-aware rule against the best real
-fitness so far: expected improvement (``ei``, skip when EI < ``threshold`` x the spread of the training targets)
-or probability of improvement (``pi``, skip when P(improvement) < ``threshold``). A skipped candidate is not
-simulated and costs no budget: the inner agent is told a pessimistic fitness (the prediction minus ``pessimism``
+:class:`Prescreened` asks the inner agent for candidates and screens each against the incumbent (the test with the
+best real fitness so far) with one of three rules:
+
+* ``lowfi`` (multi-fidelity): fly the candidate once in the low-fidelity simulator (:mod:`surrogates.lowfi`) and
+  skip it when its low-fidelity fitness falls short of the incumbent's by more than a ``margin``. The margin is
+  calibrated on the model's training stores: each search is replayed in the order it was evaluated, and the margin
+  is the shortfall that only ``miss_rate`` of its real improvements exceeded (:func:`lowfi_margin`).
+* ``ei`` / ``pi``: the surrogate's mean and standard deviation of the fitness (model scale) give the expected
+  improvement over the best (skip when EI < ``threshold`` x the spread of the training targets) or the probability
+  of improvement (skip when P < ``threshold``).
+* ``auto`` (default): ``lowfi`` when a margin is known (a model trained with low-fidelity features on stores with
+  enough improvements, or a margin given), else ``ei``.
+
+A skipped candidate is not simulated and costs no budget: the inner agent is told an estimate below the best
+(``lowfi``: the best minus the low-fidelity shortfall; ``ei``/``pi``: the prediction minus ``pessimism``
 standard deviations, never above the best) with ``info["skipped"] = True`` and ``info["memo"] = True`` (so
 budget-aware agents do not count it), and it is logged in :attr:`Prescreened.skipped`. Promising candidates go
 through ``env.step`` as usual, the most promising of one ``ask`` first (by predicted mean), each screened against
 the best so far including the earlier results of the same ``ask`` (the inner agent is told the results in the
 order it asked). In online mode (no model to start from) or with ``retrain_every`` set, the model is
 retrained on its training data plus the real evaluations of the episode every ``retrain_every`` evaluations once
-``min_points`` exist. ``max_skips`` consecutive skips force the next candidate to be simulated, so an agent that
-never stops on its own (random search) still spends its budget.
+``min_points`` exist (and the margin recalibrated). ``max_skips`` consecutive skips force the next candidate to
+be simulated, so an agent that never stops on its own (random search) still spends its budget.
 
 Example:
     >>> import gymnasium as gym, surrealist_gym
@@ -36,9 +46,34 @@ from search.base import Agent, SearchResult
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
 
 from .dataset import Featurizer
+from .lowfi import FITNESS as LOWFI_FITNESS
 from .models import SurrogateModel
 
 log = logging.getLogger(__name__)
+RULES = ("auto", "lowfi", "ei", "pi")
+MIN_IMPROVEMENTS = 10  # improvements needed in the training data to calibrate the low-fidelity margin
+
+
+def lowfi_margin(lowfi_fitness, fitness, groups, miss_rate: float = 0.02) -> float | None:
+    """The low-fidelity shortfall that only ``miss_rate`` of the real improvements of past searches exceeded.
+
+    Each search (rows of one group, in the order evaluated) is replayed: an improvement is a real fitness above the
+    best so far, its shortfall the incumbent's low-fidelity fitness minus its own. None with fewer than
+    ``MIN_IMPROVEMENTS`` improvements.
+    """
+    lowfi_fitness, fitness, groups = (np.asarray(a) for a in (lowfi_fitness, fitness, groups))
+    shortfalls = []
+    for group in np.unique(groups):
+        best, incumbent = -np.inf, None
+        rows = groups == group
+        for low, real in zip(lowfi_fitness[rows], fitness[rows]):
+            if real > best:
+                if incumbent is not None:
+                    shortfalls.append(incumbent - low)
+                best, incumbent = real, low
+    if len(shortfalls) < MIN_IMPROVEMENTS:
+        return None
+    return float(np.quantile(shortfalls, 1.0 - miss_rate))
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,7 +81,12 @@ class PrescreenConfig:
     """How candidates are screened and the model retrained.
 
     Attributes:
-        rule: ``ei`` (expected improvement) or ``pi`` (probability of improvement).
+        rule: ``auto``, ``lowfi`` (low-fidelity shortfall), ``ei`` (expected improvement) or ``pi``
+            (probability of improvement); see the module docstring.
+        margin: ``lowfi``: skip when the low-fidelity fitness is below the incumbent's by more than this (in
+            fitness units); None calibrates it on the model's training data (see ``miss_rate``).
+        miss_rate: share of the past real improvements whose low-fidelity shortfall may exceed the calibrated
+            margin.
         threshold: EI below ``threshold`` x std of the training targets (``ei``), or P(improvement) below it
             (``pi``), skips a candidate.
         pessimism: a skipped candidate is told ``mean - pessimism x std`` (capped below the best).
@@ -59,7 +99,9 @@ class PrescreenConfig:
             candidate screened; see :mod:`surrogates.lowfi`).
     """
 
-    rule: str = "ei"
+    rule: str = "auto"
+    margin: float | None = None
+    miss_rate: float = 0.02
     threshold: float = 0.01
     pessimism: float = 1.0
     min_points: int = 10
@@ -69,8 +111,10 @@ class PrescreenConfig:
     lowfi: bool = True
 
     def __post_init__(self):
-        if self.rule not in ("ei", "pi"):
-            raise ValueError(f"prescreen rule: expected 'ei' or 'pi', got {self.rule!r}")
+        if self.rule not in RULES:
+            raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
+        if not 0.0 <= self.miss_rate < 1.0:
+            raise ValueError(f"prescreen miss_rate: expected a share in [0, 1), got {self.miss_rate!r}")
 
 
 class Prescreened(Agent):
@@ -93,8 +137,16 @@ class Prescreened(Agent):
             model = SurrogateModel.load(model)
         self._initial = None if isinstance(model, str) else model
         self.model: SurrogateModel | None = None
+        self.margin: float | None = None
         self.skipped: list[dict] = []
         self.retrains = 0
+
+    @property
+    def rule(self) -> str:
+        """The rule in force: ``auto`` resolves to ``lowfi`` once a margin is known, else ``ei``."""
+        if self.config.rule != "auto":
+            return self.config.rule
+        return "lowfi" if self.margin is not None else "ei"
 
     # --- the run: some candidates are answered without env.step ---------------------------------------------
     def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
@@ -110,19 +162,20 @@ class Prescreened(Agent):
             self.ask()
             results: list[tuple | None] = [None] * len(candidates)
             real = []
-            best = self.best[1]
-            order, predictions = self._most_promising_first(candidates)
+            _, best, incumbent = self.best
+            order, tests, predictions = self._most_promising_first(candidates)
             for i in order:  # a better first result raises the bar for the rest
                 if done:
                     break
-                skip = self._screen(candidates[i], best, predictions[i])
+                skip = self._screen(candidates[i], tests[i], predictions[i], best, incumbent.get("test"))
                 if skip is not None:
                     results[i] = (candidates[i], skip["told_fitness"], skip["info"])
                     continue
                 reward, step_info, done = self._step(env, candidates[i], callback)
                 results[i] = (candidates[i], reward, step_info)
                 real.append(results[i])
-                best = max(best, reward)
+                if reward > best:
+                    best, incumbent = reward, step_info
             told = list(itertools.takewhile(lambda r: r is not None, results))  # in the order asked
             self.tell([a for a, _, _ in real], [f for _, f, _ in real], [i for _, _, i in real])
             self.inner.tell([a for a, _, _ in told], [f for _, f, _ in told], [i for _, _, i in told])
@@ -139,10 +192,14 @@ class Prescreened(Agent):
         self.retrains = 0
         self._consecutive = 0
         self._featurizer = self._initial.featurizer if self._initial is not None else Featurizer.for_env(self._env, self.config.lowfi)
+        if self.config.rule == "lowfi" and self._featurizer.lowfi is None:
+            raise SurrealistError("prescreen rule lowfi: the model has no low-fidelity features (train it with "
+                                  "--lowfi)")
         self._X: list[np.ndarray] = []
         self._y: list[float] = []
         self._since_retrain = 0
         self.model = self._initial
+        self.margin = self._calibrated_margin()
         self._add_point(info)
 
     def _ask(self) -> list[np.ndarray]:  # the inner agent's candidates (run() tells back the simulated ones)
@@ -155,68 +212,101 @@ class Prescreened(Agent):
         self._maybe_retrain()
 
     # --- screening -----------------------------------------------------------------------------------------------
-    def _prediction(self, action) -> tuple | None:
-        """(test, mean, std) on the model's scale, or None when the candidate is free (invalid or a memo hit)."""
+    def _test(self, action):
+        """The candidate's test, or None when it is free (invalid or a memo hit)."""
         try:
             test = self._env.test_for(action)
         except InvalidTestCase:
             return None  # the env rejects it for free
-        if test.key() in self._env._episode_keys:
-            return None  # a memo hit costs nothing
-        mean, std = self.model.predict(self._featurizer.transform([test]))
-        return test, float(mean[0]), max(float(std[0]), 1e-9)
+        return None if test.key() in self._env._episode_keys else test  # a memo hit costs nothing
 
-    def _most_promising_first(self, candidates) -> tuple[list[int], list]:
-        """Candidate indices, free ones first, then by predicted fitness (the order asked without a model), and
-        the predictions (``_prediction`` of each candidate; None without a model)."""
+    def _most_promising_first(self, candidates) -> tuple[list[int], list, list]:
+        """Candidate indices, free ones first, then by predicted fitness (the order asked without a model); the
+        tests (None: free) and the model's predictions (mean, std on the model's scale; None without a model)."""
+        tests = [self._test(a) for a in candidates]
         if self.model is None:
-            return list(range(len(candidates))), [None] * len(candidates)
-        predictions = [self._prediction(a) for a in candidates]
+            return list(range(len(candidates))), tests, [None] * len(candidates)
+        predictions = [None if t is None else self._predict(t) for t in tests]
 
         def priority(i):
             p = predictions[i]
-            return -np.inf if p is None else (-p[1] if np.isfinite(p[1]) else np.inf)
-        return sorted(range(len(candidates)), key=priority), predictions
+            return -np.inf if p is None else (-p[0] if np.isfinite(p[0]) else np.inf)
+        return sorted(range(len(candidates)), key=priority), tests, predictions
 
-    def _screen(self, action, best_fitness: float, prediction) -> dict | None:
+    def _predict(self, test) -> tuple[float, float]:
+        mean, std = self.model.predict(self._featurizer.transform([test]))
+        return float(mean[0]), max(float(std[0]), 1e-9)
+
+    def _screen(self, action, test, prediction, best_fitness: float, incumbent) -> dict | None:
         """None to simulate the candidate, else the log entry of a skip (with what the inner agent is told)."""
-        if self.model is None or self._consecutive >= self.config.max_skips:
+        if test is None or self._consecutive >= self.config.max_skips:
             self._consecutive = 0
             return None
-        if prediction is None:
+        rule = self.rule
+        if rule == "lowfi":
+            verdict = self._lowfi_verdict(test, incumbent, best_fitness)
+        else:
+            verdict = None if prediction is None else self._model_verdict(prediction, best_fitness)
+        if verdict is None:
+            self._consecutive = 0
             return None
-        test, mean, std = prediction
+        self._consecutive += 1
+        entry, told = verdict
+        told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
+        env = self._env
+        entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
+                      "obstacles": [o.to_list() for o in test.obstacles], "rule": rule, "told_fitness": told,
+                      "after_evaluations": env.budget - env.budget_left})
+        info = {"fitness": told, "memo": True, "skipped": True, "invalid": None, "test": test,
+                "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
+                "simulations": env._simulations, "best_fitness": None if env.best is None else env.best.fitness,
+                "predicted": prediction}
+        log.info("skipped candidate %s (%s): %s", entry["action"], rule,
+                 {k: round(v, 3) for k, v in entry.items() if isinstance(v, float)})
+        self.skipped.append(entry)
+        return {"told_fitness": told, "info": info}
+
+    def _lowfi_verdict(self, test, incumbent, best_fitness: float) -> tuple[dict, float] | None:
+        """Skip when the low-fidelity fitness falls short of the incumbent's by more than the margin; the inner
+        agent is told the best real fitness minus that shortfall."""
+        if self.margin is None or incumbent is None:
+            return None
+        lowfi = self._featurizer.lowfi
+        shortfall = float(lowfi.fitness(incumbent.obstacles) - lowfi.fitness(test.obstacles))
+        if not shortfall > self.margin:
+            return None
+        return {"lowfi_shortfall": shortfall, "margin": self.margin}, best_fitness - shortfall
+
+    def _model_verdict(self, prediction, best_fitness: float) -> tuple[dict, float] | None:
+        """The model's rule (``ei`` or ``pi``); a skip is told the prediction minus ``pessimism`` std."""
+        mean, std = prediction
         best = float(self.model.to_scale(best_fitness))
         z = (mean - best) / std
         cdf = 0.5 * (1.0 + math.erf(z / math.sqrt(2.0)))
-        if self.config.rule == "pi":
+        if self.rule == "pi":
             score, limit = cdf, self.config.threshold
         else:
             pdf = math.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi)
             score = std * (z * cdf + pdf)
             limit = self.config.threshold * self._target_scale()
         if score >= limit:
-            self._consecutive = 0
             return None
-        self._consecutive += 1
         told = float(self.model.from_scale(min(mean - self.config.pessimism * std, best)))
-        told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
-        env = self._env
-        entry = {"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
-                 "obstacles": [o.to_list() for o in test.obstacles], "predicted_mean": mean, "predicted_std": std,
-                 "score": score, "told_fitness": told, "after_evaluations": env.budget - env.budget_left}
-        info = {"fitness": told, "memo": True, "skipped": True, "invalid": None, "test": test,
-                "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
-                "simulations": env._simulations, "best_fitness": None if env.best is None else env.best.fitness,
-                "predicted": (mean, std)}
-        log.info("skipped candidate %s: predicted %.3f +/- %.3f, %s %.3g < %.3g", entry["action"], mean, std,
-                 self.config.rule, score, limit)
-        self.skipped.append(entry)
-        return {"told_fitness": told, "info": info}
+        return {"predicted_mean": mean, "predicted_std": std, "score": score, "limit": limit}, told
 
     def _target_scale(self) -> float:
         y = self.model.to_scale(self.model.train_y)
         return float(np.std(y)) or 1.0
+
+    def _calibrated_margin(self) -> float | None:
+        """The ``lowfi`` margin: the configured one, else calibrated on the model's training data."""
+        if self.config.margin is not None:
+            return float(self.config.margin)
+        if self.model is None or self._featurizer.lowfi is None:
+            return None
+        column = self._featurizer.names.index(LOWFI_FITNESS)
+        return lowfi_margin(self.model.train_X[:, column], self.model.train_y, self.model.train_groups,
+                            self.config.miss_rate)
 
     # --- online training -----------------------------------------------------------------------------------------
     def _add_point(self, info: dict) -> None:
@@ -237,14 +327,17 @@ class Prescreened(Agent):
         if self.model is not None and self._since_retrain < max(cfg.retrain_every, 1):
             return
         X, y = np.asarray(self._X), np.asarray(self._y)
+        groups = np.zeros(len(y), dtype=np.int64)  # the episode is one search
         if self._initial is not None:
             X = np.concatenate([self._initial.train_X, X])
             y = np.concatenate([self._initial.train_y, y])
+            groups = np.concatenate([self._initial.train_groups, groups + int(self._initial.train_groups.max()) + 1])
             kind, config = self._initial.kind, asdict(self._initial.regressor.config)
         else:
             kind, config = cfg.kind, None
         model = SurrogateModel(self._featurizer, kind, "fitness", config, seed=(self.seed or 0) + self.retrains)
-        self.model = model.fit(X, y)
+        self.model = model.fit(X, y, groups)
+        self.margin = self._calibrated_margin()
         self.retrains += 1
         self._since_retrain = 0
         log.info("surrogate retrained on %d evaluations", len(y))

@@ -41,3 +41,16 @@ def generate_featurizer():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return Featurizer.for_problem("generate")
+
+
+@pytest.fixture(scope="session")
+def replicate_lowfi_featurizer():
+    from surrogates.dataset import Featurizer
+    return Featurizer.for_problem("replicate", lowfi=True)
+
+
+@pytest.fixture(scope="session")
+def rq1_lowfi_dataset(rq1_stores, replicate_lowfi_featurizer):
+    """The two RQ1 stores with multi-fidelity features (one low-fidelity flight per stored test, cached)."""
+    from surrogates.dataset import load_dataset
+    return load_dataset(rq1_stores, replicate_lowfi_featurizer)

@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 import surrealist_gym as sg
-from surrogates.dataset import Featurizer, load_dataset
+from surrogates.dataset import Featurizer
 from surrogates.lowfi import NAMES, LowFidelity
 from surrogates.models import SurrogateModel, evaluate_model, train_model
 
 
 @pytest.fixture(scope="module")
-def featurizer():
-    return Featurizer.for_problem("replicate", lowfi=True)
+def featurizer(replicate_lowfi_featurizer):
+    return replicate_lowfi_featurizer
 
 
 def test_outcomes_follow_the_obstacle_and_are_cached(featurizer):
@@ -44,13 +44,14 @@ def test_featurizer_appends_the_outcomes_and_round_trips(featurizer, tmp_path):
     assert np.allclose(again.transform([test]), x, atol=1e-3)  # the mission survives the .plan round trip
 
 
-def test_multi_fidelity_model_saves_its_simulator(featurizer, rq1_stores, tmp_path):
+def test_multi_fidelity_model_saves_its_simulator(featurizer, rq1_lowfi_dataset, tmp_path):
     from scipy.stats import spearmanr
 
-    data = load_dataset(rq1_stores, featurizer)
+    data = rq1_lowfi_dataset
     X, y = data.target("fitness")
     lowfi_dtw = X[:, featurizer.names.index("lowfi_dtw")]
     assert spearmanr(-lowfi_dtw, y).statistic > 0.5  # the coarse flight alone already ranks the real fitness
+    assert np.allclose(X[:, featurizer.names.index("lowfi_fitness")], -lowfi_dtw)  # replication: -DTW
     model = train_model(data, featurizer, "ensemble", config={"members": 3}, seed=0)
     assert evaluate_model(model, data)["spearman"] > 0.8
     folder = model.save(tmp_path / "m")

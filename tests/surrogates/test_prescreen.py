@@ -2,6 +2,7 @@
 import warnings
 
 import gymnasium as gym
+import numpy as np
 import pytest
 
 import surrealist_gym  # noqa: F401 - registers the envs
@@ -9,7 +10,7 @@ from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
 from surrogates.dataset import load_dataset
 from surrogates.models import train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened, wrap
+from surrogates.prescreen import PrescreenConfig, Prescreened, lowfi_margin, wrap
 
 BUDGET = 4
 
@@ -77,14 +78,46 @@ def test_wrap(model, tmp_path):
 
 
 def test_free_then_most_promising_candidates_first(model):
-    import numpy as np
-
     env = _env()
     _, info = env.reset(seed=0)
     agent = Prescreened(AdaptiveGreedy("paper"), model, seed=0)
     agent.setup(env, info)
     candidates = [np.array([0.1, 0.0]), np.array([-0.1, 0.3]), np.array([0.0, -1.0])]  # the last one overlaps
-    order, predictions = agent._most_promising_first(candidates)
-    means = [p[1] for p in predictions[:2]]
-    assert predictions[2] is None and order[0] == 2
+    order, tests, predictions = agent._most_promising_first(candidates)
+    means = [p[0] for p in predictions[:2]]
+    assert tests[2] is None and predictions[2] is None and order[0] == 2
     assert order[1:] == sorted([0, 1], key=lambda i: -means[i])
+
+
+def test_lowfi_margin_replays_each_search_in_order():
+    # two searches of 12 evaluations: real fitness rises each step, the low-fidelity fitness of each improvement
+    # falls short of its incumbent's by 0, 1, ..., 10 (search 0) and 0 (search 1: it must not inherit search 0's best)
+    real = np.concatenate([np.arange(12.0), np.arange(12.0) - 100])
+    low = np.concatenate([-np.cumsum(np.r_[0.0, np.arange(11.0)]), np.zeros(12)])
+    groups = np.repeat([0, 1], 12)
+    shortfalls = np.r_[np.arange(11.0), np.zeros(11)]
+    assert lowfi_margin(low, real, groups, miss_rate=0.1) == pytest.approx(np.quantile(shortfalls, 0.9))
+    assert lowfi_margin(low[:8], real[:8], groups[:8]) is None  # too few improvements to calibrate
+
+
+@pytest.fixture(scope="module")
+def lowfi_model(rq1_lowfi_dataset, replicate_lowfi_featurizer):
+    return train_model(rq1_lowfi_dataset, replicate_lowfi_featurizer, "knn")
+
+
+def test_lowfi_rule_skips_candidates_the_coarse_flight_finds_clearly_worse(lowfi_model):
+    env = gym.make("Surrealist-Replicate-v0", budget=6, runs=1, executor="inline")
+    agent = Prescreened(AdaptiveGreedy("authors"), lowfi_model, PrescreenConfig(miss_rate=0.5), seed=0)
+    result = agent.run(env, seed=0)
+    assert agent.rule == "lowfi" and agent.margin is not None  # auto: the model's stores calibrate a margin
+    assert result.evaluations <= 6 and env.unwrapped.evaluator.simulations == result.evaluations
+    assert agent.skipped, "a margin at the median of past improvements must skip candidates"
+    for entry in agent.skipped:
+        assert entry["rule"] == "lowfi" and entry["lowfi_shortfall"] > agent.margin
+        assert entry["told_fitness"] < result.best_fitness
+
+
+def test_lowfi_rule_needs_low_fidelity_features(model):
+    agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig(rule="lowfi"), seed=0)
+    with pytest.raises(SurrealistError, match="low-fidelity"):
+        agent.run(_env(), seed=0)
