@@ -75,9 +75,14 @@ def evaluations_to_reach(curve, level: float, evaluations: int) -> tuple[int, bo
     return (reach[0], True) if reach else (evaluations, False)
 
 
+def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
+    return f"{rule}{threshold:g}" if rule in ("ei", "pi") else f"{rule}-miss{miss_rate:g}"
+
+
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
-                also: str | None = None, rule: str = "pi", threshold: float = 0.05) -> dict:
-    label = (f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "") + f"-{rule}{threshold:g}"
+                also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02) -> dict:
+    label = ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
+             + f"-{_rule_label(rule, threshold, miss_rate)}")
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -87,10 +92,10 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     if mode == "pretrained":
         others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
-        config = PrescreenConfig(rule=rule, threshold=threshold, retrain_every=10)
+        config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, retrain_every=10)
     else:
-        model, config = "online", PrescreenConfig(rule=rule, threshold=threshold, min_points=10, retrain_every=10,
-                                                  lowfi=lowfi)
+        model, config = "online", PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10,
+                                                  retrain_every=10, lowfi=lowfi)
     if problem == "rq2":
         env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline"), "paper"
     else:
@@ -107,7 +112,8 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
            "to_best": result.evaluations_to_best, "skipped": len(agent.skipped), "retrains": agent.retrains,
            "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations, "runs": env.unwrapped.evaluator.runs,
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
-           "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0)}
+           "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
+           "rule": agent.rule, "margin": agent.margin}
     env.close()
     cached.write_text(json.dumps(row))
     return row
@@ -120,7 +126,8 @@ def search(args) -> None:
     target = float(np.mean([g["final"] for g in greedy]))  # the common level: greedy alone's mean final fitness
     rows = []
     for rep, g in enumerate(greedy):
-        p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold)
+        p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
+                        args.miss_rate)
         runs = p["runs"]
         g_own, _ = evaluations_to_reach(g["curve"], g["final"], g["evaluations"])
         p_own, reached = evaluations_to_reach(p["curve"], g["final"], p["evaluations"])
@@ -130,7 +137,8 @@ def search(args) -> None:
                "pre_sims_to_reach": p_own * runs, "reached": reached, "greedy_sims_to_target": g_common * runs,
                "greedy_hit_target": g_hit, "pre_sims_to_target": p_common * runs, "pre_hit_target": p_hit,
                "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "wall_s": p["wall_s"],
-               "new_simulations": p["new_simulations"], "lowfi_runs": p.get("lowfi_runs", 0)}
+               "new_simulations": p["new_simulations"], "lowfi_runs": p.get("lowfi_runs", 0),
+               "rule": p.get("rule"), "margin": p.get("margin")}
         rows.append(row)
         print(json.dumps(row), flush=True)
     _summary(args, rows, target)
@@ -138,7 +146,9 @@ def search(args) -> None:
 
 def _summary(args, rows, target: float) -> None:
     n = len(rows)
-    print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule {args.rule} < {args.threshold}, "
+    print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule "
+          f"{_rule_label(args.rule, args.threshold, args.miss_rate)} (in force: {sorted({r['rule'] for r in rows})}, "
+          f"margin {np.mean([r['margin'] or np.nan for r in rows]):.2f}), "
           f"{n} repetitions; skipped per search {np.mean([r['skipped'] for r in rows]):.0f}, low-fidelity flights "
           f"per search {np.mean([r['lowfi_runs'] for r in rows]):.0f}")
     for label, gk, pk, hits in (
@@ -194,8 +204,11 @@ def main() -> None:
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
-    parser.add_argument("--rule", default="pi", choices=["pi", "ei"], help="screening rule (default pi)")
-    parser.add_argument("--threshold", type=float, default=0.05, help="screening threshold (default 0.05)")
+    parser.add_argument("--rule", default="auto", choices=["auto", "lowfi", "ei", "pi"],
+                        help="screening rule (default auto: lowfi with a calibrated margin, else ei)")
+    parser.add_argument("--threshold", type=float, default=0.01, help="ei/pi threshold (default 0.01)")
+    parser.add_argument("--miss-rate", type=float, default=0.02,
+                        help="lowfi: share of past improvements the calibrated margin may miss (default 0.02)")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],

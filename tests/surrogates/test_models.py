@@ -71,3 +71,11 @@ def test_cli_train_and_eval(rq1_stores, tmp_path, capsys):
     assert "within 1 sd (68% ideal)" in capsys.readouterr().out
     assert main(["surrogate", "eval", str(tmp_path / "nope"), str(rq1_stores[1])]) == 2
     assert "not a surrogate model" in capsys.readouterr().err
+
+
+def test_cli_train_lowfi_reports_the_screening_margin(rq1_stores, tmp_path, capsys):
+    out = tmp_path / "lowfi-model"
+    assert main(["surrogate", "train", *map(str, rq1_stores), "--out", str(out), "--kind", "knn", "--lowfi"]) == 0
+    text = capsys.readouterr().out
+    assert "falls short of the incumbent's by more than" in text
+    assert set(SurrogateModel.load(out).train_groups.tolist()) == {0, 1}  # one group per store, saved
