@@ -80,9 +80,10 @@ def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
 
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
-                also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02) -> dict:
+                also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
+                counted: bool = False) -> dict:
     label = ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
-             + f"-{_rule_label(rule, threshold, miss_rate)}")
+             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else ""))
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -92,10 +93,11 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     if mode == "pretrained":
         others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
-        config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, retrain_every=10)
+        config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, retrain_every=10,
+                                 agent_counts_skips=counted)
     else:
         model, config = "online", PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10,
-                                                  retrain_every=10, lowfi=lowfi)
+                                                  retrain_every=10, lowfi=lowfi, agent_counts_skips=counted)
     if problem == "rq2":
         env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline"), "paper"
     else:
@@ -127,7 +129,7 @@ def search(args) -> None:
     rows = []
     for rep, g in enumerate(greedy):
         p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
-                        args.miss_rate)
+                        args.miss_rate, args.counted)
         runs = p["runs"]
         g_own, _ = evaluations_to_reach(g["curve"], g["final"], g["evaluations"])
         p_own, reached = evaluations_to_reach(p["curve"], g["final"], p["evaluations"])
@@ -147,7 +149,7 @@ def search(args) -> None:
 def _summary(args, rows, target: float) -> None:
     n = len(rows)
     print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule "
-          f"{_rule_label(args.rule, args.threshold, args.miss_rate)} (in force: {sorted({r['rule'] for r in rows})}, "
+          f"{_rule_label(args.rule, args.threshold, args.miss_rate)}{', agent counts skips' if args.counted else ''} (in force: {sorted({r['rule'] for r in rows})}, "
           f"margin {np.mean([r['margin'] or np.nan for r in rows]):.2f}), "
           f"{n} repetitions; skipped per search {np.mean([r['skipped'] for r in rows]):.0f}, low-fidelity flights "
           f"per search {np.mean([r['lowfi_runs'] for r in rows]):.0f}")
@@ -209,6 +211,8 @@ def main() -> None:
     parser.add_argument("--threshold", type=float, default=0.01, help="ei/pi threshold (default 0.01)")
     parser.add_argument("--miss-rate", type=float, default=0.02,
                         help="lowfi: share of past improvements the calibrated margin may miss (default 0.02)")
+    parser.add_argument("--counted", action="store_true",
+                        help="the greedy counts skipped candidates against its local budgets (agent_counts_skips)")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],

@@ -95,6 +95,8 @@ class PrescreenConfig:
             an online model always retrains).
         max_skips: consecutive skips after which the next candidate is simulated anyway.
         kind: model kind of an online model (``ensemble`` or ``knn``).
+        agent_counts_skips: tell the inner agent a skip as a (non-memo) evaluation, so it plans its own budgets
+            (the greedy's local budgets) as without screening; the env's budget counts real simulations either way.
         lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
             candidate screened; see :mod:`surrogates.lowfi`).
     """
@@ -108,6 +110,7 @@ class PrescreenConfig:
     retrain_every: int = 5
     max_skips: int = 20
     kind: str = "ensemble"
+    agent_counts_skips: bool = False
     lowfi: bool = True
 
     def __post_init__(self):
@@ -257,7 +260,7 @@ class Prescreened(Agent):
         entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
                       "obstacles": [o.to_list() for o in test.obstacles], "rule": rule, "told_fitness": told,
                       "after_evaluations": env.budget - env.budget_left})
-        info = {"fitness": told, "memo": True, "skipped": True, "invalid": None, "test": test,
+        info = {"fitness": told, "memo": not self.config.agent_counts_skips, "skipped": True, "invalid": None, "test": test,
                 "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
                 "simulations": env._simulations, "best_fitness": None if env.best is None else env.best.fitness,
                 "predicted": prediction}

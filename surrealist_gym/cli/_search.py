@@ -114,6 +114,8 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     summary = write_results(out, env, result, time.perf_counter() - start, problem)
     if hasattr(agent, "skipped"):
         (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
+        print(f"pre-screening ({agent.rule}): {len(agent.skipped)} candidates skipped without a simulation "
+              f"(skipped.json)")
     env.close()
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
           f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "
