@@ -1,17 +1,25 @@
 """Greedy vs greedy with pre-screening: simulations needed to reach greedy's final fitness, and held-out accuracy.
 
-    python benchmarks/bench_surrogates.py search --problem rq1-seed1 --repetitions 10 --mode pretrained [--lowfi]
+    python benchmarks/bench_surrogates.py search --problem rq1-seed1 --repetitions 10 --mode pretrained --lowfi
     python benchmarks/bench_surrogates.py accuracy --problem rq1-seed1 [--lowfi]
 
 ``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
 budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
 greedy runs with the same settings; ``pretrained`` starts from an ensemble trained on the OTHER repetitions'
-stores (never on repetition N) and retrains every 20 evaluations, ``online`` starts without a model. Its store
-starts as a copy of repetition N's, so a test greedy alone already simulated is read back instead of flown again
-(the simulation is deterministic given test and seed, so the numbers are the same; the env still counts it as an
-evaluation). Simulations = evaluations x runs. ``--lowfi`` adds the low-fidelity flight outcomes to the features
-(multi-fidelity surrogate); the low-fidelity flights flown during each search are counted (those made while
-building the training set are not) and their time is part of the search's wall time.
+stores (never on repetition N) and retrains every 10 evaluations, ``online`` starts without a model. ``--rule``
+picks the screening rule (default ``auto``: the low-fidelity incumbent rule with its margin calibrated on the
+training stores when the model has low-fidelity features, else EI). Its store starts as a copy of repetition N's,
+so a test greedy alone already simulated is read back instead of flown again (the simulation is deterministic
+given test and seed, so the numbers are the same; the env still counts it as an evaluation). Simulations =
+evaluations x runs. ``--lowfi`` adds the low-fidelity flight outcomes to the features (multi-fidelity
+surrogate); the low-fidelity flights flown during each search are counted (those made while building the
+training set are not) and their time is part of the search's wall time.
+
+Two measures, each with the Mann-Whitney/ANOVA p-value and A12, then the final fitness of both:
+* simulations until the best fitness reaches greedy alone's final fitness of the same repetition (a run that
+  never reaches it counts all its simulations: censored, which favours the run that stopped early);
+* simulations until the best fitness reaches a common level, greedy alone's mean final fitness, for both agents
+  alike (censored the same way).
 
 ``accuracy``: leave-one-repetition-out over the 10 stores of the problem: for each repetition, a model trained on
 the other nine predicts it; printed are the Spearman rank correlation per held-out repetition, their mean, and the
