@@ -89,7 +89,7 @@ def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
-                counted: bool = False) -> dict:
+                counted: bool = True) -> dict:
     label = ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
              + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else ""))
     cached = out / f"{problem}-{label}-rep{rep}.json"
@@ -137,7 +137,7 @@ def search(args) -> None:
     rows = []
     for rep, g in enumerate(greedy):
         p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
-                        args.miss_rate, args.counted)
+                        args.miss_rate, not args.skips_as_memo)
         runs = p["runs"]
         g_own, _ = evaluations_to_reach(g["curve"], g["final"], g["evaluations"])
         p_own, reached = evaluations_to_reach(p["curve"], g["final"], p["evaluations"])
@@ -157,7 +157,7 @@ def search(args) -> None:
 def _summary(args, rows, target: float) -> None:
     n = len(rows)
     print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule "
-          f"{_rule_label(args.rule, args.threshold, args.miss_rate)}{', agent counts skips' if args.counted else ''} (in force: {sorted({r['rule'] for r in rows})}, "
+          f"{_rule_label(args.rule, args.threshold, args.miss_rate)}{', skips told as memo' if args.skips_as_memo else ', agent counts skips'} (in force: {sorted({r['rule'] for r in rows})}, "
           f"margin {np.mean([r['margin'] or np.nan for r in rows]):.2f}), "
           f"{n} repetitions; skipped per search {np.mean([r['skipped'] for r in rows]):.0f}, low-fidelity flights "
           f"per search {np.mean([r['lowfi_runs'] for r in rows]):.0f}")
@@ -219,8 +219,9 @@ def main() -> None:
     parser.add_argument("--threshold", type=float, default=0.01, help="ei/pi threshold (default 0.01)")
     parser.add_argument("--miss-rate", type=float, default=0.02,
                         help="lowfi: share of past improvements the calibrated margin may miss (default 0.02)")
-    parser.add_argument("--counted", action="store_true",
-                        help="the greedy counts skipped candidates against its local budgets (agent_counts_skips)")
+    parser.add_argument("--skips-as-memo", action="store_true",
+                        help="tell skips to the greedy as memo answers (not charged to its local budgets; "
+                             "agent_counts_skips=False)")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],

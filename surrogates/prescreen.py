@@ -15,8 +15,9 @@ best real fitness so far) with one of three rules:
 
 A skipped candidate is not simulated and costs no budget: the inner agent is told an estimate below the best
 (``lowfi``: the best minus the low-fidelity shortfall; ``ei``/``pi``: the prediction minus ``pessimism``
-standard deviations, never above the best) with ``info["skipped"] = True`` and ``info["memo"] = True`` (so
-budget-aware agents do not count it), and it is logged in :attr:`Prescreened.skipped`. Promising candidates go
+standard deviations, never above the best) with ``info["skipped"] = True`` and ``info["memo"]`` False (the
+agent plans its own budgets as if it had been evaluated; ``agent_counts_skips=False``: True, so budget-aware
+agents do not count it), and it is logged in :attr:`Prescreened.skipped`. Promising candidates go
 through ``env.step`` as usual, the most promising of one ``ask`` first (by predicted mean), each screened against
 the best so far including the earlier results of the same ``ask`` (the inner agent is told the results in the
 order it asked). In online mode (no model to start from) or with ``retrain_every`` set, the model is
@@ -96,7 +97,8 @@ class PrescreenConfig:
         max_skips: consecutive skips after which the next candidate is simulated anyway.
         kind: model kind of an online model (``ensemble`` or ``knn``).
         agent_counts_skips: tell the inner agent a skip as a (non-memo) evaluation, so it plans its own budgets
-            (the greedy's local budgets) as without screening; the env's budget counts real simulations either way.
+            (the greedy's local budgets) as without screening (default; False tells skips as memo answers, which
+            the greedy does not charge); the env's budget counts real simulations either way.
         lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
             candidate screened; see :mod:`surrogates.lowfi`).
     """
@@ -110,7 +112,7 @@ class PrescreenConfig:
     retrain_every: int = 5
     max_skips: int = 20
     kind: str = "ensemble"
-    agent_counts_skips: bool = False
+    agent_counts_skips: bool = True
     lowfi: bool = True
 
     def __post_init__(self):
