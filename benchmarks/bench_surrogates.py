@@ -44,7 +44,7 @@ from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened
+from surrogates.prescreen import RULES, PrescreenConfig, Prescreened
 
 PAPER = Path("results/paper")
 
@@ -98,14 +98,13 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     store = out / f"{problem}-{label}-rep{rep}.sqlite"
     shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
     featurizer = _featurizer(problem, lowfi)
+    config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10, retrain_every=10,
+                             lowfi=lowfi, agent_counts_skips=counted)
     if mode == "pretrained":
         others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
-        config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, retrain_every=10,
-                                 agent_counts_skips=counted)
     else:
-        model, config = "online", PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10,
-                                                  retrain_every=10, lowfi=lowfi, agent_counts_skips=counted)
+        model = "online"
     if problem == "rq2":
         env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline"), "paper"
     else:
@@ -214,7 +213,7 @@ def main() -> None:
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
-    parser.add_argument("--rule", default="auto", choices=["auto", "lowfi", "ei", "pi"],
+    parser.add_argument("--rule", default="auto", choices=RULES,
                         help="screening rule (default auto: lowfi with a calibrated margin, else ei)")
     parser.add_argument("--threshold", type=float, default=0.01, help="ei/pi threshold (default 0.01)")
     parser.add_argument("--miss-rate", type=float, default=0.02,

@@ -77,6 +77,14 @@ def lowfi_margin(lowfi_fitness, fitness, groups, miss_rate: float = 0.02) -> flo
     return float(np.quantile(shortfalls, 1.0 - miss_rate))
 
 
+def model_margin(model: SurrogateModel, miss_rate: float = 0.02) -> float | None:
+    """:func:`lowfi_margin` on a model's training data; None for a model without low-fidelity features."""
+    names = model.featurizer.names
+    if LOWFI_FITNESS not in names:
+        return None
+    return lowfi_margin(model.train_X[:, names.index(LOWFI_FITNESS)], model.train_y, model.train_groups, miss_rate)
+
+
 @dataclass(frozen=True, slots=True)
 class PrescreenConfig:
     """How candidates are screened and the model retrained.
@@ -305,13 +313,11 @@ class Prescreened(Agent):
 
     def _calibrated_margin(self) -> float | None:
         """The ``lowfi`` margin: the configured one, else calibrated on the model's training data."""
+        if self._featurizer.lowfi is None:
+            return None  # no low-fidelity flights to compare
         if self.config.margin is not None:
             return float(self.config.margin)
-        if self.model is None or self._featurizer.lowfi is None:
-            return None
-        column = self._featurizer.names.index(LOWFI_FITNESS)
-        return lowfi_margin(self.model.train_X[:, column], self.model.train_y, self.model.train_groups,
-                            self.config.miss_rate)
+        return None if self.model is None else model_margin(self.model, self.config.miss_rate)
 
     # --- online training -----------------------------------------------------------------------------------------
     def _add_point(self, info: dict) -> None:

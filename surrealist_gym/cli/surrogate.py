@@ -83,12 +83,10 @@ def run(args) -> int:
     print(f"model ({args.kind}, {args.target}, {len(model.train_y)} evaluations, {data.X.shape[1]} features) "
           f"in {out}/: weights.pt, meta.json")
     if args.lowfi and args.target == "fitness":
-        from surrogates.prescreen import PrescreenConfig, lowfi_margin
-        from surrogates.lowfi import FITNESS
+        from surrogates.prescreen import PrescreenConfig, model_margin
 
         rate = PrescreenConfig().miss_rate
-        margin = lowfi_margin(model.train_X[:, featurizer.names.index(FITNESS)], model.train_y, model.train_groups,
-                              rate)
+        margin = model_margin(model, rate)
         print("pre-screening with it (--surrogate): " + (
             f"skips a candidate whose low-fidelity fitness falls short of the incumbent's by more than {margin:.2f} "
             f"(exceeded by {rate:.0%} of the stores' improvements)" if margin is not None else
