@@ -40,7 +40,7 @@ def _torch():
     try:
         import torch
     except ImportError as err:
-        raise DependencyNotInstalled("surrogate models need torch: pip install torch") from err
+        raise DependencyNotInstalled("surrogate models need torch: pip install torch==2.13.0 (CPU build), or pip install -e '.[surrogates]'") from err
     return torch
 
 
