@@ -155,8 +155,9 @@ def search(args) -> None:
 
 def _summary(args, rows, target: float) -> None:
     n = len(rows)
+    skips = "skips told as memo" if args.skips_as_memo else "agent counts skips"
     print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule "
-          f"{_rule_label(args.rule, args.threshold, args.miss_rate)}{', skips told as memo' if args.skips_as_memo else ', agent counts skips'} (in force: {sorted({r['rule'] for r in rows})}, "
+          f"{_rule_label(args.rule, args.threshold, args.miss_rate)}, {skips} (in force: {sorted({r['rule'] for r in rows})}, "
           f"margin {np.mean([r['margin'] or np.nan for r in rows]):.2f}), "
           f"{n} repetitions; skipped per search {np.mean([r['skipped'] for r in rows]):.0f}, low-fidelity flights "
           f"per search {np.mean([r['lowfi_runs'] for r in rows]):.0f}")

@@ -204,7 +204,8 @@ class Prescreened(Agent):
         self.skipped = []
         self.retrains = 0
         self._consecutive = 0
-        self._featurizer = self._initial.featurizer if self._initial is not None else Featurizer.for_env(self._env, self.config.lowfi)
+        self._featurizer = (self._initial.featurizer if self._initial is not None
+                            else Featurizer.for_env(self._env, self.config.lowfi))
         if self.config.rule == "lowfi" and self._featurizer.lowfi is None:
             raise SurrealistError("prescreen rule lowfi: the model has no low-fidelity features (train it with "
                                   "--lowfi)")
@@ -270,7 +271,8 @@ class Prescreened(Agent):
         entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
                       "obstacles": [o.to_list() for o in test.obstacles], "rule": rule, "told_fitness": told,
                       "after_evaluations": env.budget - env.budget_left})
-        info = {"fitness": told, "memo": not self.config.agent_counts_skips, "skipped": True, "invalid": None, "test": test,
+        info = {"fitness": told, "memo": not self.config.agent_counts_skips, "skipped": True, "invalid": None,
+                "test": test,
                 "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
                 "simulations": env._simulations, "best_fitness": None if env.best is None else env.best.fitness,
                 "predicted": prediction}
