@@ -2,7 +2,10 @@
 stored in SQLite as it completes.
 
 Run i of a test flies with a seed derived from (test, base seed, i), so the same test always gets the same runs
-and the memo is exact. Objectives turn the runs of a test into a fitness (maximised) and the terms behind it.
+and the memo is exact. Objectives turn the runs of a test into a fitness (maximised) and the terms behind it; the
+term ``first_runs_fitness`` holds the fitness of its first k runs alone (k = 1 .. n-1), so a search can judge a
+partial evaluation (``evaluate(test, runs=k)``: only the first k runs are flown; evaluating the test in full later
+flies only the rest, with the same seeds, so the result is the same as in one go).
 """
 from __future__ import annotations
 
@@ -12,7 +15,7 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
-from .fitness import average_runs, generation_fitness, is_unsafe
+from .fitness import MIN_DIST_WEIGHT, Aggregate, average_runs, generation_fitness, is_unsafe
 from .metrics import dtw, frechet
 from .store import EvaluationStore, StoredEvaluation
 from .testcase import TestCase
@@ -85,8 +88,11 @@ class ReplicationObjective:
         if not trajectories:
             return -np.inf, {}, None
         averaged = np.asarray(average_runs(trajectories, self.averaging))
+        first_runs = [-dtw(self.reference, np.asarray(average_runs(trajectories[:k], self.averaging)))
+                      for k in range(1, len(trajectories))]
         return (-dtw(self.reference, averaged),
-                {"dtw": dtw(self.reference, averaged), "frechet": frechet(self.reference, averaged)}, averaged)
+                {"dtw": dtw(self.reference, averaged), "frechet": frechet(self.reference, averaged),
+                 "first_runs_fitness": first_runs}, averaged)
 
 
 @dataclass(frozen=True)
@@ -102,8 +108,19 @@ class GenerationObjective:
         result = generation_fitness([r.trajectory for r in flown], test.obstacles, self.aggregate)
         terms = {"sum_dist": list(result.sum_dist), "min_dist": list(result.min_dist), "riskiest": result.riskiest,
                  "unsafe": sum(is_unsafe(r.min_distance_2d) for r in flown),
-                 "crash": sum(str(getattr(r.status, "value", r.status)) == "collision" for r in flown)}
+                 "crash": sum(str(getattr(r.status, "value", r.status)) == "collision" for r in flown),
+                 "first_runs_fitness": _first_runs_fitness(result)}
         return result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz)
+
+
+def _first_runs_fitness(result) -> list[float]:
+    """Generation fitness of the first k runs alone, k = 1 .. n-1, from the per-run distances."""
+    scores = np.asarray(result.sum_dist) + MIN_DIST_WEIGHT * np.asarray(result.min_dist)
+    if result.aggregate is Aggregate.RISKIEST:
+        first = np.minimum.accumulate(scores)
+    else:
+        first = np.cumsum(scores) / np.arange(1, len(scores) + 1)
+    return [float(-v) for v in first[:-1]]
 
 
 class Evaluator:
@@ -123,30 +140,50 @@ class Evaluator:
         self.executor = make_executor(executor)
         self.store = store
         self._memo: dict[str, Evaluation] = {}
+        self._flown: dict[str, list] = {}  # the runs of partial evaluations, by test key
+        self._flown_seconds: dict[str, float] = {}
         self.simulations = 0
         self.replayed_seconds = 0.0  # simulation time of the evaluations read back from the store
 
-    def evaluate(self, test: TestCase) -> Evaluation:
+    def evaluate(self, test: TestCase, runs: int | None = None) -> Evaluation:
+        """The evaluation of ``test``: from the memo, else the store, else simulated (and stored).
+
+        ``runs=k`` (< n): a partial evaluation judged on the first k runs alone (the fitness of the objective on
+        them; ``len(result.runs) == k``), neither stored nor memoised as the test's evaluation; its runs are kept, so
+        a later full evaluation of the test flies only the remaining ones. A test already evaluated in full is
+        answered from its ``first_runs_fitness`` term without flying.
+        """
+        n = self.runs if runs is None else max(1, min(int(runs), self.runs))
         key = test.key()
-        if key in self._memo:
-            return _as_cached(self._memo[key])
-        if self.store is not None:
-            stored = self.store.get(key)
-            if stored is not None:
-                evaluation = _from_stored(test, stored)
-                self.replayed_seconds += stored.sim_seconds
-                self._memo[key] = evaluation
-                return evaluation
+        known = self._memo.get(key) or self._from_store(test)
+        if known is not None:
+            return _as_cached(known) if n == self.runs else _first_runs(known, n)
+        flown = self._flown.get(key, [])
         start = time.perf_counter()
-        results = self.executor.run(test, range(self.runs), self.seed, self.sim_config)
-        sim_seconds = time.perf_counter() - start
-        self.simulations += self.runs
-        fitness, terms, trajectory = self.objective(test, results)
-        evaluation = Evaluation(test, float(fitness), tuple(RunSummary.of(r) for r in results), terms,
+        if len(flown) < n:
+            fresh = self.executor.run(test, range(len(flown), n), self.seed, self.sim_config)
+            self.simulations += len(fresh)
+            flown = flown + list(fresh)
+        sim_seconds = self._flown_seconds.pop(key, 0.0) + time.perf_counter() - start
+        fitness, terms, trajectory = self.objective(test, flown)
+        evaluation = Evaluation(test, float(fitness), tuple(RunSummary.of(r) for r in flown), terms,
                                 trajectory, cached=False, sim_seconds=sim_seconds)
+        if n < self.runs:
+            self._flown[key], self._flown_seconds[key] = flown, sim_seconds
+            return evaluation
+        self._flown.pop(key, None)
         self._memo[key] = evaluation
         if self.store is not None:
             self.store.add(_to_stored(evaluation, [self.seed] * self.runs))
+        return evaluation
+
+    def _from_store(self, test: TestCase) -> Evaluation | None:
+        stored = None if self.store is None else self.store.get(test.key())
+        if stored is None:
+            return None
+        evaluation = _from_stored(test, stored)
+        self.replayed_seconds += stored.sim_seconds
+        self._memo[test.key()] = evaluation
         return evaluation
 
     def close(self) -> None:
@@ -156,6 +193,16 @@ class Evaluator:
 def _as_cached(evaluation: Evaluation) -> Evaluation:
     return Evaluation(evaluation.test, evaluation.fitness, evaluation.runs, evaluation.terms, evaluation.trajectory,
                       cached=True)
+
+
+def _first_runs(evaluation: Evaluation, k: int) -> Evaluation:
+    """A full evaluation judged on its first k runs alone (from its ``first_runs_fitness`` term)."""
+    first = evaluation.terms.get("first_runs_fitness")
+    if not first or len(first) < k:
+        raise ValueError(f"evaluation of {evaluation.test.key()}: no fitness of its first {k} runs (stored by an "
+                         "older version?)")
+    return Evaluation(evaluation.test, float(first[k - 1]), evaluation.runs[:k], {"first_runs_fitness": first[:k - 1]},
+                      None, cached=True)
 
 
 def _to_stored(evaluation: Evaluation, seeds) -> StoredEvaluation:
