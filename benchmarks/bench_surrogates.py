@@ -70,17 +70,18 @@ def _lowfi_runs(featurizer) -> int:
 
 
 def greedy_alone(problem: str, rep: int) -> dict:
-    """Greedy's curve from its store: (evaluations, best fitness so far) after each evaluation."""
+    """Greedy's curve from its store: (simulations, best fitness so far) after each evaluation."""
     with EvaluationStore(PAPER / f"{problem}-rep{rep}.sqlite") as store:
-        fit = [-np.inf if e.fitness is None else e.fitness for e in store]
-    best = np.maximum.accumulate(fit)
-    return {"final": float(best[-1]), "evaluations": len(fit), "curve": [(i + 1, float(b)) for i, b in enumerate(best)]}
+        fit, runs = zip(*[(-np.inf if e.fitness is None else e.fitness, len(e.runs)) for e in store])
+    best, sims = np.maximum.accumulate(fit), np.cumsum(runs)
+    return {"final": float(best[-1]), "simulations": int(sims[-1]),
+            "curve": [(int(n), float(b)) for n, b in zip(sims, best)]}
 
 
-def evaluations_to_reach(curve, level: float, evaluations: int) -> tuple[int, bool]:
-    """Evaluations until the best fitness first reaches ``level``; (all evaluations, False) if it never does."""
-    reach = [e for e, best in curve if best is not None and best >= level]
-    return (reach[0], True) if reach else (evaluations, False)
+def simulations_to_reach(curve, level: float, simulations: int) -> tuple[int, bool]:
+    """Simulations until the best fitness first reaches ``level``; (all simulations, False) if it never does."""
+    reach = [n for n, best in curve if best is not None and best >= level]
+    return (reach[0], True) if reach else (simulations, False)
 
 
 def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
@@ -89,9 +90,10 @@ def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
-                counted: bool = True) -> dict:
+                counted: bool = True, first_runs: int = 0) -> dict:
     label = ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
-             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else ""))
+             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
+             + (f"-race{first_runs}" if first_runs else ""))
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -99,7 +101,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
     featurizer = _featurizer(problem, lowfi)
     config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10, retrain_every=10,
-                             lowfi=lowfi, agent_counts_skips=counted)
+                             lowfi=lowfi, agent_counts_skips=counted, first_runs=first_runs)
     if mode == "pretrained":
         others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
@@ -116,13 +118,14 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     lowfi_before = _lowfi_runs(featurizer)  # an online model featurizes with a featurizer of its own
     start = time.perf_counter()
     result = agent.run(env, seed=rep, callback=lambda info: curve.append(
-        (info["evaluations"], info["best_fitness"])))
+        (info["simulations"], info["best_fitness"])))
     row = {"final": result.best_fitness, "evaluations": result.evaluations,
            "to_best": result.evaluations_to_best, "skipped": len(agent.skipped), "retrains": agent.retrains,
-           "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations, "runs": env.unwrapped.evaluator.runs,
+           "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations,
+           "simulations": env.unwrapped._simulations, "raced": sum(s["rule"] == "race" for s in agent.skipped),
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
            "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
-           "rule": agent.rule, "margin": agent.margin}
+           "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin}
     env.close()
     cached.write_text(json.dumps(row))
     return row
@@ -136,18 +139,17 @@ def search(args) -> None:
     rows = []
     for rep, g in enumerate(greedy):
         p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
-                        args.miss_rate, not args.skips_as_memo)
-        runs = p["runs"]
-        g_own, _ = evaluations_to_reach(g["curve"], g["final"], g["evaluations"])
-        p_own, reached = evaluations_to_reach(p["curve"], g["final"], p["evaluations"])
-        g_common, g_hit = evaluations_to_reach(g["curve"], target, g["evaluations"])
-        p_common, p_hit = evaluations_to_reach(p["curve"], target, p["evaluations"])
-        row = {"rep": rep, "greedy_final": g["final"], "greedy_sims": g_own * runs, "pre_final": p["final"],
-               "pre_sims_to_reach": p_own * runs, "reached": reached, "greedy_sims_to_target": g_common * runs,
-               "greedy_hit_target": g_hit, "pre_sims_to_target": p_common * runs, "pre_hit_target": p_hit,
-               "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "wall_s": p["wall_s"],
-               "new_simulations": p["new_simulations"], "lowfi_runs": p.get("lowfi_runs", 0),
-               "rule": p.get("rule"), "margin": p.get("margin")}
+                        args.miss_rate, not args.skips_as_memo, args.first_runs)
+        g_own, _ = simulations_to_reach(g["curve"], g["final"], g["simulations"])
+        p_own, reached = simulations_to_reach(p["curve"], g["final"], p["simulations"])
+        g_common, g_hit = simulations_to_reach(g["curve"], target, g["simulations"])
+        p_common, p_hit = simulations_to_reach(p["curve"], target, p["simulations"])
+        row = {"rep": rep, "greedy_final": g["final"], "greedy_sims": g_own, "pre_final": p["final"],
+               "pre_sims_to_reach": p_own, "reached": reached, "greedy_sims_to_target": g_common,
+               "greedy_hit_target": g_hit, "pre_sims_to_target": p_common, "pre_hit_target": p_hit,
+               "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "raced": p["raced"],
+               "wall_s": p["wall_s"], "new_simulations": p["new_simulations"], "lowfi_runs": p.get("lowfi_runs", 0),
+               "rule": p.get("rule"), "margin": p.get("margin"), "race_margin": p.get("race_margin")}
         rows.append(row)
         print(json.dumps(row), flush=True)
     _summary(args, rows, target)
@@ -156,9 +158,12 @@ def search(args) -> None:
 def _summary(args, rows, target: float) -> None:
     n = len(rows)
     skips = "skips told as memo" if args.skips_as_memo else "agent counts skips"
+    race_margin = np.nanmean([r["race_margin"] or np.nan for r in rows])
+    racing = (f"on the first {args.first_runs} runs (margin {race_margin:.2f}, dropped per search "
+              f"{np.mean([r['raced'] for r in rows]):.0f})" if args.first_runs else "off")
     print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule "
           f"{_rule_label(args.rule, args.threshold, args.miss_rate)}, {skips} (in force: {sorted({r['rule'] for r in rows})}, "
-          f"margin {np.mean([r['margin'] or np.nan for r in rows]):.2f}), "
+          f"margin {np.mean([r['margin'] or np.nan for r in rows]):.2f}), racing {racing}, "
           f"{n} repetitions; skipped per search {np.mean([r['skipped'] for r in rows]):.0f}, low-fidelity flights "
           f"per search {np.mean([r['lowfi_runs'] for r in rows]):.0f}")
     for label, gk, pk, hits in (
@@ -222,6 +227,8 @@ def main() -> None:
     parser.add_argument("--skips-as-memo", action="store_true",
                         help="tell skips to the greedy as memo answers (not charged to its local budgets; "
                              "agent_counts_skips=False)")
+    parser.add_argument("--first-runs", type=int, default=0,
+                        help="racing: fly this many runs of a candidate first, the rest only if they do not fall short")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],

@@ -151,12 +151,12 @@ class Evaluator:
         ``runs=k`` (< n): a partial evaluation judged on the first k runs alone (the fitness of the objective on
         them; ``len(result.runs) == k``), neither stored nor memoised as the test's evaluation; its runs are kept, so
         a later full evaluation of the test flies only the remaining ones. A test already evaluated in full is
-        answered from its ``first_runs_fitness`` term without flying.
+        answered from its ``first_runs_fitness`` term without flying (one stored without it flies its first runs).
         """
         n = self.runs if runs is None else max(1, min(int(runs), self.runs))
         key = test.key()
         known = self._memo.get(key) or self._from_store(test)
-        if known is not None:
+        if known is not None and (n == self.runs or len(known.terms.get("first_runs_fitness") or ()) >= n):
             return _as_cached(known) if n == self.runs else _first_runs(known, n)
         flown = self._flown.get(key, [])
         start = time.perf_counter()
@@ -197,10 +197,7 @@ def _as_cached(evaluation: Evaluation) -> Evaluation:
 
 def _first_runs(evaluation: Evaluation, k: int) -> Evaluation:
     """A full evaluation judged on its first k runs alone (from its ``first_runs_fitness`` term)."""
-    first = evaluation.terms.get("first_runs_fitness")
-    if not first or len(first) < k:
-        raise ValueError(f"evaluation of {evaluation.test.key()}: no fitness of its first {k} runs (stored by an "
-                         "older version?)")
+    first = evaluation.terms["first_runs_fitness"]
     return Evaluation(evaluation.test, float(first[k - 1]), evaluation.runs[:k], {"first_runs_fitness": first[:k - 1]},
                       None, cached=True)
 

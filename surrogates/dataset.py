@@ -235,6 +235,8 @@ class Dataset:
         groups: (n,) index of the store each row comes from (for held-out splits by store).
         keys: test key of each row.
         names: feature names.
+        first_runs: (n, runs - 1) fitness of each test's first k runs alone (column k-1; NaN when not stored), to
+            calibrate racing (:mod:`surrogates.prescreen`).
     """
 
     X: np.ndarray
@@ -243,6 +245,11 @@ class Dataset:
     groups: np.ndarray
     keys: tuple[str, ...]
     names: tuple[str, ...] = field(default=())
+    first_runs: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.first_runs is None:
+            object.__setattr__(self, "first_runs", np.full((len(self.X), 0), np.nan))
 
     def __len__(self) -> int:
         return len(self.X)
@@ -251,7 +258,7 @@ class Dataset:
         """The rows selected by a boolean mask or index array."""
         idx = np.arange(len(self))[mask]
         return Dataset(self.X[idx], {k: v[idx] for k, v in self.targets.items()}, self.trajectories[idx],
-                       self.groups[idx], tuple(self.keys[i] for i in idx), self.names)
+                       self.groups[idx], tuple(self.keys[i] for i in idx), self.names, self.first_runs[idx])
 
     def concat(self, other: "Dataset") -> "Dataset":
         """The rows of both datasets (same features); the other's store indices follow this one's."""
@@ -261,7 +268,8 @@ class Dataset:
         return Dataset(np.concatenate([self.X, other.X]),
                        {k: np.concatenate([v, other.targets[k]]) for k, v in self.targets.items()},
                        np.concatenate([self.trajectories, other.trajectories]),
-                       np.concatenate([self.groups, other.groups + offset]), self.keys + other.keys, self.names)
+                       np.concatenate([self.groups, other.groups + offset]), self.keys + other.keys, self.names,
+                       stack_rows([*self.first_runs, *other.first_runs]))
 
     def target(self, name: str = "fitness") -> tuple[np.ndarray, np.ndarray]:
         """``(X, y)`` for one target, without the rows whose value is unknown (fitness of an unflown test)."""
@@ -274,7 +282,7 @@ class Dataset:
 
 def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
     """A dataset from one or more evaluation stores (paths or EvaluationStore) searched on one problem."""
-    X, fit, mind, unsafe, crash, trajs, groups, keys = [], [], [], [], [], [], [], []
+    X, fit, mind, unsafe, crash, trajs, groups, keys, first = [], [], [], [], [], [], [], [], []
     for g, source in enumerate(stores):
         store = source if isinstance(source, EvaluationStore) else _open(source)
         try:
@@ -290,6 +298,7 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
                 unsafe.append(sum(float(r["min_distance_2d"]) < UNSAFE_DISTANCE for r in runs) / n)
                 crash.append(sum(r.get("status") == "collision" for r in runs) / n)
                 trajs.append(_resample((ev.info or {}).get("trajectory")))
+                first.append(((ev.info or {}).get("terms") or {}).get("first_runs_fitness") or [])
                 groups.append(g)
                 keys.append(ev.test_key)
         finally:
@@ -299,7 +308,16 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
         raise DatasetError(f"{', '.join(map(str, stores))}: no evaluations stored")
     return Dataset(np.asarray(X), {"fitness": np.asarray(fit), "min_distance": np.asarray(mind),
                                    "unsafe": np.asarray(unsafe), "crash": np.asarray(crash)},
-                   np.asarray(trajs), np.asarray(groups), tuple(keys), tuple(featurizer.names))
+                   np.asarray(trajs), np.asarray(groups), tuple(keys), tuple(featurizer.names), stack_rows(first))
+
+
+def stack_rows(rows) -> np.ndarray:
+    """Rows of different lengths as one float matrix padded with NaN."""
+    width = max((len(r) for r in rows), default=0)
+    out = np.full((len(rows), width), np.nan)
+    for i, r in enumerate(rows):
+        out[i, :len(r)] = np.asarray(r, dtype=np.float64)
+    return out
 
 
 def _open(path) -> EvaluationStore:

@@ -220,6 +220,7 @@ class SurrogateModel:
         self.train_X: np.ndarray | None = None
         self.train_y: np.ndarray | None = None
         self.train_groups: np.ndarray | None = None  # the store (search) each training row comes from
+        self.train_first_runs: np.ndarray | None = None  # fitness of each row's first k runs (racing calibration)
         self.metrics: dict = {}
 
     # --- scale ---------------------------------------------------------------------------------------------------
@@ -233,13 +234,16 @@ class SurrogateModel:
         return -np.expm1(-t) if self.log_scale else t
 
     # --- training and prediction -----------------------------------------------------------------------------
-    def fit(self, X: np.ndarray, y: np.ndarray, groups=None) -> "SurrogateModel":
+    def fit(self, X: np.ndarray, y: np.ndarray, groups=None, first_runs=None) -> "SurrogateModel":
         """Train on features X and raw target values y (fitness etc.); ``groups`` names the search each row comes
-        from (rows of one search in the order evaluated; default: all one search)."""
+        from (rows of one search in the order evaluated; default: all one search); ``first_runs`` (rows, k) the
+        fitness of each row's first 1..k runs alone, kept to calibrate racing (not a feature)."""
         X, y = np.asarray(X, dtype=np.float64), np.asarray(y, dtype=np.float64)
         groups = np.zeros(len(y), dtype=np.int64) if groups is None else np.asarray(groups, dtype=np.int64)
+        first_runs = np.full((len(y), 0), np.nan) if first_runs is None else np.asarray(first_runs, dtype=np.float64)
         ok = np.isfinite(y)
         X, y, groups = X[ok], y[ok], groups[ok]
+        self.train_first_runs = first_runs.reshape(len(ok), -1)[ok]
         if len(y) < 2:
             raise SurrealistError(f"surrogate: need at least 2 evaluations with a known {self.target}, got {len(y)}")
         self.log_scale = self.target == "fitness" and bool((y <= 0).all())
@@ -249,7 +253,7 @@ class SurrogateModel:
 
     def fit_dataset(self, dataset: Dataset) -> "SurrogateModel":
         dataset.target(self.target)  # checks the name
-        return self.fit(dataset.X, dataset.targets[self.target], dataset.groups)
+        return self.fit(dataset.X, dataset.targets[self.target], dataset.groups, dataset.first_runs)
 
     def predict(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mean and standard deviation on the modelled scale (see :meth:`to_scale`)."""
@@ -274,7 +278,8 @@ class SurrogateModel:
         tensors = {f"regressor.{k}": torch.as_tensor(np.asarray(v)) if not torch.is_tensor(v) else v
                    for k, v in self.regressor.state.items()}
         tensors.update({"train_X": torch.as_tensor(self.train_X), "train_y": torch.as_tensor(self.train_y),
-                        "train_groups": torch.as_tensor(self.train_groups)})
+                        "train_groups": torch.as_tensor(self.train_groups),
+                        "train_first_runs": torch.as_tensor(self.train_first_runs)})
         torch.save(tensors, out / "weights.pt")
         meta = {"format": FORMAT, "kind": self.kind, "target": self.target, "seed": self.seed,
                 "log_scale": self.log_scale, "config": asdict(self.regressor.config),
@@ -303,6 +308,9 @@ class SurrogateModel:
             model.regressor.state = state
             model.train_X, model.train_y = tensors["train_X"].numpy(), tensors["train_y"].numpy()
             model.train_groups = tensors["train_groups"].numpy()
+            first_runs = tensors.get("train_first_runs")
+            model.train_first_runs = (np.full((len(model.train_y), 0), np.nan) if first_runs is None
+                                      else first_runs.numpy())
             model.log_scale = bool(meta["log_scale"])
             model.metrics = meta.get("metrics", {})
         except SurrealistError:

@@ -46,7 +46,7 @@ import numpy as np
 from search.base import Agent, SearchResult
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
 
-from .dataset import Featurizer
+from .dataset import Featurizer, stack_rows
 from .lowfi import FITNESS as LOWFI_FITNESS
 from .models import SurrogateModel
 
@@ -55,19 +55,20 @@ RULES = ("auto", "lowfi", "ei", "pi")
 MIN_IMPROVEMENTS = 10  # improvements needed in the training data to calibrate the low-fidelity margin
 
 
-def lowfi_margin(lowfi_fitness, fitness, groups, miss_rate: float = 0.02) -> float | None:
-    """The low-fidelity shortfall that only ``miss_rate`` of the real improvements of past searches exceeded.
+def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | None:
+    """The shortfall in a cheap proxy of the fitness (the low-fidelity fitness, or the fitness of the first runs)
+    that only ``miss_rate`` of the real improvements of past searches exceeded.
 
     Each search (rows of one group, in the order evaluated) is replayed: an improvement is a real fitness above the
-    best so far, its shortfall the incumbent's low-fidelity fitness minus its own. None with fewer than
-    ``MIN_IMPROVEMENTS`` improvements.
+    best so far, its shortfall the incumbent's proxy minus its own. Rows whose proxy is unknown (NaN) are skipped.
+    None with fewer than ``MIN_IMPROVEMENTS`` improvements.
     """
-    lowfi_fitness, fitness, groups = (np.asarray(a) for a in (lowfi_fitness, fitness, groups))
+    proxy, fitness, groups = (np.asarray(a) for a in (proxy, fitness, groups))
     shortfalls = []
     for group in np.unique(groups):
         best, incumbent = -np.inf, None
-        rows = groups == group
-        for low, real in zip(lowfi_fitness[rows], fitness[rows]):
+        rows = (groups == group) & np.isfinite(proxy)
+        for low, real in zip(proxy[rows], fitness[rows]):
             if real > best:
                 if incumbent is not None:
                     shortfalls.append(incumbent - low)
@@ -78,11 +79,21 @@ def lowfi_margin(lowfi_fitness, fitness, groups, miss_rate: float = 0.02) -> flo
 
 
 def model_margin(model: SurrogateModel, miss_rate: float = 0.02) -> float | None:
-    """:func:`lowfi_margin` on a model's training data; None for a model without low-fidelity features."""
+    """:func:`replay_margin` of the low-fidelity fitness on a model's training data; None for a model without
+    low-fidelity features."""
     names = model.featurizer.names
     if LOWFI_FITNESS not in names:
         return None
-    return lowfi_margin(model.train_X[:, names.index(LOWFI_FITNESS)], model.train_y, model.train_groups, miss_rate)
+    return replay_margin(model.train_X[:, names.index(LOWFI_FITNESS)], model.train_y, model.train_groups, miss_rate)
+
+
+def race_margin(model: SurrogateModel, first_runs: int, miss_rate: float = 0.02) -> float | None:
+    """:func:`replay_margin` of the fitness of the first ``first_runs`` runs on a model's training data; None when
+    its stores hold no such fitness."""
+    first = model.train_first_runs
+    if first is None or first.shape[1] < first_runs:
+        return None
+    return replay_margin(first[:, first_runs - 1], model.train_y, model.train_groups, miss_rate)
 
 
 @dataclass(frozen=True, slots=True)
@@ -109,6 +120,11 @@ class PrescreenConfig:
             the greedy does not charge); the env's budget counts real simulations either way.
         lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
             candidate screened; see :mod:`surrogates.lowfi`).
+        first_runs: racing: a candidate that passes the screen first flies only this many of its runs, and the
+            rest only if the fitness of those runs falls short of the incumbent's first runs by no more than
+            ``race_margin`` (0: off; must be below the env's runs).
+        race_margin: racing's margin (fitness units); None calibrates it like the ``lowfi`` margin, on the
+            model's training stores and the episode's evaluations (see ``miss_rate``).
     """
 
     rule: str = "auto"
@@ -122,12 +138,16 @@ class PrescreenConfig:
     kind: str = "ensemble"
     agent_counts_skips: bool = True
     lowfi: bool = True
+    first_runs: int = 0
+    race_margin: float | None = None
 
     def __post_init__(self):
         if self.rule not in RULES:
             raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
         if not 0.0 <= self.miss_rate < 1.0:
             raise ValueError(f"prescreen miss_rate: expected a share in [0, 1), got {self.miss_rate!r}")
+        if self.first_runs < 0:
+            raise ValueError(f"prescreen first_runs: expected 0 (off) or a number of runs, got {self.first_runs!r}")
 
 
 class Prescreened(Agent):
@@ -151,6 +171,7 @@ class Prescreened(Agent):
         self._initial = None if isinstance(model, str) else model
         self.model: SurrogateModel | None = None
         self.margin: float | None = None
+        self.race_margin: float | None = None
         self.skipped: list[dict] = []
         self.retrains = 0
 
@@ -181,8 +202,11 @@ class Prescreened(Agent):
                 if done:
                     break
                 skip = self._screen(candidates[i], tests[i], predictions[i], best, incumbent.get("test"))
+                if skip is None and tests[i] is not None:
+                    skip = self._race(candidates[i], tests[i], best, incumbent)
                 if skip is not None:
                     results[i] = (candidates[i], skip["told_fitness"], skip["info"])
+                    done = self._env.budget_left <= 0
                     continue
                 reward, step_info, done = self._step(env, candidates[i], callback)
                 results[i] = (candidates[i], reward, step_info)
@@ -213,7 +237,9 @@ class Prescreened(Agent):
         self._y: list[float] = []
         self._since_retrain = 0
         self.model = self._initial
+        self._first: list[list[float]] = []
         self.margin = self._calibrated_margin()
+        self.race_margin = self._calibrated_race_margin()
         self._add_point(info)
 
     def _ask(self) -> list[np.ndarray]:  # the inner agent's candidates (run() tells back the simulated ones)
@@ -266,11 +292,15 @@ class Prescreened(Agent):
             return None
         self._consecutive += 1
         entry, told = verdict
+        return self._skip(action, test, rule, entry, told, best_fitness, prediction)
+
+    def _skip(self, action, test, rule: str, entry: dict, told: float, best_fitness: float, prediction=None) -> dict:
+        """Log a skipped candidate; returns what the inner agent is told (a fitness below the best)."""
         told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
         env = self._env
         entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
                       "obstacles": [o.to_list() for o in test.obstacles], "rule": rule, "told_fitness": told,
-                      "after_evaluations": env.budget - env.budget_left})
+                      "after_evaluations": env.budget - env.budget_left, "simulations": env._simulations})
         info = {"fitness": told, "memo": not self.config.agent_counts_skips, "skipped": True, "invalid": None,
                 "test": test,
                 "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
@@ -280,6 +310,22 @@ class Prescreened(Agent):
                  {k: round(v, 3) for k, v in entry.items() if isinstance(v, float)})
         self.skipped.append(entry)
         return {"told_fitness": told, "info": info}
+
+    def _race(self, action, test, best_fitness: float, incumbent: dict) -> dict | None:
+        """Racing: fly the candidate's first runs; None to fly the rest (the candidate is stepped on), else the
+        log entry of a candidate dropped because those runs fall short of the incumbent's first runs by more than
+        the margin (the inner agent is told the best minus that shortfall)."""
+        k = self.config.first_runs
+        theirs = (incumbent.get("terms") or {}).get("first_runs_fitness") or []
+        if not k or self.race_margin is None or len(theirs) < k:
+            return None
+        fitness, _ = self._env.probe(action, k)
+        shortfall = float(theirs[k - 1] - fitness)
+        if not shortfall > self.race_margin:
+            return None
+        entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
+                 "race_margin": self.race_margin}
+        return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness)
 
     def _lowfi_verdict(self, test, incumbent, best_fitness: float) -> tuple[dict, float] | None:
         """Skip when the low-fidelity fitness falls short of the incumbent's by more than the margin; the inner
@@ -321,6 +367,18 @@ class Prescreened(Agent):
             return float(self.config.margin)
         return None if self.model is None else model_margin(self.model, self.config.miss_rate)
 
+    def _calibrated_race_margin(self) -> float | None:
+        """Racing's margin: the configured one, else calibrated on the model's training data."""
+        k = self.config.first_runs
+        if not k:
+            return None
+        if k >= self._env.evaluator.runs:
+            raise SurrealistError(f"prescreen first_runs: {k} must be below the env's runs "
+                                  f"({self._env.evaluator.runs})")
+        if self.config.race_margin is not None:
+            return float(self.config.race_margin)
+        return None if self.model is None else race_margin(self.model, k, self.config.miss_rate)
+
     # --- online training -----------------------------------------------------------------------------------------
     def _add_point(self, info: dict) -> None:
         test, fitness = info.get("test"), info.get("fitness")
@@ -328,6 +386,7 @@ class Prescreened(Agent):
             return
         self._X.append(self._featurizer.features(test.obstacles))
         self._y.append(float(fitness))
+        self._first.append(list((info.get("terms") or {}).get("first_runs_fitness") or []))
         self._since_retrain += 1
 
     def _maybe_retrain(self) -> None:
@@ -340,17 +399,20 @@ class Prescreened(Agent):
         if self.model is not None and self._since_retrain < max(cfg.retrain_every, 1):
             return
         X, y = np.asarray(self._X), np.asarray(self._y)
+        first = stack_rows(self._first)
         groups = np.zeros(len(y), dtype=np.int64)  # the episode is one search
         if self._initial is not None:
             X = np.concatenate([self._initial.train_X, X])
             y = np.concatenate([self._initial.train_y, y])
+            first = stack_rows([*self._initial.train_first_runs, *first])
             groups = np.concatenate([self._initial.train_groups, groups + int(self._initial.train_groups.max()) + 1])
             kind, config = self._initial.kind, asdict(self._initial.regressor.config)
         else:
             kind, config = cfg.kind, None
         model = SurrogateModel(self._featurizer, kind, "fitness", config, seed=(self.seed or 0) + self.retrains)
-        self.model = model.fit(X, y, groups)
+        self.model = model.fit(X, y, groups, first)
         self.margin = self._calibrated_margin()
+        self.race_margin = self._calibrated_race_margin()
         self.retrains += 1
         self._since_retrain = 0
         log.info("surrogate retrained on %d evaluations", len(y))

@@ -10,7 +10,7 @@ from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
 from surrogates.dataset import load_dataset
 from surrogates.models import train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened, lowfi_margin, wrap
+from surrogates.prescreen import PrescreenConfig, Prescreened, replay_margin, wrap
 
 BUDGET = 4
 
@@ -89,15 +89,15 @@ def test_free_then_most_promising_candidates_first(model):
     assert order[1:] == sorted([0, 1], key=lambda i: -means[i])
 
 
-def test_lowfi_margin_replays_each_search_in_order():
+def test_replay_margin_replays_each_search_in_order():
     # two searches of 12 evaluations: real fitness rises each step, the low-fidelity fitness of each improvement
     # falls short of its incumbent's by 0, 1, ..., 10 (search 0) and 0 (search 1: it must not inherit search 0's best)
     real = np.concatenate([np.arange(12.0), np.arange(12.0) - 100])
     low = np.concatenate([-np.cumsum(np.r_[0.0, np.arange(11.0)]), np.zeros(12)])
     groups = np.repeat([0, 1], 12)
     shortfalls = np.r_[np.arange(11.0), np.zeros(11)]
-    assert lowfi_margin(low, real, groups, miss_rate=0.1) == pytest.approx(np.quantile(shortfalls, 0.9))
-    assert lowfi_margin(low[:8], real[:8], groups[:8]) is None  # too few improvements to calibrate
+    assert replay_margin(low, real, groups, miss_rate=0.1) == pytest.approx(np.quantile(shortfalls, 0.9))
+    assert replay_margin(low[:8], real[:8], groups[:8]) is None  # too few improvements to calibrate
 
 
 @pytest.fixture(scope="module")
