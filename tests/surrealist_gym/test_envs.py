@@ -96,3 +96,25 @@ def test_replicate_from_a_log_without_seed_places_the_papers_box():
     box = seed.obstacles[0]
     assert (box.l, box.w, box.h) == (3.0, 3.0, 3.0)
     assert box.x == pytest.approx(-17.0 / 2, abs=0.6) and box.y == pytest.approx(6.8 / 2, abs=0.6)
+
+
+def test_probe_flies_the_first_runs_and_step_only_the_rest(tmp_path):
+    action = [4.0, -1.0]
+    whole = make("Surrealist-Generate-v0", budget=5, runs=3).unwrapped
+    whole.reset(seed=0)
+    _, fitness, _, _, info = whole.step(whole.action_for(action))
+    first = info["terms"]["first_runs_fitness"]
+    assert len(first) == 2 and first[0] <= first[1] + 1e-12 and first[1] <= fitness + 1e-12  # riskiest so far
+
+    env = make("Surrealist-Generate-v0", budget=5, runs=3, store=tmp_path / "e.sqlite").unwrapped
+    env.reset(seed=0)
+    probed, pinfo = env.probe(env.action_for(action), 2)
+    assert probed == pytest.approx(first[1]) and pinfo["runs"] == 2
+    assert env.evaluator.simulations == 3 + 2 and pinfo["simulations"] == 5
+    assert env.budget_left == 5 - 1  # two runs of three do not make an evaluation yet
+    assert len(list(EvaluationStore(tmp_path / "e.sqlite"))) == 1  # a partial evaluation is not stored
+    _, stepped, _, _, sinfo = env.step(env.action_for(action))
+    assert stepped == fitness and env.evaluator.simulations == 6 and sinfo["simulations"] == 6
+    assert env.budget_left == 5 - 2
+    again, _ = env.probe(env.action_for(action), 1)  # evaluated in full: answered from its first_runs_fitness term
+    assert again == pytest.approx(first[0]) and env.evaluator.simulations == 6

@@ -121,3 +121,24 @@ def test_lowfi_rule_needs_low_fidelity_features(model):
     agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig(rule="lowfi"), seed=0)
     with pytest.raises(SurrealistError, match="low-fidelity"):
         agent.run(_env(), seed=0)
+
+
+def test_racing_drops_candidates_whose_first_runs_fall_short():
+    env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline")
+    config = PrescreenConfig(rule="ei", first_runs=1, race_margin=0.0, lowfi=False)
+    agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
+    result = agent.run(env, seed=0)
+    raced = [s for s in agent.skipped if s["rule"] == "race"]
+    assert raced, "a zero margin must drop candidates whose first run is worse than the incumbent's"
+    for entry in raced:
+        assert entry["race_shortfall"] > 0 and entry["told_fitness"] < result.best_fitness
+    sims = env.unwrapped.evaluator.simulations
+    assert sims == 3 * result.evaluations + len(raced)  # a dropped candidate cost its first run only
+    assert env.unwrapped.budget_left >= 0
+
+
+def test_racing_needs_fewer_first_runs_than_runs():
+    env = gym.make("Surrealist-Generate-v0", budget=2, runs=2, executor="inline")
+    agent = Prescreened(AdaptiveGreedy("paper"), "online", PrescreenConfig(first_runs=2, lowfi=False), seed=0)
+    with pytest.raises(SurrealistError, match="first_runs"):
+        agent.run(env, seed=0)
