@@ -30,6 +30,9 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
     parser.add_argument("--surrogate", default=None, metavar="MODEL|online",
                         help="pre-screen mutations with a surrogate model folder (surrealist surrogate train) "
                              "or one trained online; skipped candidates cost no simulations")
+    parser.add_argument("--first-runs", type=int, default=0, metavar="K",
+                        help="racing (with a surrogate; default online): fly K runs of a candidate first and the "
+                             "rest only if they do not fall clearly short of the best test's first K runs")
     parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
     parser.add_argument("--resume", default=None, metavar="DIR",
                         help="resume an interrupted search from its results folder (same options)")
@@ -64,6 +67,9 @@ def prepare(args, command: str, keys: tuple[str, ...]) -> tuple[Path, dict]:
         from search.registry import make_agent
 
         make_agent(args.agent)  # an unknown agent fails here, before any folder or worker exists
+    if not 0 <= (getattr(args, "first_runs", 0) or 0) < args.runs:
+        raise SurrealistError(f"--first-runs: expected a number of runs below --runs ({args.runs}), "
+                              f"got {args.first_runs}")
     out = Path(args.out or f"results/{command}-{datetime.now():%Y%m%d-%H%M%S}")
     options = {"command": command, **{k: getattr(args, k) for k in keys}}
     for key in ("log", "test", "seed"):
@@ -89,10 +95,11 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
         from search.registry import make_agent
 
         agent = make_agent(name, seed=options["random_seed"])
-    if options.get("surrogate"):
-        from surrogates.prescreen import wrap
+    first_runs = options.get("first_runs") or 0
+    if options.get("surrogate") or first_runs:
+        from surrogates.prescreen import PrescreenConfig, wrap
 
-        agent = wrap(agent, options["surrogate"], env)
+        agent = wrap(agent, options.get("surrogate") or "online", env, PrescreenConfig(first_runs=first_runs))
     bar = tqdm(total=options["budget"], unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)
     start = time.perf_counter()
@@ -114,8 +121,10 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     summary = write_results(out, env, result, time.perf_counter() - start, problem)
     if hasattr(agent, "skipped"):
         (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
-        print(f"pre-screening ({agent.rule}): {len(agent.skipped)} candidates skipped without a simulation "
-              f"(skipped.json)")
+        raced = sum(s["rule"] == "race" for s in agent.skipped)
+        print(f"pre-screening ({agent.rule}): {len(agent.skipped) - raced} candidates skipped without a simulation"
+              + (f", {raced} dropped after their first {first_runs} runs (racing margin {agent.race_margin:.2f})"
+                 if first_runs and agent.race_margin is not None else "") + " (skipped.json)")
     env.close()
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
           f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "

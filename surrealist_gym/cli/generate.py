@@ -4,7 +4,7 @@ from __future__ import annotations
 from ._search import add_search_arguments, executor_of, new_search_folder, run_search
 
 KEYS = ("test", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed",
-        "surrogate", "agent", "aggregate", "all_mutators")
+        "surrogate", "first_runs", "agent", "aggregate", "all_mutators")
 
 
 def add_arguments(parser) -> None:
