@@ -2,6 +2,7 @@
 
     python benchmarks/bench_surrogates.py search --problem rq1-seed1 --repetitions 10 --mode pretrained --lowfi
     python benchmarks/bench_surrogates.py accuracy --problem rq1-seed1 [--lowfi]
+    python benchmarks/bench_surrogates.py race-replay --problem rq2
 
 ``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
 budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
@@ -213,9 +214,54 @@ def accuracy(args) -> None:
               f"pooled out-of-fold Spearman {spearmanr(pooled[ok], y[ok]).statistic:.3f} ({ok.sum()} evaluations)")
 
 
+def race_replay(args) -> None:
+    """Racing replayed on greedy alone's stores: for each repetition, a margin calibrated on the other repetitions
+    (:func:`replay_margin` of the first-k fitness); a candidate is dropped when the incumbent's first-k fitness
+    exceeds its own by more than the margin. Printed per k: the share of simulations saved and of real improvements
+    missed. An estimate only: a real search that drops a candidate walks on differently."""
+    from surrogates.prescreen import replay_margin
+
+    stores = _stores(args.problem, range(args.repetitions))
+    searches = []
+    for path in stores:
+        with EvaluationStore(path) as store:
+            rows = [(e.fitness, len(e.runs), ((e.info or {}).get("terms") or {}).get("first_runs_fitness"))
+                    for e in store if e.fitness is not None]
+        if any(first is None for *_, first in rows):
+            raise SystemExit(f"{path}: evaluations without first_runs_fitness; rerun benchmarks/reproduce_paper.py")
+        searches.append(rows)
+    runs = max(n for rows in searches for _, n, _ in rows)
+    print(f"{args.problem}: {len(searches)} stores, {sum(map(len, searches))} evaluations of {runs} runs; "
+          f"margins at miss rate {args.miss_rate:g}, leave-one-repetition-out")
+    for k in range(1, runs):
+        saved = total = missed = improvements = 0
+        margins = []
+        for held, rows in enumerate(searches):
+            others = [r for i, s in enumerate(searches) if i != held for r in s]
+            groups = [i for i, s in enumerate(searches) if i != held for _ in s]
+            margin = replay_margin([r[2][k - 1] for r in others], [r[0] for r in others], groups, args.miss_rate)
+            if margin is None:
+                continue
+            margins.append(margin)
+            best, incumbent = -np.inf, None
+            for fitness, n, first in rows:
+                total += n
+                improves = fitness > best
+                improvements += improves
+                if incumbent is not None and incumbent - first[k - 1] > margin:
+                    saved += n - k
+                    missed += improves
+                    continue
+                if improves:
+                    best, incumbent = fitness, first[k - 1]
+        if margins:
+            print(f"first {k} runs: margin {np.mean(margins):.2f}, simulations saved {saved / total:.0%}, "
+                  f"improvements missed {missed}/{improvements}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=["search", "accuracy"])
+    parser.add_argument("what", choices=["search", "accuracy", "race-replay"])
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
@@ -238,7 +284,7 @@ def main() -> None:
     if args.also == args.problem:
         parser.error("--also must name the OTHER seed (the held-out repetition would leak into training)")
     warnings.simplefilter("ignore")
-    search(args) if args.what == "search" else accuracy(args)
+    {"search": search, "accuracy": accuracy, "race-replay": race_replay}[args.what](args)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
 from surrogates.dataset import load_dataset
 from surrogates.models import train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened, replay_margin, wrap
+from surrogates.prescreen import PrescreenConfig, Prescreened, race_margin, replay_margin, wrap
 
 BUDGET = 4
 
@@ -142,3 +142,13 @@ def test_racing_needs_fewer_first_runs_than_runs():
     agent = Prescreened(AdaptiveGreedy("paper"), "online", PrescreenConfig(first_runs=2, lowfi=False), seed=0)
     with pytest.raises(SurrealistError, match="first_runs"):
         agent.run(env, seed=0)
+
+
+def test_race_margin_is_calibrated_on_the_first_runs_of_real_stores(rq1_stores, replicate_featurizer):
+    data = load_dataset(rq1_stores, replicate_featurizer)
+    assert data.first_runs.shape == (len(data), 4) and np.isfinite(data.first_runs).all()
+    model = train_model(data, replicate_featurizer, "knn", seed=0)
+    margins = [race_margin(model, k) for k in (1, 4)]
+    assert all(m is not None and m >= 0 for m in margins)
+    assert margins[0] > margins[1]  # one run of five is a noisier proxy of the fitness than four
+    assert race_margin(model, 5) is None  # no proxy for all five runs: that is the fitness itself
