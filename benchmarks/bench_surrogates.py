@@ -21,6 +21,9 @@ Two measures, each with the Mann-Whitney/ANOVA p-value and A12, then the final f
   never reaches it counts all its simulations: censored, which favours the run that stopped early);
 * simulations until the best fitness reaches a common level, greedy alone's mean final fitness, for both agents
   alike (censored the same way).
+Both are printed again strictly censored: a run that never gets there counts the whole budget's simulations
+(budget x runs = 500), as if it needed at least the budget. The pre-screened greedy runs with
+``PrescreenConfig.verify_stop`` (the default; ``--no-verify-stop`` turns it off).
 
 ``accuracy``: leave-one-repetition-out over the 10 stores of the problem: for each repetition, a model trained on
 the other nine predicts it; printed are the Spearman rank correlation per held-out repetition, their mean, and the
@@ -91,10 +94,10 @@ def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
-                counted: bool = True, first_runs: int = 0) -> dict:
+                counted: bool = True, first_runs: int = 0, verify_stop: bool = True) -> dict:
     label = ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
              + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
-             + (f"-race{first_runs}" if first_runs else ""))
+             + (f"-race{first_runs}" if first_runs else "") + ("-verify" if verify_stop else ""))
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -102,7 +105,8 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
     featurizer = _featurizer(problem, lowfi)
     config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10, retrain_every=10,
-                             lowfi=lowfi, agent_counts_skips=counted, first_runs=first_runs)
+                             lowfi=lowfi, agent_counts_skips=counted, first_runs=first_runs,
+                             verify_stop=verify_stop)
     if mode == "pretrained":
         others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
@@ -126,7 +130,8 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
            "simulations": env.unwrapped._simulations, "raced": sum(s["rule"] == "race" for s in agent.skipped),
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
            "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
-           "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin}
+           "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin,
+           "verified_at": agent.verified_at, "budget_simulations": env.unwrapped.budget * env.unwrapped.runs}
     env.close()
     cached.write_text(json.dumps(row))
     return row
@@ -140,7 +145,8 @@ def search(args) -> None:
     rows = []
     for rep, g in enumerate(greedy):
         p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
-                        args.miss_rate, not args.skips_as_memo, args.first_runs)
+                        args.miss_rate, not args.skips_as_memo, args.first_runs, not args.no_verify_stop)
+        full = p.get("budget_simulations", 500)  # strict censoring: a run that never gets there needs > budget
         g_own, _ = simulations_to_reach(g["curve"], g["final"], g["simulations"])
         p_own, reached = simulations_to_reach(p["curve"], g["final"], p["simulations"])
         g_common, g_hit = simulations_to_reach(g["curve"], target, g["simulations"])
@@ -148,6 +154,9 @@ def search(args) -> None:
         row = {"rep": rep, "greedy_final": g["final"], "greedy_sims": g_own, "pre_final": p["final"],
                "pre_sims_to_reach": p_own, "reached": reached, "greedy_sims_to_target": g_common,
                "greedy_hit_target": g_hit, "pre_sims_to_target": p_common, "pre_hit_target": p_hit,
+               "pre_sims_to_reach_strict": p_own if reached else full,
+               "greedy_sims_to_target_strict": g_common if g_hit else full,
+               "pre_sims_to_target_strict": p_common if p_hit else full, "verified_at": p.get("verified_at"),
                "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "raced": p["raced"],
                "wall_s": p["wall_s"], "new_simulations": p["new_simulations"], "lowfi_runs": p.get("lowfi_runs", 0),
                "rule": p.get("rule"), "margin": p.get("margin"), "race_margin": p.get("race_margin")}
@@ -172,10 +181,13 @@ def _summary(args, rows, target: float) -> None:
              f"pre-screened reached it in {sum(r['reached'] for r in rows)}/{n}"),
             (f"simulations to reach greedy alone's mean final fitness ({target:.2f})", "greedy_sims_to_target",
              "pre_sims_to_target", f"reached by greedy in {sum(r['greedy_hit_target'] for r in rows)}/{n}, by "
-             f"pre-screened in {sum(r['pre_hit_target'] for r in rows)}/{n}")):
+             f"pre-screened in {sum(r['pre_hit_target'] for r in rows)}/{n}"),
+            ("strict (never reached = the whole budget's simulations): to greedy's own final", "greedy_sims",
+             "pre_sims_to_reach_strict", ""),
+            ("strict: to the common level", "greedy_sims_to_target_strict", "pre_sims_to_target_strict", "")):
         gs, ps = [r[gk] for r in rows], [r[pk] for r in rows]
         print(f"{label}: greedy {np.mean(gs):.0f}, pre-screened {np.mean(ps):.0f} "
-              f"({1 - np.mean(ps) / np.mean(gs):.0%} fewer); {hits}")
+              f"({1 - np.mean(ps) / np.mean(gs):.0%} fewer)" + (f"; {hits}" if hits else ""))
         if n >= 3:
             p, test = compare(gs, ps)
             print(f"  p = {p:.3g} ({test}), A12(greedy needs more) = {vargha_delaney_a12(gs, ps):.2f}")
@@ -273,6 +285,8 @@ def main() -> None:
     parser.add_argument("--skips-as-memo", action="store_true",
                         help="tell skips to the greedy as memo answers (not charged to its local budgets; "
                              "agent_counts_skips=False)")
+    parser.add_argument("--no-verify-stop", action="store_true",
+                        help="end when the inner greedy stops, even with budget left (no unscreened verify pass)")
     parser.add_argument("--first-runs", type=int, default=0,
                         help="racing: fly this many runs of a candidate first, the rest only if they do not fall short")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")

@@ -43,15 +43,16 @@ class Agent(ABC):
         self._stop_reason = ""
 
     # --- public verbs: bookkeeping, then the subclass hook ------------------------------------------------------
-    def setup(self, env, info: dict) -> None:
-        """Bind to an env just reset; ``info`` is the reset info (it carries the seed test's fitness)."""
+    def setup(self, env, info: dict, start: tuple | None = None) -> None:
+        """Bind to an env just reset; ``info`` is the reset info (it carries the seed test's fitness). ``start``
+        (action, fitness, info) begins the search from an evaluated test instead of the seed test (a restart)."""
         self._env = env.unwrapped
         self.rng = np.random.default_rng(self.seed)
         zero = np.zeros(len(self._env.mutators))
-        self._best = (zero, float(info["fitness"]), info)
+        self._best = (zero, float(info["fitness"]), info) if start is None else start
         self._evaluations = int(info.get("evaluations", 1))
         self._evaluations_to_best = self._evaluations
-        self._history = [float(info["fitness"])]
+        self._history = [float(self._best[1])]
         self._stop_reason = ""
         self._pending = None
         self._setup(info)

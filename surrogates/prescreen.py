@@ -125,6 +125,9 @@ class PrescreenConfig:
             ``race_margin`` (0: off; must be below the env's runs).
         race_margin: racing's margin (fitness units); None calibrates it like the ``lowfi`` margin, on the
             model's training stores and the episode's evaluations (see ``miss_rate``).
+        verify_stop: when the inner agent stops with budget left, start it again from the best test with
+            screening and racing off, so that a stop the skips may have caused is checked by simulation (tests
+            already simulated are memo hits and cost nothing); the search then ends as the agent alone would.
     """
 
     rule: str = "auto"
@@ -140,6 +143,7 @@ class PrescreenConfig:
     lowfi: bool = True
     first_runs: int = 0
     race_margin: float | None = None
+    verify_stop: bool = True
 
     def __post_init__(self):
         if self.rule not in RULES:
@@ -174,6 +178,7 @@ class Prescreened(Agent):
         self.race_margin: float | None = None
         self.skipped: list[dict] = []
         self.retrains = 0
+        self.verified_at: int | None = None  # real evaluations when the unscreened verify pass began
 
     @property
     def rule(self) -> str:
@@ -191,7 +196,7 @@ class Prescreened(Agent):
         self.setup(env, info)
         self.inner.setup(env, info)
         done = False
-        while not done and not self.stop():
+        while not done and (not self.stop() or self._verify_stop(env, info)):
             self._candidates = candidates = self.inner.ask()
             self.ask()
             results: list[tuple | None] = [None] * len(candidates)
@@ -223,10 +228,20 @@ class Prescreened(Agent):
     def stop(self) -> dict:
         return super().stop() or self.inner.stop()
 
+    def _verify_stop(self, env, info: dict) -> bool:
+        """Begin the verify pass (see ``PrescreenConfig.verify_stop``) if due; True when it began."""
+        if (not self.config.verify_stop or self.verified_at is not None or super().stop()
+                or self._env.budget_left <= 0):
+            return False
+        self.verified_at = self._evaluations
+        self.inner.setup(env, info, start=self.best)
+        return not self.inner.stop()
+
     # --- Agent hooks ---------------------------------------------------------------------------------------------
     def _setup(self, info: dict) -> None:
         self.skipped = []
         self.retrains = 0
+        self.verified_at = None
         self._consecutive = 0
         self._featurizer = (self._initial.featurizer if self._initial is not None
                             else Featurizer.for_env(self._env, self.config.lowfi))
@@ -279,7 +294,7 @@ class Prescreened(Agent):
 
     def _screen(self, action, test, prediction, best_fitness: float, incumbent) -> dict | None:
         """None to simulate the candidate, else the log entry of a skip (with what the inner agent is told)."""
-        if test is None or self._consecutive >= self.config.max_skips:
+        if test is None or self.verified_at is not None or self._consecutive >= self.config.max_skips:
             self._consecutive = 0
             return None
         rule = self.rule
@@ -317,7 +332,7 @@ class Prescreened(Agent):
         the margin (the inner agent is told the best minus that shortfall)."""
         k = self.config.first_runs
         theirs = (incumbent.get("terms") or {}).get("first_runs_fitness") or []
-        if not k or self.race_margin is None or len(theirs) < k:
+        if not k or self.race_margin is None or self.verified_at is not None or len(theirs) < k:
             return None
         fitness, _ = self._env.probe(action, k)
         shortfall = float(theirs[k - 1] - fitness)

@@ -152,3 +152,22 @@ def test_race_margin_is_calibrated_on_the_first_runs_of_real_stores(rq1_stores, 
     assert all(m is not None and m >= 0 for m in margins)
     assert margins[0] > margins[1]  # one run of five is a noisier proxy of the fitness than four
     assert race_margin(model, 5) is None  # no proxy for all five runs: that is the fitness itself
+
+
+def test_a_stop_the_skips_caused_is_verified_by_simulation(model):
+    # a screen that skips every candidate: the greedy gives up with budget left; the verify pass restarts it from
+    # the best test with screening off and spends the budget on real simulations
+    ends = {}
+    for verify in (False, True):
+        env = gym.make("Surrealist-Generate-v0", budget=3, runs=1, executor="inline")
+        config = PrescreenConfig(rule="pi", threshold=1.0, max_skips=10**6, verify_stop=verify)
+        agent = Prescreened(AdaptiveGreedy("paper"), model, config, seed=0)
+        result = agent.run(env, seed=0)
+        ends[verify] = (agent, result, env.unwrapped)
+    agent, result, env = ends[False]
+    assert agent.skipped and agent.verified_at is None
+    assert result.stop_reason == "no mutator improves the best" and env.budget_left > 0
+    agent, result, env = ends[True]
+    assert agent.verified_at == 1 and env.budget_left <= 0 and result.evaluations == 3
+    assert all(s["after_evaluations"] <= agent.verified_at for s in agent.skipped)  # no skip after the restart
+    assert env.evaluator.simulations == 3  # the seed test, then the two candidates of the verify pass
