@@ -131,7 +131,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
            "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
            "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin,
-           "verified_at": agent.verified_at, "budget_simulations": env.unwrapped.budget * env.unwrapped.runs}
+           "verified_at": agent.verified_at, "budget_simulations": env.unwrapped.budget * env.unwrapped.evaluator.runs}
     env.close()
     cached.write_text(json.dumps(row))
     return row
