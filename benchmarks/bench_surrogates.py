@@ -22,8 +22,8 @@ Two measures, each with the Mann-Whitney/ANOVA p-value and A12, then the final f
 * simulations until the best fitness reaches a common level, greedy alone's mean final fitness, for both agents
   alike (censored the same way).
 Both are printed again strictly censored: a run that never gets there counts the whole budget's simulations
-(budget x runs = 500), as if it needed at least the budget. The pre-screened greedy runs with
-``PrescreenConfig.verify_stop`` (the default; ``--no-verify-stop`` turns it off).
+(budget x runs = 500), as if it needed at least the budget. ``--verify-stop`` runs the pre-screened greedy
+with ``PrescreenConfig.verify_stop`` (an early stop checked by an unscreened restart from the best).
 
 ``accuracy``: leave-one-repetition-out over the 10 stores of the problem: for each repetition, a model trained on
 the other nine predicts it; printed are the Spearman rank correlation per held-out repetition, their mean, and the
@@ -94,7 +94,7 @@ def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
-                counted: bool = True, first_runs: int = 0, verify_stop: bool = True) -> dict:
+                counted: bool = True, first_runs: int = 0, verify_stop: bool = False) -> dict:
     label = ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
              + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
              + (f"-race{first_runs}" if first_runs else "") + ("-verify" if verify_stop else ""))
@@ -145,7 +145,7 @@ def search(args) -> None:
     rows = []
     for rep, g in enumerate(greedy):
         p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
-                        args.miss_rate, not args.skips_as_memo, args.first_runs, not args.no_verify_stop)
+                        args.miss_rate, not args.skips_as_memo, args.first_runs, args.verify_stop)
         full = p.get("budget_simulations", 500)  # strict censoring: a run that never gets there needs > budget
         g_own, _ = simulations_to_reach(g["curve"], g["final"], g["simulations"])
         p_own, reached = simulations_to_reach(p["curve"], g["final"], p["simulations"])
@@ -285,8 +285,8 @@ def main() -> None:
     parser.add_argument("--skips-as-memo", action="store_true",
                         help="tell skips to the greedy as memo answers (not charged to its local budgets; "
                              "agent_counts_skips=False)")
-    parser.add_argument("--no-verify-stop", action="store_true",
-                        help="end when the inner greedy stops, even with budget left (no unscreened verify pass)")
+    parser.add_argument("--verify-stop", action="store_true",
+                        help="when the inner greedy stops with budget left, restart it unscreened from the best")
     parser.add_argument("--first-runs", type=int, default=0,
                         help="racing: fly this many runs of a candidate first, the rest only if they do not fall short")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")

@@ -23,7 +23,11 @@ the best so far including the earlier results of the same ``ask`` (the inner age
 order it asked). In online mode (no model to start from) or with ``retrain_every`` set, the model is
 retrained on its training data plus the real evaluations of the episode every ``retrain_every`` evaluations once
 ``min_points`` exist (and the margin recalibrated). ``max_skips`` consecutive skips force the next candidate to
-be simulated, so an agent that never stops on its own (random search) still spends its budget.
+be simulated, so an agent that never stops on its own (random search) still spends its budget. Racing
+(``first_runs``) flies a candidate that passes the screen run by run: its first runs, then the rest only if they
+keep up with the incumbent's first runs. An agent that counts skips may give up because of them (the greedy ends
+when a whole round of mutators finds nothing better): with ``verify_stop`` the inner agent is then started again
+from the best test, unscreened, so the budget left checks that stop by simulation.
 
 Example:
     >>> import gymnasium as gym, surrealist_gym
@@ -128,6 +132,7 @@ class PrescreenConfig:
         verify_stop: when the inner agent stops with budget left, start it again from the best test with
             screening and racing off, so that a stop the skips may have caused is checked by simulation (tests
             already simulated are memo hits and cost nothing); the search then ends as the agent alone would.
+            Off by default: on case0 it spent 10-44 more evaluations per search and found nothing better.
     """
 
     rule: str = "auto"
@@ -143,7 +148,7 @@ class PrescreenConfig:
     lowfi: bool = True
     first_runs: int = 0
     race_margin: float | None = None
-    verify_stop: bool = True
+    verify_stop: bool = False
 
     def __post_init__(self):
         if self.rule not in RULES:
