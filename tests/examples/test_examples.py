@@ -15,6 +15,7 @@ CASES = {
     "train_ppo.py": ["--steps", "16", "--budget", "3", "--out", "{tmp}/ppo.zip"],
     "dask_cluster.py": ["--budget", "2", "--runs", "2"],
     "custom_agent.py": ["--budget", "4"],
+    "prescreen_greedy.py": ["--budget", "3", "--runs", "2", "--first-runs", "1", "--kind", "knn"],
 }
 
 
