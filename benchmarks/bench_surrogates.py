@@ -127,7 +127,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     row = {"final": result.best_fitness, "evaluations": result.evaluations,
            "to_best": result.evaluations_to_best, "skipped": len(agent.skipped), "retrains": agent.retrains,
            "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations,
-           "simulations": env.unwrapped._simulations, "raced": sum(s["rule"] == "race" for s in agent.skipped),
+           "simulations": env.unwrapped._simulations, "raced": agent.dropped,
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
            "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
            "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin,

@@ -47,7 +47,7 @@ for name, agent in agents.items():
     line = (f"{name:>16}: fitness {result.history[0]:.2f} -> {result.best_fitness:.2f}, "
             f"{steps[-1]['simulations'] if steps else args.runs} simulations, {time.perf_counter() - start:.1f} s")
     if isinstance(agent, Prescreened):
-        raced = sum(s["rule"] == "race" for s in agent.skipped)
-        line += f"; {len(agent.skipped) - raced} candidates skipped, {raced} dropped after their first runs"
+        line += (f"; {len(agent.skipped) - agent.dropped} candidates skipped, "
+                 f"{agent.dropped} dropped after their first runs")
     print(line)
     env.close()

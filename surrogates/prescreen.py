@@ -186,6 +186,11 @@ class Prescreened(Agent):
         self.verified_at: int | None = None  # real evaluations when the unscreened verify pass began
 
     @property
+    def dropped(self) -> int:
+        """Candidates dropped by racing after their first runs (the rest of :attr:`skipped` were never flown)."""
+        return sum(s["rule"] == "race" for s in self.skipped)
+
+    @property
     def rule(self) -> str:
         """The rule in force: ``auto`` resolves to ``lowfi`` once a margin is known, else ``ei``."""
         if self.config.rule != "auto":
@@ -207,7 +212,10 @@ class Prescreened(Agent):
             results: list[tuple | None] = [None] * len(candidates)
             real = []
             _, best, incumbent = self.best
-            order, tests, predictions = self._most_promising_first(candidates)
+            if self.verified_at is None:
+                order, tests, predictions = self._most_promising_first(candidates)
+            else:  # the verify pass simulates every candidate: no tests to screen, nothing to predict
+                order, tests, predictions = range(len(candidates)), [None] * len(candidates), [None] * len(candidates)
             for i in order:  # a better first result raises the bar for the rest
                 if done:
                     break
@@ -269,7 +277,8 @@ class Prescreened(Agent):
         for info in infos:
             if not info.get("memo") and not info.get("invalid"):
                 self._add_point(info)
-        self._maybe_retrain()
+        if self.verified_at is None:  # the verify pass no longer consults the model
+            self._maybe_retrain()
 
     # --- screening -----------------------------------------------------------------------------------------------
     def _test(self, action):
@@ -299,7 +308,7 @@ class Prescreened(Agent):
 
     def _screen(self, action, test, prediction, best_fitness: float, incumbent) -> dict | None:
         """None to simulate the candidate, else the log entry of a skip (with what the inner agent is told)."""
-        if test is None or self.verified_at is not None or self._consecutive >= self.config.max_skips:
+        if test is None or self._consecutive >= self.config.max_skips:
             self._consecutive = 0
             return None
         rule = self.rule
@@ -337,7 +346,7 @@ class Prescreened(Agent):
         the margin (the inner agent is told the best minus that shortfall)."""
         k = self.config.first_runs
         theirs = (incumbent.get("terms") or {}).get("first_runs_fitness") or []
-        if not k or self.race_margin is None or self.verified_at is not None or len(theirs) < k:
+        if not k or self.race_margin is None or len(theirs) < k:
             return None
         fitness, _ = self._env.probe(action, k)
         shortfall = float(theirs[k - 1] - fitness)

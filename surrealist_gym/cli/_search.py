@@ -121,7 +121,7 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     summary = write_results(out, env, result, time.perf_counter() - start, problem)
     if hasattr(agent, "skipped"):
         (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
-        raced = sum(s["rule"] == "race" for s in agent.skipped)
+        raced = agent.dropped
         print(f"pre-screening ({agent.rule}): {len(agent.skipped) - raced} candidates skipped without a simulation"
               + (f", {raced} dropped after their first {first_runs} runs (racing margin {agent.race_margin:.2f})"
                  if first_runs and agent.race_margin is not None else "") + " (skipped.json)")
