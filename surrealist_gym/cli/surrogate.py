@@ -35,6 +35,8 @@ def add_arguments(parser) -> None:
                         description="held-out R2, Spearman rank correlation and calibration of a model")
     ev.add_argument("model", metavar="MODEL", help="model folder written by `surrealist surrogate train`")
     ev.add_argument("stores", nargs="+", metavar="STORE", help="evaluation stores of the model's problem")
+    ev.add_argument("--plot", default=None, metavar="PNG",
+                    help="also draw predicted vs true values and the calibration of the uncertainty to this PNG")
 
 
 def _print_metrics(label: str, m: dict) -> None:
@@ -53,8 +55,12 @@ def run(args) -> int:
 
     if args.action == "eval":
         model = SurrogateModel.load(args.model)
-        _print_metrics(f"{args.model} ({model.kind}, {model.target})",
-                       evaluate_model(model, load_dataset(args.stores, model.featurizer)))
+        data = load_dataset(args.stores, model.featurizer)
+        label = f"{args.model} ({model.kind}, {model.target})"
+        _print_metrics(label, evaluate_model(model, data))
+        if args.plot:
+            from surrogates.plots import plot_predictions
+            print(f"plot: {plot_predictions(args.plot, model, data, label)}")
         return 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)

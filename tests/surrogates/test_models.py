@@ -67,8 +67,10 @@ def test_cli_train_and_eval(rq1_stores, tmp_path, capsys):
                  "--holdout", "1"]) == 0
     text = capsys.readouterr().out
     assert text.startswith("held-out (1 of 2 stores): ") and "Spearman" in text and "weights.pt, meta.json" in text
-    assert main(["surrogate", "eval", str(out), str(rq1_stores[1])]) == 0
+    png = tmp_path / "plots" / "eval.png"
+    assert main(["surrogate", "eval", str(out), str(rq1_stores[1]), "--plot", str(png)]) == 0
     assert "within 1 sd (68% ideal)" in capsys.readouterr().out
+    assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size > 10_000
     assert main(["surrogate", "eval", str(tmp_path / "nope"), str(rq1_stores[1])]) == 2
     assert "not a surrogate model" in capsys.readouterr().err
 

@@ -1,0 +1,75 @@
+"""A picture of how well a surrogate predicts: predicted vs true values with the predicted spread, and the
+calibration of that spread.
+
+Left panel: each evaluation at (true, predicted) on the target's scale, with a bar over the predicted mean +/- one
+standard deviation (computed on the modelled scale, then mapped back, so the bars of a log-scale model are
+asymmetric, and both axes are symmetric-log); the diagonal is a perfect prediction. Right panel: for each nominal central coverage p of a Gaussian
+with the predicted mean and sd, the share of true values inside that interval; a calibrated model follows the
+diagonal, one below it is over-confident (sd too narrow), one above it too cautious. matplotlib is imported inside
+the function (Agg canvas, no display).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from statistics import NormalDist
+
+import numpy as np
+
+from surrealist_gym.errors import DependencyNotInstalled
+
+from .dataset import Dataset
+from .models import SurrogateModel, evaluate_model
+
+
+def plot_predictions(path, model: SurrogateModel, dataset: Dataset, title: str | None = None) -> Path:
+    """Write the two-panel PNG for ``model`` on ``dataset`` to ``path``; returns the path."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError as err:
+        raise DependencyNotInstalled("plots need matplotlib: pip install matplotlib") from err
+    X, y = dataset.target(model.target)
+    mean_t, std_t = model.predict(X)
+    pred = model.from_scale(mean_t)
+    low, high = model.from_scale(mean_t - std_t), model.from_scale(mean_t + std_t)
+    z = np.abs(model.to_scale(y) - mean_t) / np.maximum(std_t, 1e-12)
+    metrics = evaluate_model(model, dataset)
+
+    fig = Figure(figsize=(11, 5))
+    FigureCanvasAgg(fig)
+    scatter, calibration = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
+    scatter.errorbar(y, pred, yerr=[pred - low, high - pred], fmt="o", markersize=3, elinewidth=0.6, alpha=0.6)
+    span = [float(min(y.min(), pred.min())), float(max(y.max(), pred.max()))]
+    scatter.plot(span, span, color="black", linewidth=1, label="perfect prediction")
+    if model.log_scale:  # as the model sees it: the long tail of bad values compressed (all values < 0)
+        scatter.set_xscale("symlog", linthresh=1.0)
+        scatter.set_yscale("symlog", linthresh=1.0)
+        limits = (span[0] * 1.3, min(span[1] * 0.7, -0.5))
+    else:
+        pad = 0.05 * (span[1] - span[0]) or 1.0
+        limits = (span[0] - pad, span[1] + pad)
+    scatter.set_xlim(*limits)
+    scatter.set_ylim(*limits)  # a wide bar may leave the frame; the points never do
+    scatter.set_xlabel(f"true {model.target}")
+    scatter.set_ylabel(f"predicted {model.target} (mean +/- 1 sd)")
+    scatter.set_title(f"{metrics['n']} evaluations: Spearman {metrics['spearman']:.3f}, R2 {metrics['r2']:.3f}")
+    scatter.legend(loc="upper left")
+    scatter.grid(alpha=0.3)
+
+    nominal = np.linspace(0.0, 1.0, 41)
+    observed = [(z <= NormalDist().inv_cdf(0.5 + p / 2)).mean() if p < 1 else 1.0 for p in nominal]
+    calibration.plot(nominal, observed, marker=".", label=f"{model.kind}")
+    calibration.plot([0, 1], [0, 1], color="black", linewidth=1, label="calibrated")
+    calibration.set_xlabel("nominal coverage of the central interval")
+    calibration.set_ylabel("share of true values inside")
+    calibration.set_title(f"uncertainty: {metrics['within_1sd']:.0%} within 1 sd (68% ideal)")
+    calibration.set_aspect("equal")
+    calibration.legend(loc="upper left")
+    calibration.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    return path
