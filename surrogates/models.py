@@ -326,26 +326,54 @@ def train_model(dataset: Dataset, featurizer: Featurizer, kind: str = "ensemble"
     return SurrogateModel(featurizer, kind, target, config, seed).fit_dataset(dataset)
 
 
-def evaluate_model(model: SurrogateModel, dataset: Dataset) -> dict:
-    """Prediction quality on a dataset: R2 and Spearman rho of predicted vs true values (target scale), R2 on the
-    modelled scale (``r2_modelled``: the log scale of a log-scale model, where a few far-off predictions in the long
-    tail of bad fitness values no longer dominate; the target scale otherwise), and the calibration of the
-    uncertainty on the modelled scale (share of true values within 1 and 2 predicted standard deviations: 0.68 and
-    0.95 when calibrated; mean Gaussian negative log-likelihood)."""
-    from scipy import stats
+@dataclass(frozen=True)
+class Predictions:
+    """A model's predictions on a dataset: on the target scale (``true``, ``mean``, and ``low``/``high`` = the
+    modelled mean -/+ one sd mapped back) and on the modelled scale (``modelled_true``, ``modelled_mean``,
+    ``modelled_std``: the log scale of a log-scale model, the target scale otherwise)."""
 
+    true: np.ndarray
+    mean: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    modelled_true: np.ndarray
+    modelled_mean: np.ndarray
+    modelled_std: np.ndarray
+
+    @property
+    def z(self) -> np.ndarray:
+        """Errors in predicted standard deviations (modelled scale)."""
+        return np.abs(self.modelled_true - self.modelled_mean) / np.maximum(self.modelled_std, 1e-12)
+
+    def metrics(self) -> dict:
+        """R2 and Spearman rho of predicted vs true values (target scale), R2 on the modelled scale
+        (``r2_modelled``: on a log-scale model's log scale a few far-off predictions in the long tail of bad fitness
+        values no longer dominate), and the calibration of the uncertainty on the modelled scale (share of true
+        values within 1 and 2 predicted standard deviations: 0.68 and 0.95 when calibrated; mean Gaussian negative
+        log-likelihood)."""
+        from scipy import stats
+
+        y, pred, z, std = self.true, self.mean, self.z, self.modelled_std
+        nll = 0.5 * np.log(2 * np.pi * std ** 2) + 0.5 * z ** 2
+        rho = stats.spearmanr(pred, y)[0] if np.ptp(pred) > 0 and np.ptp(y) > 0 else float("nan")
+        return {"n": int(len(y)), "r2": _r2(y, pred), "r2_modelled": _r2(self.modelled_true, self.modelled_mean),
+                "spearman": float(rho), "mae": float(np.abs(y - pred).mean()),
+                "within_1sd": float((z <= 1).mean()), "within_2sd": float((z <= 2).mean()), "nll": float(nll.mean())}
+
+
+def predict_dataset(model: SurrogateModel, dataset: Dataset) -> Predictions:
+    """The model's :class:`Predictions` for every row of ``dataset`` with a known target (at least 3)."""
     X, y = dataset.target(model.target)
     if len(y) < 3:
         raise SurrealistError(f"evaluation: need at least 3 evaluations with a known {model.target}, got {len(y)}")
     mean_t, std_t = model.predict(X)
-    pred = model.from_scale(mean_t)
-    t = model.to_scale(y)
-    z = np.abs(t - mean_t) / np.maximum(std_t, 1e-12)
-    nll = 0.5 * np.log(2 * np.pi * std_t ** 2) + 0.5 * z ** 2
-    rho = stats.spearmanr(pred, y)[0] if np.ptp(pred) > 0 and np.ptp(y) > 0 else float("nan")
-    return {"n": int(len(y)), "r2": _r2(y, pred), "r2_modelled": _r2(t, mean_t),
-            "spearman": float(rho), "mae": float(np.abs(y - pred).mean()),
-            "within_1sd": float((z <= 1).mean()), "within_2sd": float((z <= 2).mean()), "nll": float(nll.mean())}
+    return Predictions(y, model.from_scale(mean_t), model.from_scale(mean_t - std_t),
+                       model.from_scale(mean_t + std_t), model.to_scale(y), mean_t, std_t)
+
+
+def evaluate_model(model: SurrogateModel, dataset: Dataset) -> dict:
+    """Prediction quality on a dataset (see :meth:`Predictions.metrics`)."""
+    return predict_dataset(model, dataset).metrics()
 
 
 def _r2(true: np.ndarray, predicted: np.ndarray) -> float:

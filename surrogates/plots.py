@@ -3,10 +3,10 @@ calibration of that spread.
 
 Left panel: each evaluation at (true, predicted) on the target's scale, with a bar over the predicted mean +/- one
 standard deviation (computed on the modelled scale, then mapped back, so the bars of a log-scale model are
-asymmetric, and both axes are symmetric-log); the diagonal is a perfect prediction. Right panel: for each nominal central coverage p of a Gaussian
-with the predicted mean and sd, the share of true values inside that interval; a calibrated model follows the
-diagonal, one below it is over-confident (sd too narrow), one above it too cautious. matplotlib is imported inside
-the function (Agg canvas, no display).
+asymmetric, and both axes are symmetric-log); the diagonal is a perfect prediction. Right panel: for each nominal
+central coverage p of a Gaussian with the predicted mean and sd, the share of true values inside that interval; a
+calibrated model follows the diagonal, one below it is over-confident (sd too narrow), one above it too cautious.
+matplotlib is imported inside the function (Agg canvas, no display).
 """
 from __future__ import annotations
 
@@ -17,23 +17,19 @@ import numpy as np
 
 from surrealist_gym.errors import DependencyNotInstalled
 
-from .dataset import Dataset
-from .models import SurrogateModel, evaluate_model
+from .models import Predictions, SurrogateModel
 
 
-def plot_predictions(path, model: SurrogateModel, dataset: Dataset, title: str | None = None) -> Path:
-    """Write the two-panel PNG for ``model`` on ``dataset`` to ``path``; returns the path."""
+def plot_predictions(path, model: SurrogateModel, predicted: Predictions, title: str | None = None) -> Path:
+    """Write the two-panel PNG of ``model``'s predictions (``predict_dataset(model, dataset)``) to ``path``;
+    returns the path."""
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError as err:
         raise DependencyNotInstalled("plots need matplotlib: pip install matplotlib") from err
-    X, y = dataset.target(model.target)
-    mean_t, std_t = model.predict(X)
-    pred = model.from_scale(mean_t)
-    low, high = model.from_scale(mean_t - std_t), model.from_scale(mean_t + std_t)
-    z = np.abs(model.to_scale(y) - mean_t) / np.maximum(std_t, 1e-12)
-    metrics = evaluate_model(model, dataset)
+    y, pred, low, high, z = predicted.true, predicted.mean, predicted.low, predicted.high, predicted.z
+    metrics = predicted.metrics()
 
     fig = Figure(figsize=(11, 5))
     FigureCanvasAgg(fig)

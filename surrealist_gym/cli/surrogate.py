@@ -39,8 +39,8 @@ def add_arguments(parser) -> None:
                     help="also draw predicted vs true values and the calibration of the uncertainty to this PNG")
 
 
-def _print_metrics(label: str, m: dict) -> None:
-    modelled = f" ({m['r2_modelled']:.3f} on the model's log scale)" if m["r2_modelled"] != m["r2"] else ""
+def _print_metrics(label: str, m: dict, log_scale: bool) -> None:
+    modelled = f" ({m['r2_modelled']:.3f} on the model's log scale)" if log_scale else ""
     print(f"{label}: {m['n']} evaluations, R2 {m['r2']:.3f}{modelled}, Spearman {m['spearman']:.3f}, MAE {m['mae']:.3g}; "
           f"calibration: {m['within_1sd']:.0%} within 1 sd (68% ideal), {m['within_2sd']:.0%} within 2 sd "
           f"(95% ideal), NLL {m['nll']:.3f}")
@@ -52,16 +52,16 @@ def run(args) -> int:
     import numpy as np
 
     from surrogates.dataset import Featurizer, load_dataset
-    from surrogates.models import SurrogateModel, evaluate_model
+    from surrogates.models import SurrogateModel, evaluate_model, predict_dataset
 
     if args.action == "eval":
         model = SurrogateModel.load(args.model)
-        data = load_dataset(args.stores, model.featurizer)
+        predicted = predict_dataset(model, load_dataset(args.stores, model.featurizer))
         label = f"{args.model} ({model.kind}, {model.target})"
-        _print_metrics(label, evaluate_model(model, data))
+        _print_metrics(label, predicted.metrics(), model.log_scale)
         if args.plot:
             from surrogates.plots import plot_predictions
-            print(f"plot: {plot_predictions(args.plot, model, data, label)}")
+            print(f"plot: {plot_predictions(args.plot, model, predicted, label)}")
         return 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
@@ -81,11 +81,11 @@ def run(args) -> int:
         trial = SurrogateModel(featurizer, args.kind, args.target, config, args.random_seed)
         trial.fit_dataset(data.subset(~np.isin(data.groups, held)))
         metrics = evaluate_model(trial, data.subset(np.isin(data.groups, held)))
-        _print_metrics(f"held-out ({args.holdout} of {len(args.stores)} stores)", metrics)
+        _print_metrics(f"held-out ({args.holdout} of {len(args.stores)} stores)", metrics, trial.log_scale)
     model = SurrogateModel(featurizer, args.kind, args.target, config, args.random_seed).fit_dataset(data)
     model.metrics = {"holdout": metrics} if metrics else {}
     model.metrics["train"] = evaluate_model(model, data)
-    _print_metrics("training set", model.metrics["train"])
+    _print_metrics("training set", model.metrics["train"], model.log_scale)
     out = model.save(args.out)
     print(f"model ({args.kind}, {args.target}, {len(model.train_y)} evaluations, {data.X.shape[1]} features) "
           f"in {out}/: weights.pt, meta.json")
