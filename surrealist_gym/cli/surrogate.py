@@ -5,6 +5,8 @@
 """
 from __future__ import annotations
 
+from ..errors import SurrealistError
+
 
 def add_arguments(parser) -> None:
     sub = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
@@ -61,7 +63,10 @@ def run(args) -> int:
         _print_metrics(label, predicted.metrics(), model.log_scale)
         if args.plot:
             from surrogates.plots import plot_predictions
-            print(f"plot: {plot_predictions(args.plot, model, predicted, label)}")
+            try:
+                print(f"plot: {plot_predictions(args.plot, model, predicted, label)}")
+            except OSError as err:
+                raise SurrealistError(f"{args.plot}: cannot write the plot ({err.strerror or err})") from err
         return 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
@@ -74,9 +79,9 @@ def run(args) -> int:
     metrics = {}
     if args.holdout:
         if not 0 < args.holdout < len(args.stores):
-            from ..errors import SurrealistError
-            raise SurrealistError(f"--holdout {args.holdout}: expected 1 to {len(args.stores) - 1} "
-                                  f"(stores given: {len(args.stores)})")
+            raise SurrealistError(f"--holdout {args.holdout}: " + (
+                f"expected 1 to {len(args.stores) - 1} (stores given: {len(args.stores)})" if len(args.stores) > 1
+                else "needs at least 2 stores, one to train on and one to hold out (given: 1)"))
         held = np.arange(len(args.stores) - args.holdout, len(args.stores))
         trial = SurrogateModel(featurizer, args.kind, args.target, config, args.random_seed)
         trial.fit_dataset(data.subset(~np.isin(data.groups, held)))

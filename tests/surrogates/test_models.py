@@ -74,6 +74,10 @@ def test_cli_train_and_eval(rq1_stores, tmp_path, capsys):
     assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size > 10_000
     assert main(["surrogate", "eval", str(tmp_path / "nope"), str(rq1_stores[1])]) == 2
     assert "not a surrogate model" in capsys.readouterr().err
+    assert main(["surrogate", "eval", str(out), str(rq1_stores[1]), "--plot", "/proc/no/eval.png"]) == 2
+    assert "/proc/no/eval.png: cannot write the plot" in capsys.readouterr().err
+    assert main(["surrogate", "train", str(rq1_stores[0]), "--out", str(out), "--holdout", "1"]) == 2
+    assert "needs at least 2 stores" in capsys.readouterr().err
 
 
 def test_cli_train_lowfi_reports_the_screening_margin(rq1_stores, tmp_path, capsys):
