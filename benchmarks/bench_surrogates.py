@@ -25,6 +25,10 @@ Both are printed again strictly censored: a run that never gets there counts the
 (budget x runs = 500), as if it needed at least the budget. ``--verify-stop`` runs the pre-screened greedy
 with ``PrescreenConfig.verify_stop`` (an early stop checked by an unscreened restart from the best).
 
+``--common-noise`` runs every command on the stores of ``reproduce_paper.py --common-noise --out
+results/paper-crn`` and flies the pre-screened greedy with the same common random numbers (run i of every test
+under the same noise, ``SimConfig.common_noise``); results go to ``results/surrogates-crn``.
+
 ``accuracy``: leave-one-repetition-out over the 10 stores of the problem: for each repetition, a model trained on
 the other nine predicts it; printed are the Spearman rank correlation per held-out repetition, their mean, and the
 Spearman of all out-of-fold predictions pooled.
@@ -44,13 +48,15 @@ import surrealist_gym as sg
 from search import AdaptiveGreedy
 from surrealist_gym.envs.generate import GenerateEnv
 from surrealist_gym.envs.replicate import ReplicateEnv
+from surrealist_gym.sim import SimConfig
 from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model
 from surrogates.prescreen import RULES, PrescreenConfig, Prescreened
 
-PAPER = Path("results/paper")
+PAPER = Path("results/paper")  # greedy alone's stores (--common-noise: results/paper-crn)
+SIM_CONFIG = SimConfig()
 
 
 def _stores(problem: str, reps) -> list[Path]:
@@ -113,10 +119,11 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     else:
         model = "online"
     if problem == "rq2":
-        env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline"), "paper"
+        env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline",
+                                    sim_config=SIM_CONFIG), "paper"
     else:
         env = ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, store=store,
-                           random_seed=rep, executor="inline")
+                           random_seed=rep, executor="inline", sim_config=SIM_CONFIG)
         preset = "authors"
     agent = Prescreened(AdaptiveGreedy(preset), model, config, seed=rep)
     curve: list[float] = []
@@ -293,8 +300,15 @@ def main() -> None:
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],
                         help="add every store of this problem (same flight and mission) to each training set")
-    parser.add_argument("--out", default="results/surrogates")
+    parser.add_argument("--common-noise", action="store_true",
+                        help="common random numbers: greedy alone from results/paper-crn, the same noise for the "
+                             "pre-screened greedy")
+    parser.add_argument("--out", default=None, help="default results/surrogates (--common-noise: results/surrogates-crn)")
     args = parser.parse_args()
+    global PAPER, SIM_CONFIG
+    if args.common_noise:
+        PAPER, SIM_CONFIG = Path("results/paper-crn"), SimConfig(common_noise=True)
+    args.out = args.out or ("results/surrogates-crn" if args.common_noise else "results/surrogates")
     if args.also == args.problem:
         parser.error("--also must name the OTHER seed (the held-out repetition would leak into training)")
     warnings.simplefilter("ignore")

@@ -1,10 +1,12 @@
 """Reproduce the paper's Table 3 (RQ1, seeds 1 and 2) and Table 4 (RQ2) with repetitions, and print markdown.
 
     python benchmarks/reproduce_paper.py [--repetitions 10] [--workers 2] [--out results/paper] [--only rq1-seed1]
+                                         [--common-noise]
 
 Each repetition is one search with its own base seed (the simulation noise); its evaluations are stored in
 ``OUT/<problem>-rep<N>.sqlite``, so an interrupted run resumes where it stopped. The paper's figures are printed
-beside ours.
+beside ours. ``--common-noise`` flies every test's run i with the same noise (``SimConfig.common_noise``; use
+another ``--out``).
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ import surrealist_gym as sg
 from search import AdaptiveGreedy
 from surrealist_gym.envs.generate import GenerateEnv
 from surrealist_gym.envs.replicate import ReplicateEnv
+from surrealist_gym.sim import SimConfig
 from surrealist_gym.statistics import cohens_d, compare, reduction, vargha_delaney_a12
 
 PAPER = {
@@ -31,22 +34,23 @@ PAPER = {
 }
 
 
-def run_one(problem: str, rep: int, out: Path, workers: int) -> dict:
+def run_one(problem: str, rep: int, out: Path, workers: int, common_noise: bool = False) -> dict:
     """One repetition; returns its figures (and caches them in OUT/<problem>-rep<N>.json)."""
     cached = out / f"{problem}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
     store = out / f"{problem}-rep{rep}.sqlite"
     start = time.perf_counter()
+    sim_config = SimConfig(common_noise=common_noise)
     if problem.startswith("rq1"):
         env = ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, store=store,
-                           random_seed=rep, workers=workers)
+                           random_seed=rep, workers=workers, sim_config=sim_config)
         result = AdaptiveGreedy("authors").run(env, seed=rep)
         seed, best = env.seed_evaluation, env.best
         row = {"seed_dtw": seed.terms["dtw"], "best_dtw": best.terms["dtw"], "seed_frechet": seed.terms["frechet"],
                "best_frechet": best.terms["frechet"]}
     else:
-        env = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, workers=workers)
+        env = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, workers=workers, sim_config=sim_config)
         result = AdaptiveGreedy("paper").run(env, seed=rep)
         seed, best = env.seed_evaluation, env.best
         row = {"seed_min": min(r.min_distance_2d for r in seed.runs),
@@ -119,6 +123,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", default="results/paper")
     parser.add_argument("--only", choices=["rq1-seed1", "rq1-seed2", "rq2"], action="append")
+    parser.add_argument("--common-noise", action="store_true",
+                        help="common random numbers: run i of every test flies with the same noise")
     args = parser.parse_args()
     warnings.simplefilter("ignore", UserWarning)
     out = Path(args.out)
@@ -126,7 +132,7 @@ def main() -> None:
     for problem in args.only or ["rq1-seed1", "rq1-seed2", "rq2"]:
         rows = []
         for rep in range(args.repetitions):
-            rows.append(run_one(problem, rep, out, args.workers))
+            rows.append(run_one(problem, rep, out, args.workers, args.common_noise))
             print(f"{problem} rep {rep}: " + ", ".join(f"{k}={v:.3g}" for k, v in rows[-1].items()), flush=True)
         print()
         print(table_rq2(rows) if problem == "rq2" else table_rq1(problem, rows))

@@ -27,6 +27,9 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
                         help="search agent: greedy (default), greedy-paper, random, cmaes, ppo:POLICY.zip, "
                              "module:Class")
     parser.add_argument("--random-seed", type=int, default=0, help="base seed of the simulation noise")
+    parser.add_argument("--common-noise", action="store_true",
+                        help="common random numbers: run i of every test flies with the same noise, so tests "
+                             "differ only by what they change (default: each test draws its own)")
     parser.add_argument("--surrogate", default=None, metavar="MODEL|online",
                         help="pre-screen mutations with a surrogate model folder (surrealist surrogate train) "
                              "or one trained online; skipped candidates cost no simulations")
@@ -145,3 +148,9 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
 
 def executor_of(options: dict):
     return options.get("dask_scheduler") or None
+
+
+def sim_config_of(options: dict):
+    from ..sim import SimConfig
+
+    return SimConfig(common_noise=bool(options.get("common_noise")))

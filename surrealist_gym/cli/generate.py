@@ -1,9 +1,9 @@
 """`surrealist generate TEST.yaml`: find nearby tests that make the UAV unsafe or crash (paper RQ2)."""
 from __future__ import annotations
 
-from ._search import add_search_arguments, executor_of, new_search_folder, run_search
+from ._search import add_search_arguments, executor_of, new_search_folder, run_search, sim_config_of
 
-KEYS = ("test", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed",
+KEYS = ("test", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed", "common_noise",
         "surrogate", "first_runs", "agent", "aggregate", "all_mutators")
 
 
@@ -31,5 +31,5 @@ def run(args) -> int:
         env = GenerateEnv(seed_test=options["test"], runs=options["runs"], budget=options["budget"],
                           mutators=mutators, aggregate=options["aggregate"], executor=executor_of(options),
                           store=out / "evaluations.sqlite", random_seed=options["random_seed"],
-                          workers=options["workers"])
+                          workers=options["workers"], sim_config=sim_config_of(options))
     return run_search(env, options, out, "generate")

@@ -1,9 +1,9 @@
 """`surrealist replicate LOG`: find the obstacles that make the simulated flight match a real one (paper RQ1)."""
 from __future__ import annotations
 
-from ._search import add_search_arguments, executor_of, new_search_folder, run_search
+from ._search import add_search_arguments, executor_of, new_search_folder, run_search, sim_config_of
 
-KEYS = ("log", "seed", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed",
+KEYS = ("log", "seed", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed", "common_noise",
         "surrogate", "first_runs", "agent", "averaging")
 
 
@@ -25,5 +25,5 @@ def run(args) -> int:
         env = ReplicateEnv(reference_log=options["log"], seed_test=options["seed"], runs=options["runs"],
                            budget=options["budget"], averaging=options["averaging"], executor=executor_of(options),
                            store=out / "evaluations.sqlite", random_seed=options["random_seed"],
-                           workers=options["workers"])
+                           workers=options["workers"], sim_config=sim_config_of(options))
     return run_search(env, options, out, "replicate")

@@ -98,6 +98,10 @@ class SimConfig:
         stuck_window_s / stuck_distance_m: the run is STUCK when its distance to the current goal has not
             shrunk by stuck_distance_m [m] during the last stuck_window_s [s] of flight.
         noise: noise configuration.
+        common_noise: common random numbers: run ``i`` of every test draws the same noise (from the base seed and
+            ``i`` alone), so two tests are compared under the same wind and sensor errors and their fitness
+            differs only by what the tests change. Default False: the noise also derives from the test (the
+            product's semantics: each test meets its own conditions).
         avoidance_config / sensor_config: the planner's and the depth sensor's configurations (None = defaults).
     """
 
@@ -115,6 +119,7 @@ class SimConfig:
     stuck_window_s: float = 20.0
     stuck_distance_m: float = 0.5
     noise: NoiseConfig = NoiseConfig()
+    common_noise: bool = False
     avoidance_config: Any = None
     sensor_config: Any = None
 

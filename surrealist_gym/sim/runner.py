@@ -119,7 +119,8 @@ class _Run:
 
 
 def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
-    """Fly ``runs`` runs of a test case; run ``i`` draws its noise from (test.key(), seed, i).
+    """Fly ``runs`` runs of a test case; run ``i`` draws its noise from (test.key(), seed, i), or from (seed, i)
+    alone with ``config.common_noise``.
 
     Args:
         test: a :class:`~surrealist_gym.testcase.TestCase` with a mission.
@@ -154,7 +155,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     vehicle = preset(cfg.vehicle)
     timeout = cfg.timeout_s if cfg.timeout_s is not None else auto_timeout(mission)
     outer_dt = 1.0 / cfg.outer_hz
-    key = test.key()
+    noise_key = "" if cfg.common_noise else test.key()
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
     # modelled as converged: the controller's hover thrust is the vehicle's physical one.
     ctl_params = dict(params, MPC_THR_HOVER=vehicle.hover_command) if params.get("MPC_USE_HTE", 1) else params
@@ -177,7 +178,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             r.wind = (0.0, 0.0, 0.0)
             r.nav = Navigator(mission, params, cfg.takeoff_delay_s)
             r.planner = LocalPlanner(plan_cfg) if avoidance else None
-            r.noise = NoiseSource(run_seed_sequence(key, seed, index), cfg.noise, test.wind, outer_dt)
+            r.noise = NoiseSource(run_seed_sequence(noise_key, seed, index), cfg.noise, test.wind, outer_dt)
             r.q_sp, r.thrust = (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)), 0.0
             r.status, r.message, r.end_t = None, "", 0.0
             r.log, r.true, r.plan_out = [], [], None

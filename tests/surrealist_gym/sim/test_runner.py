@@ -150,3 +150,14 @@ def test_run_seeds_depend_on_test_seed_and_index(free, seed1):
     others = [run_seed_sequence(free.key(), 1, 0), run_seed_sequence(free.key(), 0, 1),
               run_seed_sequence(seed1.key(), 0, 0)]
     assert all(state(o) != state(run_seed_sequence(free.key(), 0, 0)) for o in others)
+
+
+def test_common_noise_flies_two_tests_under_the_same_noise(free):
+    """Common random numbers: run i draws its noise from (seed, i) alone, so a far-away box changes nothing."""
+    far = free.with_obstacles([Obstacle(l=1.0, w=1.0, h=1.0, x=200.0, y=200.0)])
+    cfg = replace(OFF, timeout_s=10.0)
+    common = replace(cfg, common_noise=True)
+    (a,), (b,) = simulate(free, runs=1, seed=3, config=common), simulate(far, runs=1, seed=3, config=common)
+    assert a.trajectory == b.trajectory
+    (c,), (d,) = simulate(free, runs=1, seed=3, config=cfg), simulate(far, runs=1, seed=3, config=cfg)
+    assert c.trajectory != d.trajectory  # by default each test draws its own noise
