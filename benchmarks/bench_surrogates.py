@@ -53,7 +53,7 @@ from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model
-from surrogates.prescreen import RULES, PrescreenConfig, Prescreened
+from surrogates.prescreen import RULES, TIE_TOLERANCE, PrescreenConfig, Prescreened
 
 PAPER = Path("results/paper")  # greedy alone's stores (--common-noise: results/paper-crn)
 SIM_CONFIG = SimConfig()
@@ -236,7 +236,7 @@ def accuracy(args) -> None:
 def race_replay(args) -> None:
     """Racing replayed on greedy alone's stores: for each repetition, a margin calibrated on the other repetitions
     (:func:`replay_margin` of the first-k fitness); a candidate is dropped when the incumbent's first-k fitness
-    exceeds its own by more than the margin. Printed per k: the share of simulations saved and of real improvements
+    exceeds its own by more than the margin, or equals it (a tie, ``PrescreenConfig.drop_ties``). Printed per k: the share of simulations saved and of real improvements
     missed. An estimate only: a real search that drops a candidate walks on differently."""
     from surrogates.prescreen import replay_margin
 
@@ -253,7 +253,7 @@ def race_replay(args) -> None:
     print(f"{args.problem}: {len(searches)} stores, {sum(map(len, searches))} evaluations of {runs} runs; "
           f"margins at miss rate {args.miss_rate:g}, leave-one-repetition-out")
     for k in range(1, runs):
-        saved = total = missed = improvements = 0
+        saved = total = missed = improvements = ties = 0
         margins = []
         for held, rows in enumerate(searches):
             others = [r for i, s in enumerate(searches) if i != held for r in s]
@@ -267,15 +267,17 @@ def race_replay(args) -> None:
                 total += n
                 improves = fitness > best
                 improvements += improves
-                if incumbent is not None and incumbent - first[k - 1] > margin:
+                tie = incumbent is not None and abs(incumbent - first[k - 1]) <= TIE_TOLERANCE * max(1.0, abs(first[k - 1]))
+                if incumbent is not None and (incumbent - first[k - 1] > margin or tie):
                     saved += n - k
                     missed += improves
+                    ties += tie
                     continue
                 if improves:
                     best, incumbent = fitness, first[k - 1]
         if margins:
             print(f"first {k} runs: margin {np.mean(margins):.2f}, simulations saved {saved / total:.0%}, "
-                  f"improvements missed {missed}/{improvements}")
+                  f"improvements missed {missed}/{improvements}; {ties} of the drops tied the incumbent")
 
 
 def main() -> None:

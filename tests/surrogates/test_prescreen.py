@@ -137,6 +137,21 @@ def test_racing_drops_candidates_whose_first_runs_fall_short():
     assert env.unwrapped.budget_left >= 0
 
 
+def test_racing_drops_ties_under_common_noise():
+    # with common random numbers, moving the RQ2 box along the path (its first mutator, y) leaves the flights and
+    # their scores unchanged: such candidates tie the incumbent on their first run and are dropped after it
+    from surrealist_gym.sim import SimConfig
+
+    env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline",
+                   sim_config=SimConfig(common_noise=True))
+    config = PrescreenConfig(rule="ei", first_runs=1, race_margin=1e9, lowfi=False)  # no drop by shortfall
+    agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
+    result = agent.run(env, seed=0)
+    ties = [s for s in agent.skipped if s["rule"] == "race"]
+    assert ties and all(s["tie"] and s["race_shortfall"] == pytest.approx(0.0, abs=1e-6) for s in ties)
+    assert env.unwrapped.evaluator.simulations == 3 * result.evaluations + len(ties)
+
+
 def test_racing_needs_fewer_first_runs_than_runs():
     env = gym.make("Surrealist-Generate-v0", budget=2, runs=2, executor="inline")
     agent = Prescreened(AdaptiveGreedy("paper"), "online", PrescreenConfig(first_runs=2, lowfi=False), seed=0)
