@@ -97,3 +97,14 @@ def test_another_agent_from_the_command_line(tmp_path):
     assert json.loads((out / "summary.json").read_text())["evaluations"] <= 3
     assert main(["generate", "--agent", "randon", "--out", str(tmp_path / "bad")]) == 2
     assert not (tmp_path / "bad").exists()
+
+
+def test_generate_with_common_noise(tmp_path):
+    # common random numbers: the greedy's first moves slide the RQ2 box along the path, which leaves every run's
+    # flight and score unchanged, so they tie the seed test exactly (with each test's own noise they never do)
+    out = tmp_path / "crn"
+    assert main(["generate", "--budget", "3", "--runs", "2", "--workers", "1", "--common-noise",
+                 "--out", str(out)]) == 0
+    assert json.loads((out / "run.json").read_text())["common_noise"] is True
+    fitness = [float(row["fitness"]) for row in _rows(out / "evaluations.csv")]
+    assert len(fitness) == 3 and len(set(fitness)) < 3
