@@ -3,6 +3,7 @@
     python benchmarks/bench_surrogates.py search --problem rq1-seed1 --repetitions 10 --mode pretrained --lowfi
     python benchmarks/bench_surrogates.py accuracy --problem rq1-seed1 [--lowfi]
     python benchmarks/bench_surrogates.py race-replay --problem rq2
+    python benchmarks/bench_surrogates.py fresh --problem rq2 --common-noise --lowfi --first-runs 1 [--verify-stop]
 
 ``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
 budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
@@ -98,12 +99,16 @@ def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
     return f"{rule}{threshold:g}" if rule in ("ei", "pi") else f"{rule}-miss{miss_rate:g}"
 
 
+def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop) -> str:
+    return ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
+            + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
+            + (f"-race{first_runs}" if first_runs else "") + ("-verify" if verify_stop else ""))
+
+
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
                 counted: bool = True, first_runs: int = 0, verify_stop: bool = False) -> dict:
-    label = ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
-             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
-             + (f"-race{first_runs}" if first_runs else "") + ("-verify" if verify_stop else ""))
+    label = _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop)
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -233,6 +238,49 @@ def accuracy(args) -> None:
               f"pooled out-of-fold Spearman {spearmanr(pooled[ok], y[ok]).statistic:.3f} ({ok.sum()} evaluations)")
 
 
+def _best_test(path: Path, fitness: float | None = None):
+    """The obstacles of the stored evaluation with the given fitness (default: the best)."""
+    from surrealist_gym.testcase import _parse_obstacles
+
+    with EvaluationStore(path) as store:
+        rows = [e for e in store if e.fitness is not None]
+    best = max(rows, key=lambda e: e.fitness) if fitness is None else min(rows, key=lambda e: abs(e.fitness - fitness))
+    return _parse_obstacles(best.test["obstacles"], str(path))
+
+
+def fresh(args) -> None:
+    """The best test of each search flown again under fresh noise (each test its own, base seed 1000 + repetition):
+    greedy alone and pre-screened (the search of the given flags, from its cached store), and greedy alone from
+    results/paper (each test's own noise) for reference. Tells whether what a search found holds up beyond the
+    noise it was found under."""
+    label = _search_label(args.mode, args.lowfi, args.also, args.rule, args.threshold, args.miss_rate,
+                          not args.skips_as_memo, args.first_runs, args.verify_stop)
+    arms = {"greedy alone": [], "pre-screened": [], "greedy alone, own noise (results/paper)": []}
+    for rep in range(args.repetitions):
+        row = json.loads((Path(args.out) / f"{args.problem}-{label}-rep{rep}.json").read_text())
+        tests = [_best_test(PAPER / f"{args.problem}-rep{rep}.sqlite"),
+                 _best_test(Path(args.out) / f"{args.problem}-{label}-rep{rep}.sqlite", row["final"]),
+                 _best_test(Path("results/paper") / f"{args.problem}-rep{rep}.sqlite")]
+        if args.problem == "rq2":
+            env = GenerateEnv(budget=50, runs=10, random_seed=1000 + rep, executor="inline")
+        else:
+            env = ReplicateEnv(seed_test=sg.data_path(f"{args.problem}.yaml"), budget=100, runs=5,
+                               random_seed=1000 + rep, executor="inline")
+        seed = env.unwrapped.seed_test
+        for values, obstacles in zip(arms.values(), tests):
+            values.append(env.unwrapped.evaluator.evaluate(seed.with_obstacles(obstacles)).fitness)
+        env.close()
+        print(f"rep {rep}: " + ", ".join(f"{name} {v[-1]:.2f}" for name, v in arms.items()), flush=True)
+    pg, pp, po = [np.array(v) for v in arms.values()]
+    print(f"\n{args.problem} ({label}{', common noise' if args.common_noise else ''}): fitness of the best tests "
+          f"under fresh noise, mean over {args.repetitions} repetitions: " + ", ".join(
+              f"{name} {np.mean(v):.2f}" for name, v in arms.items()))
+    for name, other in (("greedy alone", pg), ("greedy alone with its own noise", po)):
+        pv, test = compare(pp, other)
+        print(f"  pre-screened vs {name}: p = {pv:.3g} ({test}), A12(pre-screened fitter) = "
+              f"{vargha_delaney_a12(pp, other):.2f}")
+
+
 def race_replay(args) -> None:
     """Racing replayed on greedy alone's stores: for each repetition, a margin calibrated on the other repetitions
     (:func:`replay_margin` of the first-k fitness); a candidate is dropped when the incumbent's first-k fitness
@@ -282,7 +330,7 @@ def race_replay(args) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=["search", "accuracy", "race-replay"])
+    parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh"])
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
@@ -314,7 +362,7 @@ def main() -> None:
     if args.also == args.problem:
         parser.error("--also must name the OTHER seed (the held-out repetition would leak into training)")
     warnings.simplefilter("ignore")
-    {"search": search, "accuracy": accuracy, "race-replay": race_replay}[args.what](args)
+    {"search": search, "accuracy": accuracy, "race-replay": race_replay, "fresh": fresh}[args.what](args)
 
 
 if __name__ == "__main__":
