@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Protocol, Sequence
+from typing import Mapping, Protocol, Sequence
 
 import numpy as np
 
@@ -136,6 +136,8 @@ class Evaluator:
         self.objective = objective
         self.runs = runs
         self.seed = seed
+        if isinstance(sim_config, Mapping):  # JSON-friendly, e.g. {"common_noise": True} from gym.make or compare
+            sim_config = SimConfig.from_dict(sim_config)
         self.sim_config = sim_config if sim_config is not None else SimConfig()
         self.executor = make_executor(executor)
         self.store = store

@@ -23,6 +23,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
                         help="run the simulations on a Dask cluster (tcp://host:port)")
     parser.add_argument("--inline", action="store_true", help="simulate in this process (no worker processes)")
+    parser.add_argument("--common-noise", action="store_true",
+                        help="common random numbers: run i of every test flies with the same noise")
     parser.add_argument("--out", default=None,
                         help="results folder (default results/compare-<time>); run again with the same --out "
                              "to resume")
@@ -40,6 +42,8 @@ def run(args) -> int:
         env_kwargs["seed_test"] = str(Path(args.seed).resolve())
     if args.log:
         env_kwargs["reference_log"] = str(Path(args.log).resolve())
+    if args.common_noise:
+        env_kwargs["sim_config"] = {"common_noise": True}
     executor = args.dask_scheduler or ("inline" if args.inline else "process")
     bar = tqdm(total=len(agents) * args.repetitions * args.budget, unit="eval", desc="compare", dynamic_ncols=True,
                file=sys.stderr, disable=None)

@@ -140,10 +140,9 @@ def test_racing_drops_candidates_whose_first_runs_fall_short():
 def test_racing_drops_ties_under_common_noise():
     # with common random numbers, moving the RQ2 box along the path (its first mutator, y) leaves the flights and
     # their scores unchanged: such candidates tie the incumbent on their first run and are dropped after it
-    from surrealist_gym.sim import SimConfig
-
     env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline",
-                   sim_config=SimConfig(common_noise=True))
+                   sim_config={"common_noise": True})  # a mapping, as `surrealist compare --common-noise` passes it
+    assert env.unwrapped.evaluator.sim_config.common_noise
     config = PrescreenConfig(rule="ei", first_runs=1, race_margin=1e9, lowfi=False)  # no drop by shortfall
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
