@@ -54,7 +54,7 @@ from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model
-from surrogates.prescreen import RULES, TIE_TOLERANCE, PrescreenConfig, Prescreened
+from surrogates.prescreen import RULES, PrescreenConfig, Prescreened, is_tie
 
 PAPER = Path("results/paper")  # greedy alone's stores (--common-noise: results/paper-crn)
 SIM_CONFIG = SimConfig()
@@ -143,7 +143,8 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
            "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
            "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin,
-           "verified_at": agent.verified_at, "budget_simulations": env.unwrapped.budget * env.unwrapped.evaluator.runs}
+           "verified_at": agent.verified_at, "budget_simulations": env.unwrapped.budget * env.unwrapped.evaluator.runs,
+           "best_key": env.unwrapped.best.test.key()}
     env.close()
     cached.write_text(json.dumps(row))
     return row
@@ -238,13 +239,20 @@ def accuracy(args) -> None:
               f"pooled out-of-fold Spearman {spearmanr(pooled[ok], y[ok]).statistic:.3f} ({ok.sum()} evaluations)")
 
 
-def _best_test(path: Path, fitness: float | None = None):
-    """The obstacles of the stored evaluation with the given fitness (default: the best)."""
+def _best_test(path: Path, row: dict | None = None):
+    """The obstacles of a search's best test: the stored evaluation with the row's ``best_key``, else the first
+    with the row's final fitness (rows cached before ``best_key`` was recorded; under common noise several tests can
+    share it), or without a row the best of the store."""
     from surrealist_gym.testcase import _parse_obstacles
 
     with EvaluationStore(path) as store:
         rows = [e for e in store if e.fitness is not None]
-    best = max(rows, key=lambda e: e.fitness) if fitness is None else min(rows, key=lambda e: abs(e.fitness - fitness))
+    if row is None:
+        best = max(rows, key=lambda e: e.fitness)
+    elif row.get("best_key"):
+        best = next(e for e in rows if e.test_key == row["best_key"])
+    else:
+        best = min(rows, key=lambda e: abs(e.fitness - row["final"]))
     return _parse_obstacles(best.test["obstacles"], str(path))
 
 
@@ -259,7 +267,7 @@ def fresh(args) -> None:
     for rep in range(args.repetitions):
         row = json.loads((Path(args.out) / f"{args.problem}-{label}-rep{rep}.json").read_text())
         tests = [_best_test(PAPER / f"{args.problem}-rep{rep}.sqlite"),
-                 _best_test(Path(args.out) / f"{args.problem}-{label}-rep{rep}.sqlite", row["final"]),
+                 _best_test(Path(args.out) / f"{args.problem}-{label}-rep{rep}.sqlite", row),
                  _best_test(Path("results/paper") / f"{args.problem}-rep{rep}.sqlite")]
         if args.problem == "rq2":
             env = GenerateEnv(budget=50, runs=10, random_seed=1000 + rep, executor="inline")
@@ -284,11 +292,12 @@ def fresh(args) -> None:
 def race_replay(args) -> None:
     """Racing replayed on greedy alone's stores: for each repetition, a margin calibrated on the other repetitions
     (:func:`replay_margin` of the first-k fitness); a candidate is dropped when the incumbent's first-k fitness
-    exceeds its own by more than the margin, or equals it (a tie, ``PrescreenConfig.drop_ties``). Printed per k: the share of simulations saved and of real improvements
+    exceeds its own by more than the margin, or, under common noise, equals it (a tie, ``PrescreenConfig.drop_ties``). Printed per k: the share of simulations saved and of real improvements
     missed. An estimate only: a real search that drops a candidate walks on differently."""
     from surrogates.prescreen import replay_margin
 
     stores = _stores(args.problem, range(args.repetitions))
+    common_noise = args.common_noise  # ties are dropped under common noise only, as PrescreenConfig.drop_ties
     searches = []
     for path in stores:
         with EvaluationStore(path) as store:
@@ -315,7 +324,7 @@ def race_replay(args) -> None:
                 total += n
                 improves = fitness > best
                 improvements += improves
-                tie = incumbent is not None and abs(incumbent - first[k - 1]) <= TIE_TOLERANCE * max(1.0, abs(first[k - 1]))
+                tie = incumbent is not None and common_noise and is_tie(incumbent, first[k - 1])
                 if incumbent is not None and (incumbent - first[k - 1] > margin or tie):
                     saved += n - k
                     missed += improves

@@ -5,8 +5,8 @@
 
 Each repetition is one search with its own base seed (the simulation noise); its evaluations are stored in
 ``OUT/<problem>-rep<N>.sqlite``, so an interrupted run resumes where it stopped. The paper's figures are printed
-beside ours. ``--common-noise`` flies every test's run i with the same noise (``SimConfig.common_noise``; use
-another ``--out``).
+beside ours. ``--common-noise`` flies every test's run i with the same noise (``SimConfig.common_noise``; default out
+``results/paper-crn``).
 """
 from __future__ import annotations
 
@@ -121,13 +121,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--out", default="results/paper")
+    parser.add_argument("--out", default=None, help="default results/paper (--common-noise: results/paper-crn)")
     parser.add_argument("--only", choices=["rq1-seed1", "rq1-seed2", "rq2"], action="append")
     parser.add_argument("--common-noise", action="store_true",
                         help="common random numbers: run i of every test flies with the same noise")
     args = parser.parse_args()
     warnings.simplefilter("ignore", UserWarning)
-    out = Path(args.out)
+    out = Path(args.out or ("results/paper-crn" if args.common_noise else "results/paper"))
     out.mkdir(parents=True, exist_ok=True)
     for problem in args.only or ["rq1-seed1", "rq1-seed2", "rq2"]:
         rows = []

@@ -93,6 +93,7 @@ class ProceduralEnv(gym.Env):
     def __init__(self, config: ProblemConfig | None = None, sim_config=None, executor="inline", **overrides):
         from surrealist_gym import data_path
         from surrealist_gym.mutators import AUTHORS_ORDER, MOVE_KINDS, default_mutators
+        from surrealist_gym.sim import SimConfig
         from surrealist_gym.testcase import TestCase, load_test
 
         self.config = ProblemConfig(**overrides) if config is None else config
@@ -103,7 +104,7 @@ class ProceduralEnv(gym.Env):
         self.seed_test = seed_test if isinstance(seed_test, TestCase) else load_test(seed_test)
         kinds = AUTHORS_ORDER if self.config.problem is Problem.REPLICATE else MOVE_KINDS
         self.mutators = default_mutators(self.seed_test, kinds, obstacles=[0])
-        self.sim_config, self.executor = sim_config, executor
+        self.sim_config, self.executor = SimConfig.coerce(sim_config), executor
         n = len(self.mutators)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(n + 3,), dtype=np.float32)

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Mapping, Protocol, Sequence
+from typing import Protocol, Sequence
 
 import numpy as np
 
+from .errors import SurrealistError
 from .fitness import MIN_DIST_WEIGHT, Aggregate, average_runs, generation_fitness, is_unsafe
 from .metrics import dtw, frechet
 from .store import EvaluationStore, StoredEvaluation
@@ -136,11 +137,11 @@ class Evaluator:
         self.objective = objective
         self.runs = runs
         self.seed = seed
-        if isinstance(sim_config, Mapping):  # JSON-friendly, e.g. {"common_noise": True} from gym.make or compare
-            sim_config = SimConfig.from_dict(sim_config)
-        self.sim_config = sim_config if sim_config is not None else SimConfig()
+        self.sim_config = SimConfig.coerce(sim_config)  # a mapping from gym.make or compare's env_kwargs too
         self.executor = make_executor(executor)
         self.store = store
+        if store is not None:
+            _check_noise_mode(store, self.sim_config.common_noise)
         self._memo: dict[str, Evaluation] = {}
         self._flown: dict[str, list] = {}  # the runs of partial evaluations, by test key
         self._flown_seconds: dict[str, float] = {}
@@ -176,7 +177,7 @@ class Evaluator:
         self._flown.pop(key, None)
         self._memo[key] = evaluation
         if self.store is not None:
-            self.store.add(_to_stored(evaluation, [self.seed] * self.runs))
+            self.store.add(_to_stored(evaluation, [self.seed] * self.runs, self.sim_config.common_noise))
         return evaluation
 
     def _from_store(self, test: TestCase) -> Evaluation | None:
@@ -204,10 +205,22 @@ def _first_runs(evaluation: Evaluation, k: int) -> Evaluation:
                       None, cached=True)
 
 
-def _to_stored(evaluation: Evaluation, seeds) -> StoredEvaluation:
+def _check_noise_mode(store: EvaluationStore, common_noise: bool) -> None:
+    """A store holds one noise mode: reading back evaluations flown under the other would mix two problems."""
+    first = next(iter(store), None)
+    if first is not None and bool((first.info or {}).get("common_noise", False)) != common_noise:
+        held = "common noise" if not common_noise else "each test's own noise"
+        raise SurrealistError(f"{store.path}: holds evaluations flown with {held}, this search flies with "
+                              f"{'common' if common_noise else 'its own'} noise (use another store or results "
+                              f"folder, or match --common-noise)")
+
+
+def _to_stored(evaluation: Evaluation, seeds, common_noise: bool = False) -> StoredEvaluation:
     test = evaluation.test
     info = {"terms": evaluation.terms,
             "trajectory": None if evaluation.trajectory is None else np.round(evaluation.trajectory, 6).tolist()}
+    if common_noise:
+        info["common_noise"] = True
     return StoredEvaluation(test.key(), {"obstacles": [o.to_dict() for o in test.obstacles]}, tuple(seeds),
                             tuple(r.to_dict() for r in evaluation.runs),
                             None if not np.isfinite(evaluation.fitness) else evaluation.fitness, info,

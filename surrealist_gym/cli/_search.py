@@ -125,9 +125,11 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     if hasattr(agent, "skipped"):
         (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
         raced = agent.dropped
+        ties = sum(bool(s.get("tie")) for s in agent.skipped)
+        margin = "not calibrated" if agent.race_margin is None else f"{agent.race_margin:.2f}"
         print(f"pre-screening ({agent.rule}): {len(agent.skipped) - raced} candidates skipped without a simulation"
-              + (f", {raced} dropped after their first {first_runs} runs (racing margin {agent.race_margin:.2f})"
-                 if first_runs and agent.race_margin is not None else "") + " (skipped.json)")
+              + (f", {raced} dropped after their first {first_runs} runs ({ties} of them tied the best; racing "
+                 f"margin {margin})" if first_runs else "") + " (skipped.json)")
     env.close()
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
           f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "

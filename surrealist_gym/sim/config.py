@@ -145,6 +145,14 @@ class SimConfig:
         """A config from keyword values; an unknown key is a ``TypeError`` naming it."""
         return replace_checked(cls(), **dict(values))
 
+    @classmethod
+    def coerce(cls, value: "SimConfig | Mapping[str, Any] | None") -> "SimConfig":
+        """A config from a config, a mapping of keyword values (JSON-friendly: ``{"common_noise": True}``) or None
+        (the defaults)."""
+        if value is None:
+            return cls()
+        return cls.from_dict(value) if isinstance(value, Mapping) else value
+
 
 def _not_divisor(a: float, b: float) -> bool:
     return abs(a / b - round(a / b)) > 1e-9

@@ -108,3 +108,13 @@ def test_generate_with_common_noise(tmp_path):
     assert json.loads((out / "run.json").read_text())["common_noise"] is True
     fitness = [float(row["fitness"]) for row in _rows(out / "evaluations.csv")]
     assert len(fitness) == 3 and len(set(fitness)) < 3
+
+
+def test_a_results_folder_keeps_its_noise_mode(tmp_path, capsys):
+    # evaluations flown with common noise are not read back by a search with each test's own noise (nor the reverse)
+    out = tmp_path / "crn"
+    assert main(["generate", "--budget", "1", "--runs", "1", "--workers", "1", "--common-noise",
+                 "--out", str(out)]) == 0
+    assert main(["generate", "--budget", "1", "--runs", "1", "--workers", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "evaluations.sqlite" in err[0] and "common noise" in err[0]
