@@ -1,8 +1,9 @@
 """Evaluating a test case: memo first, else n simulations on an executor, then the fitness; every evaluation is
 stored in SQLite as it completes.
 
-Run i of a test flies with a seed derived from (test, base seed, i), so the same test always gets the same runs
-and the memo is exact. Objectives turn the runs of a test into a fitness (maximised) and the terms behind it; the
+Run i of a test flies with a seed derived from (test, base seed, i) (or from (base seed, i) alone with
+``SimConfig.common_noise``; a store holds one noise mode), so the same test always gets the same runs and the memo
+is exact. Objectives turn the runs of a test into a fitness (maximised) and the terms behind it; the
 term ``first_runs_fitness`` holds the fitness of its first k runs alone (k = 1 .. n-1), so a search can judge a
 partial evaluation (``evaluate(test, runs=k)``: only the first k runs are flown; evaluating the test in full later
 flies only the rest, with the same seeds, so the result is the same as in one go).
@@ -27,7 +28,7 @@ from .trajectory import Trajectory
 class RunSummary:
     """What the search keeps of one run."""
 
-    seed: int                # base seed; the run's noise derives from (test, seed, index)
+    seed: int                # base seed; the run's noise derives from (test, seed, index), or (seed, index)
     index: int
     status: str
     min_distance: float      # 3-D, over all obstacles [m]

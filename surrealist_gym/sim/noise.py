@@ -1,7 +1,8 @@
 """Reproducible noise: per-run seeds, estimator errors and wind (Gazebo wind-plugin fields plus turbulence).
 
 Run ``i`` of a test draws everything from ``run_seed_sequence(test.key(), base_seed, i)``, so a run is
-reproduced exactly from (test, base seed, index). Series are drawn in blocks at the outer-loop rate as the flight
+reproduced exactly from (test, base seed, index); with ``SimConfig.common_noise`` the key is empty, so run ``i``
+of every test meets the same noise. Series are drawn in blocks at the outer-loop rate as the flight
 needs them, so the per-step loop only indexes lists and a short flight draws only what it uses.
 """
 from __future__ import annotations
