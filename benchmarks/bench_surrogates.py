@@ -26,6 +26,9 @@ Both are printed again strictly censored: a run that never gets there counts the
 (budget x runs = 500), as if it needed at least the budget. ``--verify-stop`` runs the pre-screened greedy
 with ``PrescreenConfig.verify_stop`` (an early stop checked by an unscreened restart from the best).
 
+``search --from-rep 10`` runs repetitions 10.. (``reproduce_paper.py --repetitions 20``) with models trained on
+repetitions 0-9: a confirmation on repetitions no setting was chosen with.
+
 ``--common-noise`` runs every command on the stores of ``reproduce_paper.py --common-noise --out
 results/paper-crn`` and flies the pre-screened greedy with the same common random numbers (run i of every test
 under the same noise, ``SimConfig.common_noise``); results go to ``results/surrogates-crn``.
@@ -153,10 +156,11 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
 def search(args) -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    greedy = [greedy_alone(args.problem, rep) for rep in range(args.repetitions)]
+    reps = range(args.from_rep, args.from_rep + args.repetitions)
+    greedy = [greedy_alone(args.problem, rep) for rep in reps]
     target = float(np.mean([g["final"] for g in greedy]))  # the common level: greedy alone's mean final fitness
     rows = []
-    for rep, g in enumerate(greedy):
+    for rep, g in zip(reps, greedy):
         p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
                         args.miss_rate, not args.skips_as_memo, args.first_runs, args.verify_stop)
         full = p.get("budget_simulations", 500)  # strict censoring: a run that never gets there needs > budget
@@ -342,6 +346,9 @@ def main() -> None:
     parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh"])
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
+    parser.add_argument("--from-rep", type=int, default=0,
+                        help="search: run repetitions FROM_REP.. (models always train on repetitions 0-9 other than "
+                             "the one run; --from-rep 10 is a held-out confirmation on new repetitions)")
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
     parser.add_argument("--rule", default="auto", choices=RULES,
                         help="screening rule (default auto: lowfi with a calibrated margin, else ei)")
