@@ -102,6 +102,16 @@ def _rule_label(rule: str, threshold: float, miss_rate: float) -> str:
     return f"{rule}{threshold:g}" if rule in ("ei", "pi") else f"{rule}-miss{miss_rate:g}"
 
 
+def _paper_env(problem: str, random_seed: int, store=None, sim_config=None):
+    """The env of greedy alone's runs in reproduce_paper.py (RQ2: budget 50, 10 runs; case0: budget 100, 5 runs),
+    simulating in this process."""
+    if problem == "rq2":
+        return GenerateEnv(budget=50, runs=10, store=store, random_seed=random_seed, executor="inline",
+                           sim_config=sim_config)
+    return ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, store=store,
+                        random_seed=random_seed, executor="inline", sim_config=sim_config)
+
+
 def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop) -> str:
     return ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
@@ -126,14 +136,8 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
     else:
         model = "online"
-    if problem == "rq2":
-        env, preset = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, executor="inline",
-                                    sim_config=SIM_CONFIG), "paper"
-    else:
-        env = ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, store=store,
-                           random_seed=rep, executor="inline", sim_config=SIM_CONFIG)
-        preset = "authors"
-    agent = Prescreened(AdaptiveGreedy(preset), model, config, seed=rep)
+    env = _paper_env(problem, rep, store, SIM_CONFIG)
+    agent = Prescreened(AdaptiveGreedy("paper" if problem == "rq2" else "authors"), model, config, seed=rep)
     curve: list[float] = []
     lowfi_before = _lowfi_runs(featurizer)  # an online model featurizes with a featurizer of its own
     start = time.perf_counter()
@@ -273,11 +277,7 @@ def fresh(args) -> None:
         tests = [_best_test(PAPER / f"{args.problem}-rep{rep}.sqlite"),
                  _best_test(Path(args.out) / f"{args.problem}-{label}-rep{rep}.sqlite", row),
                  _best_test(Path("results/paper") / f"{args.problem}-rep{rep}.sqlite")]
-        if args.problem == "rq2":
-            env = GenerateEnv(budget=50, runs=10, random_seed=1000 + rep, executor="inline")
-        else:
-            env = ReplicateEnv(seed_test=sg.data_path(f"{args.problem}.yaml"), budget=100, runs=5,
-                               random_seed=1000 + rep, executor="inline")
+        env = _paper_env(args.problem, 1000 + rep)
         seed = env.unwrapped.seed_test
         for values, obstacles in zip(arms.values(), tests):
             values.append(env.unwrapped.evaluator.evaluate(seed.with_obstacles(obstacles)).fitness)
@@ -296,7 +296,8 @@ def fresh(args) -> None:
 def race_replay(args) -> None:
     """Racing replayed on greedy alone's stores: for each repetition, a margin calibrated on the other repetitions
     (:func:`replay_margin` of the first-k fitness); a candidate is dropped when the incumbent's first-k fitness
-    exceeds its own by more than the margin, or, under common noise, equals it (a tie, ``PrescreenConfig.drop_ties``). Printed per k: the share of simulations saved and of real improvements
+    exceeds its own by more than the margin, or, under common noise, equals it (a tie,
+    ``PrescreenConfig.drop_ties``). Printed per k: the share of simulations saved and of real improvements
     missed. An estimate only: a real search that drops a candidate walks on differently."""
     from surrogates.prescreen import replay_margin
 
@@ -369,7 +370,8 @@ def main() -> None:
     parser.add_argument("--common-noise", action="store_true",
                         help="common random numbers: greedy alone from results/paper-crn, the same noise for the "
                              "pre-screened greedy")
-    parser.add_argument("--out", default=None, help="default results/surrogates (--common-noise: results/surrogates-crn)")
+    parser.add_argument("--out", default=None,
+                        help="default results/surrogates (--common-noise: results/surrogates-crn)")
     args = parser.parse_args()
     global PAPER, SIM_CONFIG
     if args.common_noise:

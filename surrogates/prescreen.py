@@ -26,9 +26,10 @@ retrained on its training data plus the real evaluations of the episode every ``
 be simulated, so an agent that never stops on its own (random search) still spends its budget. Racing
 (``first_runs``) flies a candidate that passes the screen run by run: its first runs, then the rest only if they
 keep up with the incumbent's first runs; with common random numbers a candidate whose first runs score exactly
-as the incumbent's did not change those flights and is dropped as a tie (``drop_ties``). An agent that counts skips may give up because of them (the greedy ends
-when a whole round of mutators finds nothing better): with ``verify_stop`` the inner agent is then started again
-from the best test, unscreened, so the budget left checks that stop by simulation.
+as the incumbent's did not change those flights and is dropped as a tie (``drop_ties``). An agent that counts
+skips may give up because of them (the greedy ends when a whole round of mutators finds nothing better): with
+``verify_stop`` the inner agent is then started again from the best test, unscreened, so the budget left checks
+that stop by simulation.
 
 Example:
     >>> import gymnasium as gym, surrealist_gym

@@ -43,7 +43,8 @@ def add_arguments(parser) -> None:
 
 def _print_metrics(label: str, m: dict, log_scale: bool) -> None:
     modelled = f" ({m['r2_modelled']:.3f} on the model's log scale)" if log_scale else ""
-    print(f"{label}: {m['n']} evaluations, R2 {m['r2']:.3f}{modelled}, Spearman {m['spearman']:.3f}, MAE {m['mae']:.3g}; "
+    print(f"{label}: {m['n']} evaluations, R2 {m['r2']:.3f}{modelled}, Spearman {m['spearman']:.3f}, "
+          f"MAE {m['mae']:.3g}; "
           f"calibration: {m['within_1sd']:.0%} within 1 sd (68% ideal), {m['within_2sd']:.0%} within 2 sd "
           f"(95% ideal), NLL {m['nll']:.3f}")
 
