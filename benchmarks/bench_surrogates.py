@@ -112,15 +112,25 @@ def _paper_env(problem: str, random_seed: int, store=None, sim_config=None):
                         random_seed=random_seed, executor="inline", sim_config=sim_config)
 
 
+def _race_stages(text: str) -> int | tuple[int, ...]:
+    """``--first-runs``: one number of runs (``1``) or racing stages (``1,2,3,4``)."""
+    stages = tuple(int(k) for k in text.split(","))
+    return stages[0] if len(stages) == 1 else stages
+
+
+def _stages_label(first_runs) -> str:
+    return "-".join(map(str, first_runs)) if isinstance(first_runs, tuple) else str(first_runs)
+
+
 def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop) -> str:
     return ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
-            + (f"-race{first_runs}" if first_runs else "") + ("-verify" if verify_stop else ""))
+            + (f"-race{_stages_label(first_runs)}" if first_runs else "") + ("-verify" if verify_stop else ""))
 
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
-                counted: bool = True, first_runs: int = 0, verify_stop: bool = False) -> dict:
+                counted: bool = True, first_runs: int | tuple[int, ...] = 0, verify_stop: bool = False) -> dict:
     label = _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop)
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
@@ -190,7 +200,7 @@ def _summary(args, rows, target: float) -> None:
     n = len(rows)
     skips = "skips told as memo" if args.skips_as_memo else "agent counts skips"
     race_margin = np.nanmean([r["race_margin"] or np.nan for r in rows])
-    racing = (f"on the first {args.first_runs} runs (margin {race_margin:.2f}, dropped per search "
+    racing = (f"on the first {_stages_label(args.first_runs)} runs (margin {race_margin:.2f}, dropped per search "
               f"{np.mean([r['raced'] for r in rows]):.0f})" if args.first_runs else "off")
     print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule "
           f"{_rule_label(args.rule, args.threshold, args.miss_rate)}, {skips} (in force: {sorted({r['rule'] for r in rows})}, "
@@ -361,8 +371,9 @@ def main() -> None:
                              "agent_counts_skips=False)")
     parser.add_argument("--verify-stop", action="store_true",
                         help="when the inner greedy stops with budget left, restart it unscreened from the best")
-    parser.add_argument("--first-runs", type=int, default=0,
-                        help="racing: fly this many runs of a candidate first, the rest only if they do not fall short")
+    parser.add_argument("--first-runs", type=_race_stages, default=0,
+                        help="racing: fly this many runs of a candidate first, the rest only if they do not fall "
+                             "short; K1,K2,... races in stages")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=["rq1-seed1", "rq1-seed2"],

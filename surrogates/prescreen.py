@@ -134,9 +134,12 @@ class PrescreenConfig:
             candidate screened; see :mod:`surrogates.lowfi`).
         first_runs: racing: a candidate that passes the screen first flies only this many of its runs, and the
             rest only if the fitness of those runs falls short of the incumbent's first runs by no more than
-            ``race_margin`` (0: off; must be below the env's runs).
-        race_margin: racing's margin (fitness units); None calibrates it like the ``lowfi`` margin, on the
-            model's training stores and the episode's evaluations (see ``miss_rate``).
+            ``race_margin`` (0: off; must be below the env's runs). A tuple races in stages: after each of its
+            run counts (increasing, e.g. ``(1, 2, 3, 4)``) the candidate is compared again and dropped at the
+            first stage it falls behind; later stages fly only the runs not flown yet.
+        race_margin: racing's margin (fitness units, every stage); None calibrates one per stage like the
+            ``lowfi`` margin, on the model's training stores and the episode's evaluations, each stage at an equal
+            share of ``miss_rate`` (so the stages together miss about ``miss_rate`` of the improvements).
         drop_ties: racing also drops a candidate whose first runs score exactly as the incumbent's (told just
             below the best). With common random numbers (``SimConfig.common_noise``) that means the mutation left
             those flights unchanged (an obstacle slid along the path): in the 10 RQ2 stores of greedy alone under
@@ -161,7 +164,7 @@ class PrescreenConfig:
     kind: str = "ensemble"
     agent_counts_skips: bool = True
     lowfi: bool = True
-    first_runs: int = 0
+    first_runs: int | tuple[int, ...] = 0
     race_margin: float | None = None
     drop_ties: bool | None = None
     verify_stop: bool = False
@@ -171,8 +174,17 @@ class PrescreenConfig:
             raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
         if not 0.0 <= self.miss_rate < 1.0:
             raise ValueError(f"prescreen miss_rate: expected a share in [0, 1), got {self.miss_rate!r}")
-        if self.first_runs < 0:
-            raise ValueError(f"prescreen first_runs: expected 0 (off) or a number of runs, got {self.first_runs!r}")
+        stages = self.race_stages
+        if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
+            raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
+                             f"runs, got {self.first_runs!r}")
+
+    @property
+    def race_stages(self) -> tuple[int, ...]:
+        """The run counts after which racing compares a candidate with the incumbent (empty: racing off)."""
+        if isinstance(self.first_runs, (int, np.integer)):
+            return (int(self.first_runs),) if self.first_runs else ()
+        return tuple(int(k) for k in self.first_runs)
 
 
 class Prescreened(Agent):
@@ -196,7 +208,7 @@ class Prescreened(Agent):
         self._initial = None if isinstance(model, str) else model
         self.model: SurrogateModel | None = None
         self.margin: float | None = None
-        self.race_margin: float | None = None
+        self.race_margins: dict[int, float | None] = {}  # racing's margin per stage (run count)
         self.skipped: list[dict] = []
         self.retrains = 0
         self.verified_at: int | None = None  # real evaluations when the unscreened verify pass began
@@ -205,6 +217,11 @@ class Prescreened(Agent):
     def dropped(self) -> int:
         """Candidates dropped by racing after their first runs (the rest of :attr:`skipped` were never flown)."""
         return sum(s["rule"] == "race" for s in self.skipped)
+
+    @property
+    def race_margin(self) -> float | None:
+        """Racing's margin at its first stage (None: racing off or not calibrated yet)."""
+        return next(iter(self.race_margins.values()), None)
 
     @property
     def rule(self) -> str:
@@ -285,7 +302,7 @@ class Prescreened(Agent):
         self.model = self._initial
         self._first: list[list[float]] = []
         self.margin = self._calibrated_margin()
-        self.race_margin = self._calibrated_race_margin()
+        self.race_margins = self._calibrated_race_margins()
         self._add_point(info)
 
     def _ask(self) -> list[np.ndarray]:  # the inner agent's candidates (run() tells back the simulated ones)
@@ -359,22 +376,22 @@ class Prescreened(Agent):
         return {"told_fitness": told, "info": info}
 
     def _race(self, action, test, best_fitness: float, incumbent: dict) -> dict | None:
-        """Racing: fly the candidate's first runs; None to fly the rest (the candidate is stepped on), else the
-        log entry of a candidate dropped because those runs fall short of the incumbent's first runs by more than
-        the margin (the inner agent is told the best minus that shortfall), or, with ``drop_ties``, score exactly
-        as the incumbent's (told the best)."""
-        k = self.config.first_runs
+        """Racing: fly the candidate's first runs, stage by stage; None to fly the rest (the candidate is stepped
+        on), else the log entry of a candidate dropped at a stage because its runs so far fall short of the
+        incumbent's same first runs by more than that stage's margin (the inner agent is told the best minus that
+        shortfall), or, with ``drop_ties``, score exactly as the incumbent's (told just below the best)."""
         theirs = (incumbent.get("terms") or {}).get("first_runs_fitness") or []
-        if not k or len(theirs) < k or (self.race_margin is None and not self._drop_ties):
-            return None
-        fitness, _ = self._env.probe(action, k)
-        shortfall = float(theirs[k - 1] - fitness)
-        tie = self._drop_ties and is_tie(theirs[k - 1], fitness)
-        if not tie and (self.race_margin is None or not shortfall > self.race_margin):
-            return None
-        entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
-                 "race_margin": self.race_margin, "tie": tie}
-        return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness)
+        for k, margin in self.race_margins.items():
+            if len(theirs) < k or (margin is None and not self._drop_ties):
+                return None
+            fitness, _ = self._env.probe(action, k)
+            shortfall = float(theirs[k - 1] - fitness)
+            tie = self._drop_ties and is_tie(theirs[k - 1], fitness)
+            if tie or (margin is not None and shortfall > margin):
+                entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
+                         "race_margin": margin, "tie": tie}
+                return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness)
+        return None
 
     def _lowfi_verdict(self, test, incumbent, best_fitness: float) -> tuple[dict, float] | None:
         """Skip when the low-fidelity fitness falls short of the incumbent's by more than the margin; the inner
@@ -416,17 +433,17 @@ class Prescreened(Agent):
             return float(self.config.margin)
         return None if self.model is None else model_margin(self.model, self.config.miss_rate)
 
-    def _calibrated_race_margin(self) -> float | None:
-        """Racing's margin: the configured one, else calibrated on the model's training data."""
-        k = self.config.first_runs
-        if not k:
-            return None
-        if k >= self._env.evaluator.runs:
-            raise SurrealistError(f"prescreen first_runs: {k} must be below the env's runs "
+    def _calibrated_race_margins(self) -> dict[int, float | None]:
+        """Racing's margin per stage: the configured one, else calibrated on the model's training data at an equal
+        share of the miss rate."""
+        stages = self.config.race_stages
+        if stages and stages[-1] >= self._env.evaluator.runs:
+            raise SurrealistError(f"prescreen first_runs: {stages[-1]} must be below the env's runs "
                                   f"({self._env.evaluator.runs})")
         if self.config.race_margin is not None:
-            return float(self.config.race_margin)
-        return None if self.model is None else race_margin(self.model, k, self.config.miss_rate)
+            return {k: float(self.config.race_margin) for k in stages}
+        share = self.config.miss_rate / max(len(stages), 1)
+        return {k: None if self.model is None else race_margin(self.model, k, share) for k in stages}
 
     # --- online training -----------------------------------------------------------------------------------------
     def _add_point(self, info: dict) -> None:
@@ -461,7 +478,7 @@ class Prescreened(Agent):
         model = SurrogateModel(self._featurizer, kind, "fitness", config, seed=(self.seed or 0) + self.retrains)
         self.model = model.fit(X, y, groups, first)
         self.margin = self._calibrated_margin()
-        self.race_margin = self._calibrated_race_margin()
+        self.race_margins = self._calibrated_race_margins()
         self.retrains += 1
         self._since_retrain = 0
         log.info("surrogate retrained on %d evaluations", len(y))

@@ -33,12 +33,26 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
     parser.add_argument("--surrogate", default=None, metavar="MODEL|online",
                         help="pre-screen mutations with a surrogate model folder (surrealist surrogate train) "
                              "or one trained online; skipped candidates cost no simulations")
-    parser.add_argument("--first-runs", type=int, default=0, metavar="K",
+    parser.add_argument("--first-runs", type=race_stages, default=[], metavar="K[,K2...]",
                         help="racing (with a surrogate; default online): fly K runs of a candidate first and the "
-                             "rest only if they do not fall clearly short of the best test's first K runs")
+                             "rest only if they do not fall clearly short of the best test's first K runs; "
+                             "K1,K2,... compares again after each (e.g. 1,2,3,4)")
     parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
     parser.add_argument("--resume", default=None, metavar="DIR",
                         help="resume an interrupted search from its results folder (same options)")
+
+
+def race_stages(text) -> list[int]:
+    """``--first-runs``: the run counts after which racing compares a candidate (``"1"``, ``"1,2,3,4"``; a number
+    from an older run.json); empty when racing is off."""
+    if isinstance(text, int):
+        return [text] if text else []
+    if isinstance(text, list):
+        return text
+    stages = [int(k) for k in str(text).split(",")]
+    if any(k < 0 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
+        raise ValueError(text)
+    return [k for k in stages if k]
 
 
 @contextmanager
@@ -70,9 +84,9 @@ def prepare(args, command: str, keys: tuple[str, ...]) -> tuple[Path, dict]:
         from search.registry import make_agent
 
         make_agent(args.agent)  # an unknown agent fails here, before any folder or worker exists
-    if not 0 <= (getattr(args, "first_runs", 0) or 0) < args.runs:
-        raise SurrealistError(f"--first-runs: expected a number of runs below --runs ({args.runs}), "
-                              f"got {args.first_runs}")
+    if max(getattr(args, "first_runs", None) or [0]) >= args.runs:
+        raise SurrealistError(f"--first-runs: expected numbers of runs below --runs ({args.runs}), "
+                              f"got {','.join(map(str, args.first_runs))}")
     out = Path(args.out or f"results/{command}-{datetime.now():%Y%m%d-%H%M%S}")
     options = {"command": command, **{k: getattr(args, k) for k in keys}}
     for key in ("log", "test", "seed"):
@@ -98,11 +112,11 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
         from search.registry import make_agent
 
         agent = make_agent(name, seed=options["random_seed"])
-    first_runs = options.get("first_runs") or 0
-    if options.get("surrogate") or first_runs:
+    stages = tuple(race_stages(options.get("first_runs") or 0))
+    if options.get("surrogate") or stages:
         from surrogates.prescreen import PrescreenConfig, wrap
 
-        agent = wrap(agent, options.get("surrogate") or "online", env, PrescreenConfig(first_runs=first_runs))
+        agent = wrap(agent, options.get("surrogate") or "online", env, PrescreenConfig(first_runs=stages))
     bar = tqdm(total=options["budget"], unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)
     start = time.perf_counter()
@@ -126,10 +140,10 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
         (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
         raced = agent.dropped
         ties = sum(bool(s.get("tie")) for s in agent.skipped)
-        margin = "not calibrated" if agent.race_margin is None else f"{agent.race_margin:.2f}"
+        margin = "/".join("not calibrated" if m is None else f"{m:.2f}" for m in agent.race_margins.values())
         print(f"pre-screening ({agent.rule}): {len(agent.skipped) - raced} candidates skipped without a simulation"
-              + (f", {raced} dropped after their first {first_runs} runs ({ties} of them tied the best; racing "
-                 f"margin {margin})" if first_runs else "") + " (skipped.json)")
+              + (f", {raced} dropped after their first {'/'.join(map(str, stages))} runs ({ties} of them tied the "
+                 f"best; racing margin {margin})" if stages else "") + " (skipped.json)")
     env.close()
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
           f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "

@@ -137,6 +137,28 @@ def test_racing_drops_candidates_whose_first_runs_fall_short():
     assert env.unwrapped.budget_left >= 0
 
 
+def test_racing_in_stages_drops_a_candidate_at_the_first_stage_it_falls_behind():
+    env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline")
+    config = PrescreenConfig(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False)
+    agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
+    result = agent.run(env, seed=0)
+    assert agent.race_margins == {1: 0.0, 2: 0.0}
+    raced = [s for s in agent.skipped if s["rule"] == "race"]
+    assert {s["first_runs"] for s in raced} == {1, 2}, "both stages drop candidates at a zero margin"
+    assert all(s["race_shortfall"] > 0 for s in raced)
+    flown = {}  # a candidate asked again after its drop flies no run twice
+    for s in raced:
+        flown[s["test_key"]] = max(flown.get(s["test_key"], 0), s["first_runs"])
+    assert env.unwrapped.evaluator.simulations == 3 * result.evaluations + sum(flown.values())
+
+
+def test_racing_stages_must_increase():
+    assert PrescreenConfig(first_runs=(1, 2, 3)).race_stages == (1, 2, 3)
+    assert PrescreenConfig(first_runs=2).race_stages == (2,) and PrescreenConfig().race_stages == ()
+    with pytest.raises(ValueError, match="increasing"):
+        PrescreenConfig(first_runs=(2, 1))
+
+
 def test_racing_drops_ties_under_common_noise():
     # with common random numbers, moving the RQ2 box along the path (its first mutator, y) leaves the flights and
     # their scores unchanged: such candidates tie the incumbent on their first run and are dropped after it

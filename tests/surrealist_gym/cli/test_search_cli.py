@@ -110,6 +110,26 @@ def test_generate_with_common_noise(tmp_path):
     assert len(fitness) == 3 and len(set(fitness)) < 3
 
 
+def test_generate_races_candidates_in_stages(tmp_path, capsys):
+    # racing in stages from the command line: under common noise the greedy's first moves tie the seed test on
+    # their first run and are dropped after it (one run each instead of three)
+    out = tmp_path / "race"
+    assert main(["generate", "--budget", "3", "--runs", "3", "--workers", "1", "--common-noise",
+                 "--first-runs", "1,2", "--out", str(out)]) == 0
+    assert json.loads((out / "run.json").read_text())["first_runs"] == [1, 2]
+    dropped = json.loads((out / "skipped.json").read_text())
+    assert dropped and all(s["rule"] == "race" and s["tie"] and s["first_runs"] == 1 for s in dropped)
+    assert "dropped after their first 1/2 runs" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("stages", ["2,1", "1,3"])
+def test_racing_stages_must_increase_below_the_runs(tmp_path, stages):
+    with pytest.raises(SystemExit) as failed:  # argparse or the search's own check: one line, exit 2
+        code = main(["generate", "--budget", "1", "--runs", "3", "--first-runs", stages, "--out", str(tmp_path / "x")])
+        raise SystemExit(code)
+    assert failed.value.code == 2
+
+
 def test_a_results_folder_keeps_its_noise_mode(tmp_path, capsys):
     # evaluations flown with common noise are not read back by a search with each test's own noise (nor the reverse)
     out = tmp_path / "crn"
