@@ -304,15 +304,13 @@ def fresh(args) -> None:
 
 
 def race_replay(args) -> None:
-    """Racing replayed on greedy alone's stores: for each repetition, a margin calibrated on the other repetitions
+    """Racing replayed on greedy alone's stores: for each repetition, margins calibrated on the other repetitions
     (:func:`replay_margin` of the first-k fitness); a candidate is dropped when the incumbent's first-k fitness
     exceeds its own by more than the margin, or, under common noise, equals it (a tie,
-    ``PrescreenConfig.drop_ties``). Printed per k: the share of simulations saved and of real improvements
-    missed. An estimate only: a real search that drops a candidate walks on differently."""
-    from surrogates.prescreen import replay_margin
-
+    ``PrescreenConfig.drop_ties``). Printed per k, then for racing in stages 1..k (each stage at an equal share of
+    the miss rate, as ``PrescreenConfig(first_runs=(1, ..., k))``): the share of simulations saved and of real
+    improvements missed. An estimate only: a real search that drops a candidate walks on differently."""
     stores = _stores(args.problem, range(args.repetitions))
-    common_noise = args.common_noise  # ties are dropped under common noise only, as PrescreenConfig.drop_ties
     searches = []
     for path in stores:
         with EvaluationStore(path) as store:
@@ -324,32 +322,50 @@ def race_replay(args) -> None:
     runs = max(n for rows in searches for _, n, _ in rows)
     print(f"{args.problem}: {len(searches)} stores, {sum(map(len, searches))} evaluations of {runs} runs; "
           f"margins at miss rate {args.miss_rate:g}, leave-one-repetition-out")
-    for k in range(1, runs):
-        saved = total = missed = improvements = ties = 0
-        margins = []
-        for held, rows in enumerate(searches):
-            others = [r for i, s in enumerate(searches) if i != held for r in s]
-            groups = [i for i, s in enumerate(searches) if i != held for _ in s]
-            margin = replay_margin([r[2][k - 1] for r in others], [r[0] for r in others], groups, args.miss_rate)
-            if margin is None:
-                continue
-            margins.append(margin)
-            best, incumbent = -np.inf, None
-            for fitness, n, first in rows:
-                total += n
-                improves = fitness > best
-                improvements += improves
-                tie = incumbent is not None and common_noise and is_tie(incumbent, first[k - 1])
-                if incumbent is not None and (incumbent - first[k - 1] > margin or tie):
-                    saved += n - k
-                    missed += improves
-                    ties += tie
-                    continue
-                if improves:
-                    best, incumbent = fitness, first[k - 1]
+    for stages in [(k,) for k in range(1, runs)] + [tuple(range(1, k + 1)) for k in range(2, runs)]:
+        saved, total, missed, improvements, ties, margins = _replay_racing(searches, stages, args.miss_rate,
+                                                                           args.common_noise)
         if margins:
-            print(f"first {k} runs: margin {np.mean(margins):.2f}, simulations saved {saved / total:.0%}, "
-                  f"improvements missed {missed}/{improvements}; {ties} of the drops tied the incumbent")
+            label = f"first {stages[0]} runs" if len(stages) == 1 else f"stages 1..{stages[-1]}"
+            print(f"{label}: margin {'/'.join(f'{m:.2f}' for m in np.mean(margins, axis=0))}, simulations saved "
+                  f"{saved / total:.0%}, improvements missed {missed}/{improvements}; {ties} of the drops tied the "
+                  f"incumbent")
+
+
+def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
+    """One racing setting replayed on every search (margins from the other searches): simulations saved and in
+    all, improvements missed and in all, drops that were ties (ties drop under common noise only, as
+    ``PrescreenConfig.drop_ties``), and each search's margins per stage."""
+    from surrogates.prescreen import replay_margin
+
+    saved = total = missed = improvements = ties = 0
+    margins = []
+    for held, rows in enumerate(searches):
+        others = [r for i, s in enumerate(searches) if i != held for r in s]
+        groups = [i for i, s in enumerate(searches) if i != held for _ in s]
+        ours = [replay_margin([r[2][k - 1] for r in others], [r[0] for r in others], groups,
+                              miss_rate / len(stages)) for k in stages]
+        if any(m is None for m in ours):
+            continue
+        margins.append(ours)
+        best, incumbent = -np.inf, None
+        for fitness, n, first in rows:
+            total += n
+            improves = fitness > best
+            improvements += improves
+            dropped_at = None
+            for k, margin in zip(stages, ours) if incumbent is not None else ():
+                tie = common_noise and is_tie(incumbent[k - 1], first[k - 1])
+                if tie or incumbent[k - 1] - first[k - 1] > margin:
+                    dropped_at, ties = k, ties + tie
+                    break
+            if dropped_at is not None:
+                saved += n - dropped_at
+                missed += improves
+                continue
+            if improves:
+                best, incumbent = fitness, first
+    return saved, total, missed, improvements, ties, margins
 
 
 def main() -> None:
