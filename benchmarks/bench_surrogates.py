@@ -27,7 +27,8 @@ Both are printed again strictly censored: a run that never gets there counts the
 with ``PrescreenConfig.verify_stop`` (an early stop checked by an unscreened restart from the best).
 
 ``search --from-rep 10`` runs repetitions 10.. (``reproduce_paper.py --repetitions 20``) with models trained on
-repetitions 0-9: a confirmation on repetitions no setting was chosen with.
+repetitions 0-9: a confirmation on repetitions no setting was chosen with (``--from-rep 20``: repetitions 20..,
+models trained on 0-19).
 
 ``--common-noise`` runs every command on the stores of ``reproduce_paper.py --common-noise --out
 results/paper-crn`` and flies the pre-screened greedy with the same common random numbers (run i of every test
@@ -122,16 +123,18 @@ def _stages_label(first_runs) -> str:
     return "-".join(map(str, first_runs)) if isinstance(first_runs, tuple) else str(first_runs)
 
 
-def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop) -> str:
+def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop,
+                  spend: bool = False) -> str:
     return ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
-            + (f"-race{_stages_label(first_runs)}" if first_runs else "") + ("-verify" if verify_stop else ""))
+            + (f"-race{_stages_label(first_runs)}" if first_runs else "") + ("-spend" if spend else "") + ("-verify" if verify_stop else ""))
 
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
-                counted: bool = True, first_runs: int | tuple[int, ...] = 0, verify_stop: bool = False) -> dict:
-    label = _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop)
+                counted: bool = True, first_runs: int | tuple[int, ...] = 0, verify_stop: bool = False,
+                spend: bool = False) -> dict:
+    label = _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop, spend)
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -140,7 +143,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     featurizer = _featurizer(problem, lowfi)
     config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10, retrain_every=10,
                              lowfi=lowfi, agent_counts_skips=counted, first_runs=first_runs,
-                             verify_stop=verify_stop)
+                             verify_stop=verify_stop, skips_spend_budget=spend)
     if mode == "pretrained":
         others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
         model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
@@ -175,8 +178,9 @@ def search(args) -> None:
     target = float(np.mean([g["final"] for g in greedy]))  # the common level: greedy alone's mean final fitness
     rows = []
     for rep, g in zip(reps, greedy):
-        p = prescreened(args.problem, rep, args.mode, out, 10, args.lowfi, args.also, args.rule, args.threshold,
-                        args.miss_rate, not args.skips_as_memo, args.first_runs, args.verify_stop)
+        p = prescreened(args.problem, rep, args.mode, out, max(args.from_rep, 10), args.lowfi, args.also, args.rule, args.threshold,
+                        args.miss_rate, not args.skips_as_memo, args.first_runs, args.verify_stop,
+                        args.skips_spend_budget)
         full = p.get("budget_simulations", 500)  # strict censoring: a run that never gets there needs > budget
         g_own, _ = simulations_to_reach(g["curve"], g["final"], g["simulations"])
         p_own, reached = simulations_to_reach(p["curve"], g["final"], p["simulations"])
@@ -280,7 +284,7 @@ def fresh(args) -> None:
     results/paper (each test's own noise) for reference. Tells whether what a search found holds up beyond the
     noise it was found under."""
     label = _search_label(args.mode, args.lowfi, args.also, args.rule, args.threshold, args.miss_rate,
-                          not args.skips_as_memo, args.first_runs, args.verify_stop)
+                          not args.skips_as_memo, args.first_runs, args.verify_stop, args.skips_spend_budget)
     arms = {"greedy alone": [], "pre-screened": [], "greedy alone, own noise (results/paper)": []}
     for rep in range(args.repetitions):
         row = json.loads((Path(args.out) / f"{args.problem}-{label}-rep{rep}.json").read_text())
@@ -374,8 +378,9 @@ def main() -> None:
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--from-rep", type=int, default=0,
-                        help="search: run repetitions FROM_REP.. (models always train on repetitions 0-9 other than "
-                             "the one run; --from-rep 10 is a held-out confirmation on new repetitions)")
+                        help="search: run repetitions FROM_REP.. (models train on repetitions 0..max(FROM_REP, 10)-1 "
+                             "other than the one run; --from-rep 10 or 20 is a held-out confirmation on new "
+                             "repetitions)")
     parser.add_argument("--mode", default="pretrained", choices=["pretrained", "online"])
     parser.add_argument("--rule", default="auto", choices=RULES,
                         help="screening rule (default auto: lowfi with a calibrated margin, else ei)")
@@ -385,6 +390,9 @@ def main() -> None:
     parser.add_argument("--skips-as-memo", action="store_true",
                         help="tell skips to the greedy as memo answers (not charged to its local budgets; "
                              "agent_counts_skips=False)")
+    parser.add_argument("--skips-spend-budget", action="store_true",
+                        help="the greedy's budget counts skipped and dropped candidates as whole evaluations, so it "
+                             "plans and stops as greedy alone (PrescreenConfig.skips_spend_budget)")
     parser.add_argument("--verify-stop", action="store_true",
                         help="when the inner greedy stops with budget left, restart it unscreened from the best")
     parser.add_argument("--first-runs", type=_race_stages, default=0,

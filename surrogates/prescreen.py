@@ -147,6 +147,13 @@ class PrescreenConfig:
             all ten runs. It is not a proof: in the 20 case0 stores 2 candidates tied on the first run and one of
             them (a lower box) improved over all five. None (default): on when the env flies common noise (without
             it no two tests fly the same runs, so nothing ties).
+        skips_spend_budget: the inner agent sees a budget from which every skipped or dropped candidate was spent
+            as a whole evaluation (``budget_left`` as without screening; needs ``agent_counts_skips``), so it also
+            plans its round budgets and stops as without screening: with a screen that drops no improvement it
+            walks the unscreened search's path and ends where that would, having simulated less. The real budget
+            left is then unused, or goes to the verify pass (``verify_stop``). Off by default: the inner agent
+            sees the env's own budget, spends what screening saved on longer line searches and may walk
+            elsewhere.
         verify_stop: when the inner agent stops with budget left, start it again from the best test with
             screening and racing off, so that a stop the skips may have caused is checked by simulation (tests
             already simulated are memo hits and cost nothing); the search then ends as the agent alone would.
@@ -167,6 +174,7 @@ class PrescreenConfig:
     first_runs: int | tuple[int, ...] = 0
     race_margin: float | None = None
     drop_ties: bool | None = None
+    skips_spend_budget: bool = False
     verify_stop: bool = False
 
     def __post_init__(self):
@@ -174,6 +182,9 @@ class PrescreenConfig:
             raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
         if not 0.0 <= self.miss_rate < 1.0:
             raise ValueError(f"prescreen miss_rate: expected a share in [0, 1), got {self.miss_rate!r}")
+        if self.skips_spend_budget and not self.agent_counts_skips:
+            raise ValueError("prescreen skips_spend_budget: needs agent_counts_skips (a skip told as a memo answer "
+                             "spends no budget)")
         stages = self.race_stages
         if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
             raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
@@ -212,6 +223,7 @@ class Prescreened(Agent):
         self.skipped: list[dict] = []
         self.retrains = 0
         self.verified_at: int | None = None  # real evaluations when the unscreened verify pass began
+        self.unspent = 0.0  # budget the skipped and dropped candidates did not spend (as whole evaluations)
 
     @property
     def dropped(self) -> int:
@@ -237,7 +249,7 @@ class Prescreened(Agent):
         seed = seed if seed is not None else self.seed
         _, info = env.reset(seed=seed)
         self.setup(env, info)
-        self.inner.setup(env, info)
+        self.inner.setup(_SkipsSpendBudget(env.unwrapped, self) if self.config.skips_spend_budget else env, info)
         done = False
         while not done and (not self.stop() or self._verify_stop(env, info)):
             self._candidates = candidates = self.inner.ask()
@@ -252,11 +264,13 @@ class Prescreened(Agent):
             for i in order:  # a better first result raises the bar for the rest
                 if done:
                     break
+                before = self._env.budget_left
                 skip = self._screen(candidates[i], tests[i], predictions[i], best, incumbent.get("test"))
                 if skip is None and tests[i] is not None:
                     skip = self._race(candidates[i], tests[i], best, incumbent)
                 if skip is not None:
                     results[i] = (candidates[i], skip["told_fitness"], skip["info"])
+                    self.unspent += 1.0 - (before - self._env.budget_left)  # a whole evaluation, as told
                     done = self._env.budget_left <= 0
                     continue
                 reward, step_info, done = self._step(env, candidates[i], callback)
@@ -280,12 +294,13 @@ class Prescreened(Agent):
                 or self._env.budget_left <= 0):
             return False
         self.verified_at = self._evaluations
-        self.inner.setup(env, info, start=self.best)
+        self.inner.setup(env, info, start=self.best)  # the env's own budget: what screening saved
         return not self.inner.stop()
 
     # --- Agent hooks ---------------------------------------------------------------------------------------------
     def _setup(self, info: dict) -> None:
         self.skipped = []
+        self.unspent = 0.0
         self.retrains = 0
         self.verified_at = None
         self._consecutive = 0
@@ -482,6 +497,25 @@ class Prescreened(Agent):
         self.retrains += 1
         self._since_retrain = 0
         log.info("surrogate retrained on %d evaluations", len(y))
+
+
+class _SkipsSpendBudget:
+    """The env as the inner agent sees it with ``PrescreenConfig.skips_spend_budget``: the same env, whose
+    ``budget_left`` also counts the budget the skipped and dropped candidates did not spend."""
+
+    def __init__(self, env, prescreened: Prescreened):
+        self._real, self._prescreened = env, prescreened
+
+    @property
+    def unwrapped(self):
+        return self
+
+    @property
+    def budget_left(self) -> float:
+        return self._real.budget_left - self._prescreened.unspent
+
+    def __getattr__(self, name):
+        return getattr(self._real, name)
 
 
 def wrap(agent: Agent, spec: str | Path | None, env=None, config: PrescreenConfig | None = None) -> Agent:

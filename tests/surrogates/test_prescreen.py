@@ -159,6 +159,20 @@ def test_racing_stages_must_increase():
         PrescreenConfig(first_runs=(2, 1))
 
 
+def test_skips_spend_the_inner_agents_budget(model):
+    # a screen that skips every candidate: with skips_spend_budget the greedy runs out of (its) budget after as many
+    # candidates as the budget allows, having simulated only the seed test; the env's budget is left unspent
+    env = gym.make("Surrealist-Generate-v0", budget=5, runs=1, executor="inline")
+    config = PrescreenConfig(rule="pi", threshold=1.0, max_skips=10**6, skips_spend_budget=True)
+    agent = Prescreened(AdaptiveGreedy("paper"), model, config, seed=0)
+    result = agent.run(env, seed=0)
+    assert len(agent.skipped) == 4 and agent.unspent == pytest.approx(4.0)
+    assert result.stop_reason == "budget spent" and env.unwrapped.budget_left == 4
+    assert env.unwrapped.evaluator.simulations == 1
+    with pytest.raises(ValueError, match="agent_counts_skips"):
+        PrescreenConfig(skips_spend_budget=True, agent_counts_skips=False)
+
+
 def test_racing_drops_ties_under_common_noise():
     # with common random numbers, moving the RQ2 box along the path (its first mutator, y) leaves the flights and
     # their scores unchanged: such candidates tie the incumbent on their first run and are dropped after it
