@@ -17,7 +17,10 @@ A skipped candidate is not simulated and costs no budget: the inner agent is tol
 (``lowfi``: the best minus the low-fidelity shortfall; ``ei``/``pi``: the prediction minus ``pessimism``
 standard deviations, never above the best) with ``info["skipped"] = True`` and ``info["memo"]`` False (the
 agent plans its own budgets as if it had been evaluated; ``agent_counts_skips=False``: True, so budget-aware
-agents do not count it), and it is logged in :attr:`Prescreened.skipped`. Promising candidates go
+agents do not count it), and it is logged in :attr:`Prescreened.skipped`; asked again, it is told the same as a
+memo answer (free), as the env answers a test it simulated. A candidate dropped by racing also carries the
+averaged trajectory of the runs it flew (the authors' greedy compares trajectories in its plateau test). Promising
+candidates go
 through ``env.step`` as usual, the most promising of one ``ask`` first (by predicted mean), each screened against
 the best so far including the earlier results of the same ``ask`` (the inner agent is told the results in the
 order it asked). In online mode (no model to start from) or with ``retrain_every`` set, the model is
@@ -264,12 +267,17 @@ class Prescreened(Agent):
             for i in order:  # a better first result raises the bar for the rest
                 if done:
                     break
+                again = None if tests[i] is None else self._told.get(tests[i].key())
+                if again is not None:  # skipped before: told the same again, free, as the env's memo would
+                    results[i] = (candidates[i], again[0], {**again[1], "memo": True})
+                    continue
                 before = self._env.budget_left
                 skip = self._screen(candidates[i], tests[i], predictions[i], best, incumbent.get("test"))
                 if skip is None and tests[i] is not None:
                     skip = self._race(candidates[i], tests[i], best, incumbent)
                 if skip is not None:
                     results[i] = (candidates[i], skip["told_fitness"], skip["info"])
+                    self._told[tests[i].key()] = results[i][1:]
                     self.unspent += 1.0 - (before - self._env.budget_left)  # a whole evaluation, as told
                     done = self._env.budget_left <= 0
                     continue
@@ -301,6 +309,7 @@ class Prescreened(Agent):
     def _setup(self, info: dict) -> None:
         self.skipped = []
         self.unspent = 0.0
+        self._told: dict[str, tuple[float, dict]] = {}  # what each skipped or dropped test was told, by key
         self.retrains = 0
         self.verified_at = None
         self._consecutive = 0
@@ -373,8 +382,10 @@ class Prescreened(Agent):
         entry, told = verdict
         return self._skip(action, test, rule, entry, told, best_fitness, prediction)
 
-    def _skip(self, action, test, rule: str, entry: dict, told: float, best_fitness: float, prediction=None) -> dict:
-        """Log a skipped candidate; returns what the inner agent is told (a fitness below the best)."""
+    def _skip(self, action, test, rule: str, entry: dict, told: float, best_fitness: float, prediction=None,
+              trajectory=None) -> dict:
+        """Log a skipped candidate; returns what the inner agent is told (a fitness below the best, and the
+        averaged trajectory of the runs flown, if any, for the greedy's plateau test)."""
         told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
         env = self._env
         entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
@@ -385,6 +396,8 @@ class Prescreened(Agent):
                 "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
                 "simulations": env._simulations, "best_fitness": None if env.best is None else env.best.fitness,
                 "predicted": prediction}
+        if trajectory is not None:
+            info["trajectory"] = trajectory
         log.info("skipped candidate %s (%s): %s", entry["action"], rule,
                  {k: round(v, 3) for k, v in entry.items() if isinstance(v, float)})
         self.skipped.append(entry)
@@ -399,13 +412,14 @@ class Prescreened(Agent):
         for k, margin in self.race_margins.items():
             if len(theirs) < k or (margin is None and not self._drop_ties):
                 return None
-            fitness, _ = self._env.probe(action, k)
+            fitness, probed = self._env.probe(action, k)
             shortfall = float(theirs[k - 1] - fitness)
             tie = self._drop_ties and is_tie(theirs[k - 1], fitness)
             if tie or (margin is not None and shortfall > margin):
                 entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
                          "race_margin": margin, "tie": tie}
-                return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness)
+                return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness,
+                                  trajectory=probed.get("trajectory"))
         return None
 
     def _lowfi_verdict(self, test, incumbent, best_fitness: float) -> tuple[dict, float] | None:
