@@ -1,7 +1,7 @@
 """Pre-screening: a wrapper around any agent that simulates only the candidates worth a simulation.
 
 :class:`Prescreened` asks the inner agent for candidates and screens each against the incumbent (the test with the
-best real fitness so far) with one of three rules:
+best real fitness so far) with one of these rules:
 
 * ``lowfi`` (multi-fidelity): fly the candidate once in the low-fidelity simulator (:mod:`surrogates.lowfi`) and
   skip it when its low-fidelity fitness falls short of the incumbent's by more than a ``margin``. The margin is
@@ -10,6 +10,7 @@ best real fitness so far) with one of three rules:
 * ``ei`` / ``pi``: the surrogate's mean and standard deviation of the fitness (model scale) give the expected
   improvement over the best (skip when EI < ``threshold`` x the spread of the training targets) or the probability
   of improvement (skip when P < ``threshold``).
+* ``none``: skip nothing; candidates are only raced (``first_runs``), most promising first by the model.
 * ``auto`` (default): ``lowfi`` when a margin is known (a model trained with low-fidelity features on stores with
   enough improvements, or a margin given), else ``ei``.
 
@@ -60,7 +61,7 @@ from .lowfi import FITNESS as LOWFI_FITNESS
 from .models import SurrogateModel
 
 log = logging.getLogger(__name__)
-RULES = ("auto", "lowfi", "ei", "pi")
+RULES = ("auto", "lowfi", "ei", "pi", "none")
 MIN_IMPROVEMENTS = 10  # improvements needed in the training data to calibrate the low-fidelity margin
 TIE_TOLERANCE = 1e-9  # relative: first runs whose fitness differs by less score as a tie (identical flights)
 
@@ -116,8 +117,9 @@ class PrescreenConfig:
     """How candidates are screened and the model retrained.
 
     Attributes:
-        rule: ``auto``, ``lowfi`` (low-fidelity shortfall), ``ei`` (expected improvement) or ``pi``
-            (probability of improvement); see the module docstring.
+        rule: ``auto``, ``lowfi`` (low-fidelity shortfall), ``ei`` (expected improvement), ``pi``
+            (probability of improvement) or ``none`` (skip nothing: only race, with ``first_runs``); see the
+            module docstring.
         margin: ``lowfi``: skip when the low-fidelity fitness is below the incumbent's by more than this (in
             fitness units); None calibrates it on the model's training data (see ``miss_rate``).
         miss_rate: share of the past real improvements whose low-fidelity shortfall may exceed the calibrated
@@ -371,7 +373,9 @@ class Prescreened(Agent):
             self._consecutive = 0
             return None
         rule = self.rule
-        if rule == "lowfi":
+        if rule == "none":
+            verdict = None
+        elif rule == "lowfi":
             verdict = self._lowfi_verdict(test, incumbent, best_fitness)
         else:
             verdict = None if prediction is None else self._model_verdict(prediction, best_fitness)

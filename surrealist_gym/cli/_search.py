@@ -37,9 +37,21 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
                         help="racing (with a surrogate; default online): fly K runs of a candidate first and the "
                              "rest only if they do not fall clearly short of the best test's first K runs; "
                              "K1,K2,... compares again after each (e.g. 1,2,3,4)")
+    parser.add_argument("--screen", default="auto", choices=SCREEN_RULES,
+                        help="pre-screening rule (with a surrogate): auto (default: lowfi with a --lowfi model, "
+                             "else ei), lowfi, ei, pi, or none (skip nothing: race only, with --first-runs)")
+    parser.add_argument("--skips-spend-budget", action="store_true",
+                        help="pre-screening: the search's budget counts skipped and dropped candidates as "
+                             "evaluations, so it walks and stops as without screening, having simulated less")
+    parser.add_argument("--verify-stop", action="store_true",
+                        help="pre-screening: when the search stops with budget left, restart it unscreened from "
+                             "the best test")
     parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
     parser.add_argument("--resume", default=None, metavar="DIR",
                         help="resume an interrupted search from its results folder (same options)")
+
+
+SCREEN_RULES = ("auto", "lowfi", "ei", "pi", "none")  # surrogates.prescreen.RULES, without importing torch here
 
 
 def race_stages(text) -> list[int]:
@@ -113,10 +125,14 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
 
         agent = make_agent(name, seed=options["random_seed"])
     stages = tuple(race_stages(options.get("first_runs") or 0))
-    if options.get("surrogate") or stages:
+    if (options.get("surrogate") or stages or options.get("skips_spend_budget") or options.get("verify_stop")
+            or options.get("screen", "auto") != "auto"):
         from surrogates.prescreen import PrescreenConfig, wrap
 
-        agent = wrap(agent, options.get("surrogate") or "online", env, PrescreenConfig(first_runs=stages))
+        config = PrescreenConfig(rule=options.get("screen") or "auto", first_runs=stages,
+                                 skips_spend_budget=bool(options.get("skips_spend_budget")),
+                                 verify_stop=bool(options.get("verify_stop")))
+        agent = wrap(agent, options.get("surrogate") or "online", env, config)
     bar = tqdm(total=options["budget"], unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)
     start = time.perf_counter()

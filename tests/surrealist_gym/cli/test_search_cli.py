@@ -113,12 +113,18 @@ def test_generate_with_common_noise(tmp_path):
 def test_generate_races_candidates_in_stages(tmp_path, capsys):
     # racing in stages from the command line: under common noise the greedy's first moves tie the seed test on
     # their first run and are dropped after it (one run each instead of three)
+    # (--screen none: nothing is skipped without a flight); with --skips-spend-budget each drop spends a whole
+    # evaluation of the greedy's budget, so it stops after as many candidates as without racing
     out = tmp_path / "race"
-    assert main(["generate", "--budget", "3", "--runs", "3", "--workers", "1", "--common-noise",
-                 "--first-runs", "1,2", "--out", str(out)]) == 0
-    assert json.loads((out / "run.json").read_text())["first_runs"] == [1, 2]
+    assert main(["generate", "--budget", "3", "--runs", "3", "--workers", "1", "--common-noise", "--screen", "none",
+                 "--first-runs", "1,2", "--skips-spend-budget", "--out", str(out)]) == 0
+    options = json.loads((out / "run.json").read_text())
+    assert options["first_runs"] == [1, 2] and options["screen"] == "none" and options["skips_spend_budget"]
     dropped = json.loads((out / "skipped.json").read_text())
     assert dropped and all(s["rule"] == "race" and s["tie"] and s["first_runs"] == 1 for s in dropped)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["evaluations"] + len(dropped) == 3
+    assert summary["simulations"] == 3 * summary["evaluations"] + len(dropped)
     assert "dropped after their first 1/2 runs" in capsys.readouterr().out
 
 
