@@ -4,6 +4,7 @@
     python benchmarks/bench_surrogates.py accuracy --problem rq1-seed1 [--lowfi]
     python benchmarks/bench_surrogates.py race-replay --problem rq2
     python benchmarks/bench_surrogates.py fresh --problem rq2 --common-noise --lowfi --first-runs 1 [--verify-stop]
+    python benchmarks/bench_surrogates.py transfer --problem rq1-seed1 --common-noise
 
 ``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
 budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
@@ -336,6 +337,32 @@ def race_replay(args) -> None:
                   f"incumbent")
 
 
+def transfer(args) -> None:
+    """Do the screening margins hold on new repetitions? For the low-fidelity fitness and the first run's fitness,
+    the margin calibrated on repetitions 0..R-1 (R = ``--repetitions``, 2% miss rate by default) and the share of
+    real improvements of greedy alone on repetitions R..2R-1 whose shortfall exceeds it (in-sample on 0..R-1 for
+    comparison), with the largest shortfall seen."""
+    from surrogates.lowfi import FITNESS
+    from surrogates.prescreen import improvement_shortfalls, replay_margin
+
+    reps = args.repetitions
+    featurizer = _featurizer(args.problem, lowfi=True)
+    data = load_dataset(_stores(args.problem, range(2 * reps)), featurizer)
+    if len(np.unique(data.groups)) < 2 * reps:
+        raise SystemExit(f"{args.problem}: needs {2 * reps} stores in {PAPER} (reproduce_paper.py --repetitions "
+                         f"{2 * reps})")
+    fitness, groups = data.targets["fitness"], data.groups
+    early = groups < reps
+    for name, proxy in (("low-fidelity fitness", data.X[:, featurizer.names.index(FITNESS)]),
+                        ("first run's fitness", data.first_runs[:, 0])):
+        margin = replay_margin(proxy[early], fitness[early], groups[early], args.miss_rate)
+        for label, rows in (("in-sample", early), ("new repetitions", ~early)):
+            shortfalls = np.array(improvement_shortfalls(proxy[rows], fitness[rows], groups[rows]))
+            print(f"{args.problem}, {name}: margin {margin:.2f} (repetitions 0-{reps - 1}); {label}: "
+                  f"{np.sum(shortfalls > margin)}/{len(shortfalls)} improvements beyond it "
+                  f"({np.mean(shortfalls > margin):.1%}), largest shortfall {shortfalls.max():.1f}")
+
+
 def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
     """One racing setting replayed on every search (margins from the other searches): simulations saved and in
     all, improvements missed and in all, drops that were ties (ties drop under common noise only, as
@@ -374,7 +401,7 @@ def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh"])
+    parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh", "transfer"])
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--from-rep", type=int, default=0,
@@ -415,7 +442,8 @@ def main() -> None:
     if args.also == args.problem:
         parser.error("--also must name the OTHER seed (the held-out repetition would leak into training)")
     warnings.simplefilter("ignore")
-    {"search": search, "accuracy": accuracy, "race-replay": race_replay, "fresh": fresh}[args.what](args)
+    {"search": search, "accuracy": accuracy, "race-replay": race_replay, "fresh": fresh,
+     "transfer": transfer}[args.what](args)
 
 
 if __name__ == "__main__":

@@ -71,14 +71,9 @@ def is_tie(incumbent: float, candidate: float) -> bool:
     return abs(incumbent - candidate) <= TIE_TOLERANCE * max(1.0, abs(candidate))
 
 
-def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | None:
-    """The shortfall in a cheap proxy of the fitness (the low-fidelity fitness, or the fitness of the first runs)
-    that only ``miss_rate`` of the real improvements of past searches exceeded.
-
-    Each search (rows of one group, in the order evaluated) is replayed: an improvement is a real fitness above the
-    best so far, its shortfall the incumbent's proxy minus its own. Rows whose proxy is unknown (NaN) are skipped.
-    None with fewer than ``MIN_IMPROVEMENTS`` improvements.
-    """
+def improvement_shortfalls(proxy, fitness, groups) -> list[float]:
+    """Past searches replayed (rows of one group, in the order evaluated): for every real improvement (a fitness
+    above the best so far), the incumbent's proxy minus its own. Rows whose proxy is unknown (NaN) are skipped."""
     proxy, fitness, groups = (np.asarray(a) for a in (proxy, fitness, groups))
     shortfalls = []
     for group in np.unique(groups):
@@ -87,8 +82,17 @@ def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | No
         for low, real in zip(proxy[rows], fitness[rows]):
             if real > best:
                 if incumbent is not None:
-                    shortfalls.append(incumbent - low)
+                    shortfalls.append(float(incumbent - low))
                 best, incumbent = real, low
+    return shortfalls
+
+
+def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | None:
+    """The shortfall in a cheap proxy of the fitness (the low-fidelity fitness, or the fitness of the first runs)
+    that only ``miss_rate`` of the real improvements of past searches exceeded (:func:`improvement_shortfalls`).
+    None with fewer than ``MIN_IMPROVEMENTS`` improvements.
+    """
+    shortfalls = improvement_shortfalls(proxy, fitness, groups)
     if len(shortfalls) < MIN_IMPROVEMENTS:
         return None
     return float(np.quantile(shortfalls, 1.0 - miss_rate))
