@@ -53,6 +53,7 @@ import numpy as np
 import surrealist_gym as sg
 from search import AdaptiveGreedy
 from surrealist_gym.envs.generate import GenerateEnv
+from surrealist_gym.cli._search import race_stages
 from surrealist_gym.envs.replicate import ReplicateEnv
 from surrealist_gym.sim import SimConfig
 from surrealist_gym.statistics import compare, vargha_delaney_a12
@@ -114,21 +115,16 @@ def _paper_env(problem: str, random_seed: int, store=None, sim_config=None):
                         random_seed=random_seed, executor="inline", sim_config=sim_config)
 
 
-def _race_stages(text: str) -> int | tuple[int, ...]:
-    """``--first-runs``: one number of runs (``1``) or racing stages (``1,2,3,4``)."""
-    stages = tuple(int(k) for k in text.split(","))
-    return stages[0] if len(stages) == 1 else stages
-
-
 def _stages_label(first_runs) -> str:
-    return "-".join(map(str, first_runs)) if isinstance(first_runs, tuple) else str(first_runs)
+    return "-".join(map(str, first_runs)) if isinstance(first_runs, (tuple, list)) else str(first_runs)
 
 
 def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop,
                   spend: bool = False) -> str:
     return ((f"{mode}-lowfi" if lowfi else mode) + (f"-also-{also}" if also else "")
             + f"-{_rule_label(rule, threshold, miss_rate)}" + ("-counted" if counted else "")
-            + (f"-race{_stages_label(first_runs)}" if first_runs else "") + ("-spend" if spend else "") + ("-verify" if verify_stop else ""))
+            + (f"-race{_stages_label(first_runs)}" if first_runs else "") + ("-spend" if spend else "")
+            + ("-verify" if verify_stop else ""))
 
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
@@ -422,7 +418,7 @@ def main() -> None:
                              "plans and stops as greedy alone (PrescreenConfig.skips_spend_budget)")
     parser.add_argument("--verify-stop", action="store_true",
                         help="when the inner greedy stops with budget left, restart it unscreened from the best")
-    parser.add_argument("--first-runs", type=_race_stages, default=0,
+    parser.add_argument("--first-runs", type=lambda text: tuple(race_stages(text)), default=(),
                         help="racing: fly this many runs of a candidate first, the rest only if they do not fall "
                              "short; K1,K2,... races in stages")
     parser.add_argument("--folds", type=int, default=10, help="held-out repetitions, one per fold (default 10)")
