@@ -132,6 +132,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
                 counted: bool = True, first_runs: int | tuple[int, ...] = 0, verify_stop: bool = False,
                 spend: bool = False) -> dict:
     label = _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop, spend)
+    label += f"-train{reps}" if reps != 10 else ""  # models trained on repetitions 0..reps-1
     cached = out / f"{problem}-{label}-rep{rep}.json"
     if cached.is_file():
         return json.loads(cached.read_text())
@@ -160,6 +161,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
            "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
            "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin,
+           "race_margins": list(agent.race_margins.values()),
            "verified_at": agent.verified_at, "budget_simulations": env.unwrapped.budget * env.unwrapped.evaluator.runs,
            "best_key": env.unwrapped.best.test.key()}
     env.close()
@@ -175,8 +177,8 @@ def search(args) -> None:
     target = float(np.mean([g["final"] for g in greedy]))  # the common level: greedy alone's mean final fitness
     rows = []
     for rep, g in zip(reps, greedy):
-        p = prescreened(args.problem, rep, args.mode, out, max(args.from_rep, 10), args.lowfi, args.also, args.rule, args.threshold,
-                        args.miss_rate, not args.skips_as_memo, args.first_runs, args.verify_stop,
+        p = prescreened(args.problem, rep, args.mode, out, max(args.from_rep, 10), args.lowfi, args.also, args.rule,
+                        args.threshold, args.miss_rate, not args.skips_as_memo, args.first_runs, args.verify_stop,
                         args.skips_spend_budget)
         full = p.get("budget_simulations", 500)  # strict censoring: a run that never gets there needs > budget
         g_own, _ = simulations_to_reach(g["curve"], g["final"], g["simulations"])
@@ -191,7 +193,8 @@ def search(args) -> None:
                "pre_sims_to_target_strict": p_common if p_hit else full, "verified_at": p.get("verified_at"),
                "pre_evaluations": p["evaluations"], "skipped": p["skipped"], "raced": p["raced"],
                "wall_s": p["wall_s"], "new_simulations": p["new_simulations"], "lowfi_runs": p.get("lowfi_runs", 0),
-               "rule": p.get("rule"), "margin": p.get("margin"), "race_margin": p.get("race_margin")}
+               "rule": p.get("rule"), "margin": p.get("margin"), "race_margin": p.get("race_margin"),
+               "race_margins": p.get("race_margins")}
         rows.append(row)
         print(json.dumps(row), flush=True)
     _summary(args, rows, target)
@@ -200,11 +203,15 @@ def search(args) -> None:
 def _summary(args, rows, target: float) -> None:
     n = len(rows)
     skips = "skips told as memo" if args.skips_as_memo else "agent counts skips"
-    race_margin = np.nanmean([r["race_margin"] or np.nan for r in rows])
-    racing = (f"on the first {_stages_label(args.first_runs)} runs (margin {race_margin:.2f}, dropped per search "
+    stages = [[np.nan if m is None else m for m in r["race_margins"]] for r in rows if r.get("race_margins")]
+    margins = (np.nanmean(np.array(stages, dtype=float), axis=0) if stages  # rows cached before race_margins
+               else [np.nanmean([r["race_margin"] or np.nan for r in rows])])
+    racing = (f"on the first {_stages_label(args.first_runs)} runs (margin {'/'.join(f'{m:.2f}' for m in margins)}, "
+              f"dropped per search "
               f"{np.mean([r['raced'] for r in rows]):.0f})" if args.first_runs else "off")
     print(f"\n{args.problem}, {args.mode}{' + lowfi' if args.lowfi else ''}, rule "
-          f"{_rule_label(args.rule, args.threshold, args.miss_rate)}, {skips} (in force: {sorted({r['rule'] for r in rows})}, "
+          f"{_rule_label(args.rule, args.threshold, args.miss_rate)}, {skips} "
+          f"(in force: {sorted({r['rule'] for r in rows})}, "
           f"margin {np.mean([r['margin'] or np.nan for r in rows]):.2f}), racing {racing}, "
           f"{n} repetitions; skipped per search {np.mean([r['skipped'] for r in rows]):.0f}, low-fidelity flights "
           f"per search {np.mean([r['lowfi_runs'] for r in rows]):.0f}")
@@ -352,8 +359,11 @@ def transfer(args) -> None:
     for name, proxy in (("low-fidelity fitness", data.X[:, featurizer.names.index(FITNESS)]),
                         ("first run's fitness", data.first_runs[:, 0])):
         margin = replay_margin(proxy[early], fitness[early], groups[early], args.miss_rate)
+        if margin is None:
+            print(f"{args.problem}, {name}: too few improvements in repetitions 0-{reps - 1} to calibrate a margin")
+            continue
         for label, rows in (("in-sample", early), ("new repetitions", ~early)):
-            shortfalls = np.array(improvement_shortfalls(proxy[rows], fitness[rows], groups[rows]))
+            shortfalls = np.array(improvement_shortfalls(proxy[rows], fitness[rows], groups[rows]) or [np.nan])
             print(f"{args.problem}, {name}: margin {margin:.2f} (repetitions 0-{reps - 1}); {label}: "
                   f"{np.sum(shortfalls > margin)}/{len(shortfalls)} improvements beyond it "
                   f"({np.mean(shortfalls > margin):.1%}), largest shortfall {shortfalls.max():.1f}")

@@ -159,7 +159,9 @@ class PrescreenConfig:
         skips_spend_budget: the inner agent sees a budget from which every skipped or dropped candidate was spent
             as a whole evaluation (``budget_left`` as without screening; needs ``agent_counts_skips``), so it also
             plans its round budgets and stops as without screening: with a screen that drops no improvement it
-            walks the unscreened search's path and ends where that would, having simulated less. The real budget
+            walks the unscreened search's path and ends where that would, having simulated less (up to the
+            authors' plateau test, which compares trajectories: a skipped candidate has none, a dropped one the
+            average of the runs it flew, not of all). The real budget
             left is then unused, or goes to the verify pass (``verify_stop``). Off by default: the inner agent
             sees the env's own budget, spends what screening saved on longer line searches and may walk
             elsewhere.
@@ -187,6 +189,8 @@ class PrescreenConfig:
     verify_stop: bool = False
 
     def __post_init__(self):
+        if isinstance(self.first_runs, (list, tuple)):
+            object.__setattr__(self, "first_runs", tuple(int(k) for k in self.first_runs))  # hashable, frozen
         if self.rule not in RULES:
             raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
         if not 0.0 <= self.miss_rate < 1.0:
@@ -271,8 +275,10 @@ class Prescreened(Agent):
             else:  # the verify pass simulates every candidate: no tests to screen, nothing to predict
                 order, tests, predictions = range(len(candidates)), [None] * len(candidates), [None] * len(candidates)
             for i in order:  # a better first result raises the bar for the rest
-                if done:
+                if done or self._inner_budget_spent:
                     break
+                if tests[i] is not None and tests[i].key() in self._env._episode_keys:
+                    tests[i] = None  # the same test earlier in this ask was simulated: now a free memo answer
                 again = None if tests[i] is None else self._told.get(tests[i].key())
                 if again is not None:  # skipped before: told the same again, free, as the env's memo would
                     results[i] = (candidates[i], again[0], {**again[1], "memo": True})
@@ -284,7 +290,9 @@ class Prescreened(Agent):
                 if skip is not None:
                     results[i] = (candidates[i], skip["told_fitness"], skip["info"])
                     self._told[tests[i].key()] = results[i][1:]
-                    self.unspent += 1.0 - (before - self._env.budget_left)  # a whole evaluation, as told
+                    # a whole evaluation, as told (the env charges probed runs in whole evaluations, so each term
+                    # is 0 or 1; the running total is exact because a candidate that passes is stepped at once)
+                    self.unspent += 1.0 - (before - self._env.budget_left)
                     done = self._env.budget_left <= 0
                     continue
                 reward, step_info, done = self._step(env, candidates[i], callback)
@@ -296,11 +304,20 @@ class Prescreened(Agent):
             self.tell([a for a, _, _ in real], [f for _, f, _ in real], [i for _, _, i in real])
             self.inner.tell([a for a, _, _ in told], [f for _, f, _ in told], [i for _, _, i in told])
         if not self._stop_reason:
-            self._stop_reason = self.inner.stop().get("reason", "")
+            self._stop_reason = self.stop().get("reason", "")
         return self.result
 
     def stop(self) -> dict:
+        if self._inner_budget_spent:
+            return {"reason": "budget spent (skipped and dropped candidates counted as evaluations)"}
         return super().stop() or self.inner.stop()
+
+    @property
+    def _inner_budget_spent(self) -> bool:
+        """With ``skips_spend_budget``, before the verify pass: the inner agent's budget (skips counted) is spent,
+        where the env would have ended the search without screening."""
+        return (self.config.skips_spend_budget and self.verified_at is None
+                and self._env.budget_left - self.unspent <= 0)
 
     def _verify_stop(self, env, info: dict) -> bool:
         """Begin the verify pass (see ``PrescreenConfig.verify_stop``) if due; True when it began."""

@@ -1,6 +1,7 @@
 """What `surrealist replicate` and `surrealist generate` share: options, progress bar, results folder, resume."""
 from __future__ import annotations
 
+import argparse
 import json
 import shutil
 from collections import Counter
@@ -54,16 +55,16 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
 SCREEN_RULES = ("auto", "lowfi", "ei", "pi", "none")  # surrogates.prescreen.RULES, without importing torch here
 
 
-def race_stages(text) -> list[int]:
-    """``--first-runs``: the run counts after which racing compares a candidate (``"1"``, ``"1,2,3,4"``; a number
-    from an older run.json); empty when racing is off."""
-    if isinstance(text, int):
-        return [text] if text else []
-    if isinstance(text, list):
-        return text
-    stages = [int(k) for k in str(text).split(",")]
-    if any(k < 0 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
-        raise ValueError(text)
+def race_stages(value) -> list[int]:
+    """``--first-runs``: the run counts after which racing compares a candidate (``"1"``, ``"1,2,3,4"``; a number or
+    a list from a run.json); empty when racing is off. Raises ArgumentTypeError for anything else."""
+    try:
+        stages = ([int(value)] if isinstance(value, int) else [int(k) for k in value] if isinstance(value, list)
+                  else [int(k) for k in str(value).split(",")])
+    except ValueError:
+        stages = None
+    if stages is None or any(k < 0 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
+        raise argparse.ArgumentTypeError(f"expected increasing numbers of runs such as 1 or 1,2,3,4, got {value!r}")
     return [k for k in stages if k]
 
 
@@ -124,7 +125,10 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
         from search.registry import make_agent
 
         agent = make_agent(name, seed=options["random_seed"])
-    stages = tuple(race_stages(options.get("first_runs") or 0))
+    try:
+        stages = tuple(race_stages(options.get("first_runs") or 0))
+    except argparse.ArgumentTypeError as error:
+        raise SurrealistError(f"{out / RUN_FILE}: first_runs: {error}") from None
     if (options.get("surrogate") or stages or options.get("skips_spend_budget") or options.get("verify_stop")
             or options.get("screen", "auto") != "auto"):
         from surrogates.prescreen import PrescreenConfig, wrap

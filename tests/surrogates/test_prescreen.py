@@ -165,10 +165,41 @@ def test_skips_spend_the_inner_agents_budget(model):
     agent = Prescreened(AdaptiveGreedy("paper"), model, config, seed=0)
     result = agent.run(env, seed=0)
     assert len(agent.skipped) == 4 and agent.unspent == pytest.approx(4.0)
-    assert result.stop_reason == "budget spent" and env.unwrapped.budget_left == 4
+    assert result.stop_reason.startswith("budget spent") and env.unwrapped.budget_left == 4
     assert env.unwrapped.evaluator.simulations == 1
     with pytest.raises(ValueError, match="agent_counts_skips"):
         PrescreenConfig(skips_spend_budget=True, agent_counts_skips=False)
+
+
+def test_the_inner_agent_stops_where_its_budget_with_skips_counted_ends():
+    # every candidate is dropped after its first run (a margin below any shortfall): the greedy is told exactly as
+    # many candidates as the budget holds after the seed test, as the env would cut it off without screening
+    env = gym.make("Surrealist-Generate-v0", budget=4, runs=2, executor="inline")
+    config = PrescreenConfig(rule="none", first_runs=1, race_margin=-1e9, lowfi=False, skips_spend_budget=True)
+    agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
+    result = agent.run(env, seed=0)
+    assert len(agent.skipped) == 3 and result.stop_reason.startswith("budget spent")
+    assert env.unwrapped.budget_left > 0  # the simulations saved are left unspent (no verify pass)
+
+
+class _AsksTwice(AdaptiveGreedy):
+    """Asks the same candidate twice in one ask, once."""
+
+    def _ask(self):
+        return [] if self._stop_reason else [np.full(len(self._env.mutators), 0.3)] * 2
+
+    def _tell(self, actions, fitnesses, infos):
+        self.told = list(zip(fitnesses, infos))
+        self._finish("asked")
+
+
+def test_a_test_asked_twice_in_one_ask_is_flown_once_and_then_a_memo_answer():
+    env = gym.make("Surrealist-Generate-v0", budget=4, runs=2, executor="inline", sim_config={"common_noise": True})
+    inner = _AsksTwice("paper")
+    agent = Prescreened(inner, "online", PrescreenConfig(rule="none", first_runs=1, lowfi=False), seed=0)
+    agent.run(env, seed=0)
+    (first, _), (second, info) = inner.told
+    assert second == first and info["memo"] and not agent.skipped  # not raced against itself
 
 
 def test_racing_drops_ties_under_common_noise():

@@ -128,6 +128,18 @@ def test_generate_races_candidates_in_stages(tmp_path, capsys):
     assert "dropped after their first 1/2 runs" in capsys.readouterr().out
 
 
+def test_race_stages_reads_the_command_line_and_older_run_files():
+    import argparse
+
+    from surrealist_gym.cli._search import race_stages
+
+    assert race_stages("1,2,3,4") == [1, 2, 3, 4] and race_stages("2") == [2] and race_stages("0") == []
+    assert race_stages(0) == [] and race_stages(1) == [1] and race_stages([1, 2]) == [1, 2]  # from a run.json
+    for bad in ("2,1", "a", [3, 3], "-1"):
+        with pytest.raises(argparse.ArgumentTypeError, match="increasing numbers of runs"):
+            race_stages(bad)
+
+
 @pytest.mark.parametrize("stages", ["2,1", "1,3"])
 def test_racing_stages_must_increase_below_the_runs(tmp_path, stages):
     with pytest.raises(SystemExit) as failed:  # argparse or the search's own check: one line, exit 2
