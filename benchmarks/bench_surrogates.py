@@ -60,7 +60,7 @@ from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model
-from surrogates.prescreen import RULES, PrescreenConfig, Prescreened, is_tie
+from surrogates.prescreen import RULES, PrescreenConfig, Prescreened, race_verdict
 
 PAPER = Path("results/paper")  # greedy alone's stores (--common-noise: results/paper-crn)
 SIM_CONFIG = SimConfig()
@@ -115,8 +115,8 @@ def _paper_env(problem: str, random_seed: int, store=None, sim_config=None):
                         random_seed=random_seed, executor="inline", sim_config=sim_config)
 
 
-def _stages_label(first_runs) -> str:
-    return "-".join(map(str, first_runs)) if isinstance(first_runs, (tuple, list)) else str(first_runs)
+def _stages_label(first_runs: tuple[int, ...]) -> str:
+    return "-".join(map(str, first_runs))
 
 
 def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop,
@@ -129,7 +129,7 @@ def _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_
 
 def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: bool = False,
                 also: str | None = None, rule: str = "auto", threshold: float = 0.01, miss_rate: float = 0.02,
-                counted: bool = True, first_runs: int | tuple[int, ...] = 0, verify_stop: bool = False,
+                counted: bool = True, first_runs: tuple[int, ...] = (), verify_stop: bool = False,
                 spend: bool = False) -> dict:
     label = _search_label(mode, lowfi, also, rule, threshold, miss_rate, counted, first_runs, verify_stop, spend)
     label += f"-train{reps}" if reps != 10 else ""  # models trained on repetitions 0..reps-1
@@ -392,9 +392,9 @@ def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
             improvements += improves
             dropped_at = None
             for k, margin in zip(stages, ours) if incumbent is not None else ():
-                tie = common_noise and is_tie(incumbent[k - 1], first[k - 1])
-                if tie or incumbent[k - 1] - first[k - 1] > margin:
-                    dropped_at, ties = k, ties + tie
+                verdict = race_verdict(incumbent[k - 1], first[k - 1], margin, common_noise)
+                if verdict:
+                    dropped_at, ties = k, ties + (verdict == "tie")
                     break
             if dropped_at is not None:
                 saved += n - dropped_at

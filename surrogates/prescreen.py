@@ -71,6 +71,14 @@ def is_tie(incumbent: float, candidate: float) -> bool:
     return abs(incumbent - candidate) <= TIE_TOLERANCE * max(1.0, abs(candidate))
 
 
+def race_verdict(incumbent: float, candidate: float, margin: float | None, drop_ties: bool) -> str | None:
+    """Racing's rule on the fitness of the same first runs: ``"tie"`` (scored exactly as the incumbent's, with
+    ``drop_ties``), ``"behind"`` (short of it by more than ``margin``) or None (fly on)."""
+    if drop_ties and is_tie(incumbent, candidate):
+        return "tie"
+    return "behind" if margin is not None and incumbent - candidate > margin else None
+
+
 def improvement_shortfalls(proxy, fitness, groups) -> list[float]:
     """Past searches replayed (rows of one group, in the order evaluated): for every real improvement (a fitness
     above the best so far), the incumbent's proxy minus its own. Rows whose proxy is unknown (NaN) are skipped."""
@@ -206,9 +214,9 @@ class PrescreenConfig:
     @property
     def race_stages(self) -> tuple[int, ...]:
         """The run counts after which racing compares a candidate with the incumbent (empty: racing off)."""
-        if isinstance(self.first_runs, (int, np.integer)):
-            return (int(self.first_runs),) if self.first_runs else ()
-        return tuple(int(k) for k in self.first_runs)
+        if isinstance(self.first_runs, tuple):  # __post_init__ turns any sequence into a tuple
+            return self.first_runs
+        return (int(self.first_runs),) if self.first_runs else ()
 
 
 class Prescreened(Agent):
@@ -236,12 +244,23 @@ class Prescreened(Agent):
         self.skipped: list[dict] = []
         self.retrains = 0
         self.verified_at: int | None = None  # real evaluations when the unscreened verify pass began
-        self.unspent = 0.0  # budget the skipped and dropped candidates did not spend (as whole evaluations)
 
     @property
     def dropped(self) -> int:
         """Candidates dropped by racing after their first runs (the rest of :attr:`skipped` were never flown)."""
         return sum(s["rule"] == "race" for s in self.skipped)
+
+    @property
+    def inner_budget_left(self) -> int:
+        """The budget left with every skipped or dropped candidate spent as a whole evaluation (what the inner
+        agent sees with ``skips_spend_budget``): the env's budget less its real evaluations and the skips."""
+        return self._env.budget - self._env._evaluations - len(self.skipped)
+
+    @property
+    def unspent(self) -> int:
+        """Budget the skipped and dropped candidates did not spend (the env charges a dropped candidate's probed
+        runs in whole evaluations)."""
+        return self._env.budget_left - self.inner_budget_left
 
     @property
     def race_margin(self) -> float | None:
@@ -283,16 +302,12 @@ class Prescreened(Agent):
                 if again is not None:  # skipped before: told the same again, free, as the env's memo would
                     results[i] = (candidates[i], again[0], {**again[1], "memo": True})
                     continue
-                before = self._env.budget_left
                 skip = self._screen(candidates[i], tests[i], predictions[i], best, incumbent.get("test"))
                 if skip is None and tests[i] is not None:
                     skip = self._race(candidates[i], tests[i], best, incumbent)
                 if skip is not None:
                     results[i] = (candidates[i], skip["told_fitness"], skip["info"])
                     self._told[tests[i].key()] = results[i][1:]
-                    # a whole evaluation, as told (the env charges probed runs in whole evaluations, so each term
-                    # is 0 or 1; the running total is exact because a candidate that passes is stepped at once)
-                    self.unspent += 1.0 - (before - self._env.budget_left)
                     done = self._env.budget_left <= 0
                     continue
                 reward, step_info, done = self._step(env, candidates[i], callback)
@@ -316,8 +331,7 @@ class Prescreened(Agent):
     def _inner_budget_spent(self) -> bool:
         """With ``skips_spend_budget``, before the verify pass: the inner agent's budget (skips counted) is spent,
         where the env would have ended the search without screening."""
-        return (self.config.skips_spend_budget and self.verified_at is None
-                and self._env.budget_left - self.unspent <= 0)
+        return self.config.skips_spend_budget and self.verified_at is None and self.inner_budget_left <= 0
 
     def _verify_stop(self, env, info: dict) -> bool:
         """Begin the verify pass (see ``PrescreenConfig.verify_stop``) if due; True when it began."""
@@ -331,7 +345,6 @@ class Prescreened(Agent):
     # --- Agent hooks ---------------------------------------------------------------------------------------------
     def _setup(self, info: dict) -> None:
         self.skipped = []
-        self.unspent = 0.0
         self._told: dict[str, tuple[float, dict]] = {}  # what each skipped or dropped test was told, by key
         self.retrains = 0
         self.verified_at = None
@@ -438,11 +451,11 @@ class Prescreened(Agent):
             if len(theirs) < k or (margin is None and not self._drop_ties):
                 return None
             fitness, probed = self._env.probe(action, k)
-            shortfall = float(theirs[k - 1] - fitness)
-            tie = self._drop_ties and is_tie(theirs[k - 1], fitness)
-            if tie or (margin is not None and shortfall > margin):
+            verdict = race_verdict(theirs[k - 1], fitness, margin, self._drop_ties)
+            if verdict:
+                shortfall = float(theirs[k - 1] - fitness)
                 entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
-                         "race_margin": margin, "tie": tie}
+                         "race_margin": margin, "tie": verdict == "tie"}
                 return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness,
                                   trajectory=probed.get("trajectory"))
         return None
@@ -540,7 +553,7 @@ class Prescreened(Agent):
 
 class _SkipsSpendBudget:
     """The env as the inner agent sees it with ``PrescreenConfig.skips_spend_budget``: the same env, whose
-    ``budget_left`` also counts the budget the skipped and dropped candidates did not spend."""
+    ``budget_left`` is :attr:`Prescreened.inner_budget_left`."""
 
     def __init__(self, env, prescreened: Prescreened):
         self._real, self._prescreened = env, prescreened
@@ -550,8 +563,8 @@ class _SkipsSpendBudget:
         return self
 
     @property
-    def budget_left(self) -> float:
-        return self._real.budget_left - self._prescreened.unspent
+    def budget_left(self) -> int:
+        return self._prescreened.inner_budget_left
 
     def __getattr__(self, name):
         return getattr(self._real, name)
