@@ -133,8 +133,15 @@ class AdaptiveGreedy(Agent):
         return False
 
     def _same(self, best, fitness: float, info: dict) -> bool:
-        """The plateau test: equal fitness within epsilon, or (authors' run) averaged trajectories within same_dtw."""
-        if self.config.same_dtw is not None and "trajectory" in info and "trajectory" in best[2]:
+        """The plateau test: equal fitness within epsilon, or (authors' run) averaged trajectories within same_dtw.
+        A candidate judged on its first k runs alone (``info["first_runs"]``, e.g. dropped by a pre-screen's race)
+        is compared with the best's trajectory over the same first k runs, when the best's info keeps it."""
+        if (self.config.same_dtw is not None and info.get("trajectory") is not None
+                and best[2].get("trajectory") is not None):
             from surrealist_gym.metrics import dtw
-            return dtw(best[2]["trajectory"], info["trajectory"]) < self.config.same_dtw
+            ours = best[2]["trajectory"]
+            k, first = info.get("first_runs"), best[2].get("first_runs_trajectories") or ()
+            if k and len(first) >= k:
+                ours = first[k - 1]
+            return dtw(ours, info["trajectory"]) < self.config.same_dtw
         return abs(best[1] - fitness) < self.config.epsilon

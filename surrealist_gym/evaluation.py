@@ -5,7 +5,8 @@ Run i of a test flies with a seed derived from (test, base seed, i) (or from (ba
 ``SimConfig.common_noise``; a store holds one noise mode), so the same test always gets the same runs and the memo
 is exact. Objectives turn the runs of a test into a fitness (maximised) and the terms behind it; the
 term ``first_runs_fitness`` holds the fitness of its first k runs alone (k = 1 .. n-1), so a search can judge a
-partial evaluation (``evaluate(test, runs=k)``: only the first k runs are flown; evaluating the test in full later
+partial evaluation, and (replication) ``Evaluation.first_runs_trajectories`` the first k runs' averaged trajectories,
+so a partial evaluation's trajectory can be compared like for like (``evaluate(test, runs=k)``: only the first k runs are flown; evaluating the test in full later
 flies only the rest, with the same seeds, so the result is the same as in one go).
 """
 from __future__ import annotations
@@ -55,6 +56,8 @@ class Evaluation:
         terms: the fitness terms (replication: dtw, frechet; generation: sum_dist, min_dist, riskiest, unsafe).
         trajectory: the trajectory the fitness judged (replication: the average of the runs; generation: the
             riskiest run), (N, 3) [m].
+        first_runs_trajectories: replication: the averaged trajectory of the first k runs alone (k = 1 .. n-1), to
+            compare a partial evaluation's trajectory with this one's over the same runs; () when not kept.
         cached: True when answered without simulating: from the evaluator's memory or its store (a resumed
             search reads back what the interrupted one simulated). Whether it costs budget is the env's call.
     """
@@ -64,6 +67,7 @@ class Evaluation:
     runs: tuple[RunSummary, ...]
     terms: dict = field(default_factory=dict)
     trajectory: np.ndarray | None = None
+    first_runs_trajectories: tuple[np.ndarray, ...] = ()
     cached: bool = False
     sim_seconds: float = 0.0
 
@@ -73,9 +77,10 @@ class Evaluation:
 
 
 class Objective(Protocol):
-    """Turns the simulated runs of a test into ``(fitness, terms, judged trajectory)``."""
+    """Turns the simulated runs of a test into ``(fitness, terms, judged trajectory, first runs' trajectories)``
+    (the last: the trajectory judged on the first k runs alone, k = 1 .. n-1, or () when not kept)."""
 
-    def __call__(self, test: TestCase, runs: Sequence) -> tuple[float, dict, np.ndarray | None]: ...
+    def __call__(self, test: TestCase, runs: Sequence) -> tuple[float, dict, np.ndarray | None, tuple]: ...
 
 
 @dataclass(frozen=True)
@@ -88,13 +93,13 @@ class ReplicationObjective:
     def __call__(self, test, runs):
         trajectories = [r.trajectory for r in runs if len(r.trajectory) > 0]
         if not trajectories:
-            return -np.inf, {}, None
+            return -np.inf, {}, None, ()
         averaged = np.asarray(average_runs(trajectories, self.averaging))
-        first_runs = [-dtw(self.reference, np.asarray(average_runs(trajectories[:k], self.averaging)))
-                      for k in range(1, len(trajectories))]
+        first_averaged = tuple(np.asarray(average_runs(trajectories[:k], self.averaging))
+                               for k in range(1, len(trajectories)))
         return (-dtw(self.reference, averaged),
                 {"dtw": dtw(self.reference, averaged), "frechet": frechet(self.reference, averaged),
-                 "first_runs_fitness": first_runs}, averaged)
+                 "first_runs_fitness": [-dtw(self.reference, t) for t in first_averaged]}, averaged, first_averaged)
 
 
 @dataclass(frozen=True)
@@ -106,13 +111,13 @@ class GenerationObjective:
     def __call__(self, test, runs):
         flown = [r for r in runs if len(r.trajectory) > 0]
         if not flown or not test.obstacles:
-            return -np.inf, {}, None
+            return -np.inf, {}, None, ()
         result = generation_fitness([r.trajectory for r in flown], test.obstacles, self.aggregate)
         terms = {"sum_dist": list(result.sum_dist), "min_dist": list(result.min_dist), "riskiest": result.riskiest,
                  "unsafe": sum(is_unsafe(r.min_distance_2d) for r in flown),
                  "crash": sum(str(getattr(r.status, "value", r.status)) == "collision" for r in flown),
                  "first_runs_fitness": _first_runs_fitness(result)}
-        return result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz)
+        return result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz), ()
 
 
 def _first_runs_fitness(result) -> list[float]:
@@ -169,9 +174,9 @@ class Evaluator:
             self.simulations += len(fresh)
             flown = flown + list(fresh)
         sim_seconds = self._flown_seconds.pop(key, 0.0) + time.perf_counter() - start
-        fitness, terms, trajectory = self.objective(test, flown)
+        fitness, terms, trajectory, first_trajectories = self.objective(test, flown)
         evaluation = Evaluation(test, float(fitness), tuple(RunSummary.of(r) for r in flown), terms,
-                                trajectory, cached=False, sim_seconds=sim_seconds)
+                                trajectory, tuple(first_trajectories), cached=False, sim_seconds=sim_seconds)
         if n < self.runs:
             self._flown[key], self._flown_seconds[key] = flown, sim_seconds
             return evaluation
@@ -196,14 +201,16 @@ class Evaluator:
 
 def _as_cached(evaluation: Evaluation) -> Evaluation:
     return Evaluation(evaluation.test, evaluation.fitness, evaluation.runs, evaluation.terms, evaluation.trajectory,
-                      cached=True)
+                      evaluation.first_runs_trajectories, cached=True)
 
 
 def _first_runs(evaluation: Evaluation, k: int) -> Evaluation:
-    """A full evaluation judged on its first k runs alone (from its ``first_runs_fitness`` term)."""
+    """A full evaluation judged on its first k runs alone (from its ``first_runs_fitness`` term, and its first k
+    runs' trajectory when kept)."""
     first = evaluation.terms["first_runs_fitness"]
+    trajectories = evaluation.first_runs_trajectories
     return Evaluation(evaluation.test, float(first[k - 1]), evaluation.runs[:k], {"first_runs_fitness": first[:k - 1]},
-                      None, cached=True)
+                      trajectories[k - 1] if len(trajectories) >= k else None, trajectories[:k - 1], cached=True)
 
 
 def _check_noise_mode(store: EvaluationStore, common_noise: bool) -> None:
@@ -220,6 +227,8 @@ def _to_stored(evaluation: Evaluation, seeds, common_noise: bool = False) -> Sto
     test = evaluation.test
     info = {"terms": evaluation.terms,
             "trajectory": None if evaluation.trajectory is None else np.round(evaluation.trajectory, 6).tolist()}
+    if evaluation.first_runs_trajectories:
+        info["first_runs_trajectories"] = [np.round(t, 6).tolist() for t in evaluation.first_runs_trajectories]
     if common_noise:
         info["common_noise"] = True
     return StoredEvaluation(test.key(), {"obstacles": [o.to_dict() for o in test.obstacles]}, tuple(seeds),
@@ -232,5 +241,6 @@ def _from_stored(test: TestCase, stored: StoredEvaluation) -> Evaluation:
     trajectory = stored.info.get("trajectory")
     fitness = -np.inf if stored.fitness is None else stored.fitness
     return Evaluation(test, fitness, tuple(RunSummary(**r) for r in stored.runs), stored.info.get("terms", {}),
-                      None if trajectory is None else np.asarray(trajectory), cached=True,
+                      None if trajectory is None else np.asarray(trajectory),
+                      tuple(np.asarray(t) for t in stored.info.get("first_runs_trajectories", ())), cached=True,
                       sim_seconds=stored.sim_seconds)

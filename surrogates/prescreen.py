@@ -421,9 +421,10 @@ class Prescreened(Agent):
         return self._skip(action, test, rule, entry, told, best_fitness, prediction)
 
     def _skip(self, action, test, rule: str, entry: dict, told: float, best_fitness: float, prediction=None,
-              trajectory=None) -> dict:
+              trajectory=None, first_runs: int | None = None) -> dict:
         """Log a skipped candidate; returns what the inner agent is told (a fitness below the best, and the
-        averaged trajectory of the runs flown, if any, for the greedy's plateau test)."""
+        averaged trajectory of the runs flown, if any, with how many: the greedy's plateau test compares it with the
+        incumbent's over the same first runs)."""
         told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
         env = self._env
         entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
@@ -435,7 +436,7 @@ class Prescreened(Agent):
                 "simulations": env._simulations, "best_fitness": None if env.best is None else env.best.fitness,
                 "predicted": prediction}
         if trajectory is not None:
-            info["trajectory"] = trajectory
+            info.update(trajectory=trajectory, first_runs=first_runs)
         log.info("skipped candidate %s (%s): %s", entry["action"], rule,
                  {k: round(v, 3) for k, v in entry.items() if isinstance(v, float)})
         self.skipped.append(entry)
@@ -457,7 +458,7 @@ class Prescreened(Agent):
                 entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
                          "race_margin": margin, "tie": verdict == "tie"}
                 return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness,
-                                  trajectory=probed.get("trajectory"))
+                                  trajectory=probed.get("trajectory"), first_runs=k)
         return None
 
     def _lowfi_verdict(self, test, incumbent, best_fitness: float) -> tuple[dict, float] | None:

@@ -213,4 +213,6 @@ class SurrealistEnv(gym.Env):
                     min_distances=tuple(r.min_distance for r in runs),
                     min_distances_2d=tuple(r.min_distance_2d for r in runs), terms=copy.deepcopy(evaluation.terms),
                     trajectory=None if evaluation.trajectory is None else evaluation.trajectory.copy())
+        if evaluation.first_runs_trajectories:
+            info["first_runs_trajectories"] = evaluation.first_runs_trajectories  # read-only arrays, not copied
         return info

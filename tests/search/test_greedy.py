@@ -58,3 +58,16 @@ def test_presets():
     assert AdaptiveGreedy("authors").config.max_seq == 3
     with pytest.raises(ValueError, match="unknown greedy preset"):
         AdaptiveGreedy("fast")
+
+
+def test_the_plateau_test_compares_a_candidate_judged_on_its_first_runs_with_the_best_over_the_same_runs():
+    """The authors' plateau test (averaged trajectories within DTW 10) on a candidate a pre-screen judged on its first
+    run alone: compared with the best's first run, not with the best's average of three runs."""
+    env = gym.make("Surrealist-Replicate-v0", budget=3, runs=3, executor="inline",
+                   sim_config={"common_noise": True})
+    _, info = env.reset(seed=0)
+    best = (None, info["fitness"], info)
+    first_run = info["first_runs_trajectories"][0]
+    agent = AdaptiveGreedy("authors")
+    assert agent._same(best, -1e9, {"trajectory": first_run, "first_runs": 1})
+    assert not agent._same(best, -1e9, {"trajectory": first_run})  # one run against three runs' average: DTW > 10

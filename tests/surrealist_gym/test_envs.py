@@ -118,3 +118,29 @@ def test_probe_flies_the_first_runs_and_step_only_the_rest(tmp_path):
     assert env.budget_left == 5 - 2
     again, _ = env.probe(env.action_for(action), 1)  # evaluated in full: answered from its first_runs_fitness term
     assert again == pytest.approx(first[0]) and env.evaluator.simulations == 6
+
+
+def test_replication_keeps_its_first_runs_averaged_trajectories_through_the_store(tmp_path):
+    """A partial evaluation's trajectory can be compared like for like: the replication env keeps the averaged
+    trajectory of the first k runs alone; a probe gets it; a store reads it back; a probe of a stored test too."""
+    kwargs = dict(budget=3, runs=3, store=tmp_path / "r.sqlite", sim_config={"common_noise": True})
+    env = make("Surrealist-Replicate-v0", **kwargs).unwrapped
+    _, info = env.reset(seed=0)
+    first = info["first_runs_trajectories"]
+    assert len(first) == 2 and all(t.shape[1] == 3 for t in first)
+    assert not np.allclose(first[0][: len(info["trajectory"])], info["trajectory"][: len(first[0])])
+    values = env.values_for(np.zeros(env.action_space.shape))
+    values[0] += 2.0
+    action = env.action_for(values)
+    probed, pinfo = env.probe(action, 2)
+    _, stepped, _, _, sinfo = env.step(action)
+    assert np.array_equal(pinfo["trajectory"], sinfo["first_runs_trajectories"][1])
+    assert probed == pytest.approx(sinfo["terms"]["first_runs_fitness"][1])
+
+    again = make("Surrealist-Replicate-v0", **kwargs).unwrapped
+    _, reread = again.reset(seed=0)
+    assert again.evaluator.simulations == 0
+    assert all(np.allclose(a, b, atol=1e-6) for a, b in zip(reread["first_runs_trajectories"], first))
+    _, from_store = again.probe(action, 1)
+    assert again.evaluator.simulations == 0
+    assert np.allclose(from_store["trajectory"], sinfo["first_runs_trajectories"][0], atol=1e-6)

@@ -250,3 +250,25 @@ def test_a_stop_the_skips_caused_is_verified_by_simulation(model):
     assert agent.verified_at == 1 and env.budget_left <= 0 and result.evaluations == 3
     assert all(s["after_evaluations"] <= agent.verified_at for s in agent.skipped)  # no skip after the restart
     assert env.evaluator.simulations == 3  # the seed test, then the two candidates of the verify pass
+
+
+def test_a_dropped_candidate_tells_its_first_runs_trajectory_and_how_many_runs():
+    """The authors' greedy compares trajectories in its plateau test: a dropped candidate tells the averaged
+    trajectory of the runs it flew and their number, so the greedy compares it with the best's same first runs."""
+    told = []
+
+    class Recording(AdaptiveGreedy):
+        def tell(self, actions, fitnesses, infos):
+            told.extend(infos)
+            return super().tell(actions, fitnesses, infos)
+
+    env = gym.make("Surrealist-Replicate-v0", budget=4, runs=3, executor="inline",
+                   sim_config={"common_noise": True})
+    config = PrescreenConfig(rule="none", first_runs=(1, 2), race_margin=0.0, lowfi=False)
+    agent = Prescreened(Recording("authors"), "online", config, seed=0)
+    agent.run(env, seed=0)
+    dropped = [i for i in told if i.get("skipped") and not i.get("memo")]
+    assert dropped, "a zero margin drops candidates"
+    assert all(i["first_runs"] in (1, 2) and i["trajectory"].shape[1] == 3 for i in dropped)
+    flown = [i for i in told if not i.get("skipped")]
+    assert all(len(i["first_runs_trajectories"]) == 2 for i in flown if i.get("trajectory") is not None)
