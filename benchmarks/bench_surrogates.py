@@ -5,6 +5,7 @@
     python benchmarks/bench_surrogates.py race-replay --problem rq2
     python benchmarks/bench_surrogates.py fresh --problem rq2 --common-noise --lowfi --first-runs 1 [--verify-stop]
     python benchmarks/bench_surrogates.py transfer --problem rq1-seed1 --common-noise
+    python benchmarks/bench_surrogates.py plateau --problem rq1-seed1 --common-noise --from-rep 30
 
 ``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
 budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
@@ -331,13 +332,16 @@ def race_replay(args) -> None:
     print(f"{args.problem}: {len(searches)} stores, {sum(map(len, searches))} evaluations of {runs} runs; "
           f"margins at miss rate {args.miss_rate:g}, leave-one-repetition-out")
     for stages in [(k,) for k in range(1, runs)] + [tuple(range(1, k + 1)) for k in range(2, runs)]:
-        saved, total, missed, improvements, ties, margins = _replay_racing(searches, stages, args.miss_rate,
-                                                                           args.common_noise)
+        saved, total, missed, improvements, ties, margins, reach = _replay_racing(searches, stages, args.miss_rate,
+                                                                                  args.common_noise)
         if margins:
             label = f"first {stages[0]} runs" if len(stages) == 1 else f"stages 1..{stages[-1]}"
+            kept = [r for r in reach if r[2]]
             print(f"{label}: margin {'/'.join(f'{m:.2f}' for m in np.mean(margins, axis=0))}, simulations saved "
                   f"{saved / total:.0%}, improvements missed {missed}/{improvements}; {ties} of the drops tied the "
-                  f"incumbent")
+                  f"incumbent; searches missing none {len(kept)}/{len(reach)}, to greedy's final "
+                  f"{1 - sum(r[1] for r in reach) / sum(r[0] for r in reach):.0%} fewer (a search missing one "
+                  f"counted at greedy's whole search)")
 
 
 def transfer(args) -> None:
@@ -372,11 +376,13 @@ def transfer(args) -> None:
 def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
     """One racing setting replayed on every search (margins from the other searches): simulations saved and in
     all, improvements missed and in all, drops that were ties (ties drop under common noise only, as
-    ``PrescreenConfig.drop_ties``), and each search's margins per stage."""
+    ``PrescreenConfig.drop_ties``), each search's margins per stage, and per search (greedy's simulations to its
+    final, racing's simulations to that final, whether racing missed none of its improvements; a search that missed
+    one is counted at greedy's whole search, as if it never came back to greedy's path: the replay cannot follow it)."""
     from surrogates.prescreen import replay_margin
 
     saved = total = missed = improvements = ties = 0
-    margins = []
+    margins, reach = [], []
     for held, rows in enumerate(searches):
         others = [r for i, s in enumerate(searches) if i != held for r in s]
         groups = [i for i, s in enumerate(searches) if i != held for _ in s]
@@ -386,8 +392,12 @@ def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
             continue
         margins.append(ours)
         best, incumbent = -np.inf, None
+        spent = spent_raced = to_final = to_final_raced = 0
+        missed_before = missed
+        final = max(f for f, _, _ in rows)
         for fitness, n, first in rows:
             total += n
+            spent += n
             improves = fitness > best
             improvements += improves
             dropped_at = None
@@ -396,18 +406,61 @@ def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
                 if verdict:
                     dropped_at, ties = k, ties + (verdict == "tie")
                     break
+            spent_raced += n if dropped_at is None else dropped_at
+            if fitness == final and not to_final:
+                to_final, to_final_raced = spent, spent_raced
             if dropped_at is not None:
                 saved += n - dropped_at
                 missed += improves
                 continue
             if improves:
                 best, incumbent = fitness, first
-    return saved, total, missed, improvements, ties, margins
+        kept = missed == missed_before
+        reach.append((to_final, to_final_raced if kept else spent, kept))
+    return saved, total, missed, improvements, ties, margins, reach
+
+
+def plateau(args) -> None:
+    """The authors' plateau test (averaged trajectories within DTW 10 of the best's) on a candidate judged on its
+    first k runs: how often it agrees with the test on all runs, replayed on greedy alone's stores (each
+    non-improving evaluation against the best so far). Like for like compares the first k runs of both (what a
+    dropped candidate is judged by now); mismatched compares the candidate's first k runs with the best's all runs
+    (before). Needs stores that keep the first runs' trajectories (``reproduce_paper.py`` from this version on)."""
+    from search.greedy import PRESETS
+    from surrealist_gym.metrics import dtw
+
+    same_dtw = PRESETS["authors"].same_dtw
+    stores = [path for path in _stores(args.problem, range(args.from_rep, args.from_rep + args.repetitions))]
+    rows = []  # per non-improving evaluation: DTW on all runs, then (like for like, mismatched) per k
+    for path in stores:
+        with EvaluationStore(path) as store:
+            evaluations = [e for e in store if e.fitness is not None]
+        if not all("first_runs_trajectories" in e.info for e in evaluations):
+            raise SystemExit(f"{path}: evaluations without first runs' trajectories; fly it again with "
+                             f"benchmarks/reproduce_paper.py (a new --out or repetitions)")
+        best = None
+        for e in evaluations:
+            if best is None or e.fitness > best.fitness:
+                best = e
+                continue
+            ours, theirs = np.asarray(best.info["trajectory"]), np.asarray(e.info["trajectory"])
+            firsts = [(np.asarray(a), np.asarray(b)) for a, b in zip(best.info["first_runs_trajectories"],
+                                                                    e.info["first_runs_trajectories"])]
+            rows.append((dtw(ours, theirs), [(dtw(a, b), dtw(ours, b)) for a, b in firsts]))
+    same = np.array([full < same_dtw for full, _ in rows])
+    print(f"{args.problem}: {len(stores)} stores, {len(rows)} non-improving evaluations, {same.mean():.0%} of them "
+          f"'the same' as the best on all runs (DTW < {same_dtw:g})")
+    for k in range(1, len(rows[0][1]) + 1):
+        like = np.array([parts[k - 1][0] < same_dtw for _, parts in rows])
+        mismatched = np.array([parts[k - 1][1] < same_dtw for _, parts in rows])
+        print(f"first {k} runs: agreement with all runs, like for like {np.mean(like == same):.1%} "
+              f"({np.sum(like & ~same)} called the same wrongly, {np.sum(~like & same)} missed), mismatched "
+              f"{np.mean(mismatched == same):.1%} ({np.sum(mismatched & ~same)} / {np.sum(~mismatched & same)})")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh", "transfer"])
+    parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh", "transfer", "plateau"])
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--from-rep", type=int, default=0,
@@ -449,7 +502,7 @@ def main() -> None:
         parser.error("--also must name the OTHER seed (the held-out repetition would leak into training)")
     warnings.simplefilter("ignore")
     {"search": search, "accuracy": accuracy, "race-replay": race_replay, "fresh": fresh,
-     "transfer": transfer}[args.what](args)
+     "transfer": transfer, "plateau": plateau}[args.what](args)
 
 
 if __name__ == "__main__":
