@@ -6,6 +6,8 @@
     python benchmarks/bench_surrogates.py fresh --problem rq2 --common-noise --lowfi --first-runs 1 [--verify-stop]
     python benchmarks/bench_surrogates.py transfer --problem rq1-seed1 --common-noise
     python benchmarks/bench_surrogates.py plateau --problem rq1-seed1 --common-noise --from-rep 30
+    python benchmarks/bench_surrogates.py path --problem rq1-seed1 --common-noise --rule none --first-runs 1,2,3,4 \
+        --skips-spend-budget --verify-stop --from-rep 30 --repetitions 10
 
 ``search``: greedy alone is read from ``results/paper/<problem>-rep<N>.sqlite`` (benchmarks/reproduce_paper.py:
 budget 100 (RQ2: 50), 5 runs (RQ2: 10), random seed N, authors' preset (RQ2: paper preset)). The pre-screened
@@ -138,18 +140,10 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     if cached.is_file():
         return json.loads(cached.read_text())
     store = out / f"{problem}-{label}-rep{rep}.sqlite"
-    shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
-    featurizer = _featurizer(problem, lowfi)
     config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10, retrain_every=10,
                              lowfi=lowfi, agent_counts_skips=counted, first_runs=first_runs,
                              verify_stop=verify_stop, skips_spend_budget=spend)
-    if mode == "pretrained":
-        others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
-        model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
-    else:
-        model = "online"
-    env = _paper_env(problem, rep, store, SIM_CONFIG)
-    agent = Prescreened(AdaptiveGreedy("paper" if problem == "rq2" else "authors"), model, config, seed=rep)
+    env, agent, featurizer = _screened_search(problem, rep, mode, store, reps, config, also)
     curve: list[float] = []
     lowfi_before = _lowfi_runs(featurizer)  # an online model featurizes with a featurizer of its own
     start = time.perf_counter()
@@ -168,6 +162,80 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     env.close()
     cached.write_text(json.dumps(row))
     return row
+
+
+def _screened_search(problem: str, rep: int, mode: str, store: Path, reps: int, config: PrescreenConfig,
+                     also: str | None = None):
+    """The env (its store a copy of greedy alone's repetition ``rep``), the pre-screened greedy (its model trained
+    on repetitions 0..reps-1 other than ``rep``, or online) and the featurizer of one benchmark search."""
+    shutil.copy(PAPER / f"{problem}-rep{rep}.sqlite", store)
+    featurizer = _featurizer(problem, config.lowfi)
+    if mode == "pretrained":
+        others = _stores(problem, [r for r in range(reps) if r != rep]) + (_stores(also, range(reps)) if also else [])
+        model = train_model(load_dataset(others, featurizer), featurizer, seed=rep)
+    else:
+        model = "online"
+    env = _paper_env(problem, rep, store, SIM_CONFIG)
+    agent = Prescreened(AdaptiveGreedy("paper" if problem == "rq2" else "authors"), model, config, seed=rep)
+    return env, agent, featurizer
+
+
+def path(args) -> None:
+    """Where a pre-screened search leaves greedy alone's path. Each repetition is flown again (the settings of
+    ``search``, into a scratch store) while recording what the inner greedy is told before any verify pass; the
+    tests it asks are compared, in order, with those greedy alone evaluated (memo answers aside). Printed: the
+    first evaluation where they differ and what preceded it (one of greedy alone's improvements dropped or skipped,
+    else a step after a pair of moves that did not improve), and the final fitness of both."""
+    import tempfile
+
+    config = PrescreenConfig(rule=args.rule, threshold=args.threshold, miss_rate=args.miss_rate, min_points=10,
+                             retrain_every=10, lowfi=args.lowfi, agent_counts_skips=not args.skips_as_memo,
+                             first_runs=args.first_runs, verify_stop=args.verify_stop,
+                             skips_spend_budget=args.skips_spend_budget)
+    for rep in range(args.from_rep, args.from_rep + args.repetitions):
+        with EvaluationStore(PAPER / f"{args.problem}-rep{rep}.sqlite") as store:
+            alone = [(e.test_key, -np.inf if e.fitness is None else e.fitness) for e in store][1:]  # the seed aside
+        with tempfile.TemporaryDirectory() as scratch:
+            env, agent, _ = _screened_search(args.problem, rep, args.mode, Path(scratch) / "s.sqlite",
+                                             max(args.from_rep, 10), config, args.also)
+            told = []
+            tell = agent.inner.tell
+
+            def recording_tell(actions, fitnesses, infos, tell=tell, agent=agent, env=env):
+                if agent.verified_at is None:
+                    for info in infos:
+                        if info.get("test") is not None and not info.get("memo") and not info.get("invalid"):
+                            told.append((info["test"].key(), bool(info.get("skipped"))))
+                return tell(actions, fitnesses, infos)
+
+            agent.inner.tell = recording_tell
+            result = agent.run(env, seed=rep)
+            env.close()
+        fitness = dict(alone)
+        improvements, best = [], -np.inf
+        for key, f in alone:
+            if f > best:
+                improvements.append(key)
+                best = f
+        missed = {s["test_key"]: s for s in agent.skipped}
+        lost = [(n, missed[key]) for n, key in enumerate(improvements, 1) if key in missed]
+        split = next((i for i, ((a, _), (b, _)) in enumerate(zip(alone, told)) if a != b), None)
+        where = "never" if split is None else f"at greedy alone's evaluation {split + 1} of {len(alone)}"
+        if lost:
+            n, entry = lost[0]
+            why = (f"its improvement {n} of {len(improvements)} was {entry['rule']}-"
+                   f"{'dropped at stage ' + str(entry['first_runs']) if 'first_runs' in entry else 'skipped'}"
+                   + (f" (shortfall {entry['race_shortfall']:.2f} over a margin of {entry['race_margin']:.2f})"
+                      if entry.get("race_margin") is not None else ""))
+        elif split is not None and split >= 2:
+            pair = told[split - 2:split]
+            why = (f"no improvement of it lost; the step before follows a pair of moves that did not improve "
+                   f"({', '.join('dropped' if skipped else 'flown' for _, skipped in pair)}; true fitness "
+                   f"{', '.join(format(fitness.get(key, np.nan), '.2f') for key, _ in pair)})")
+        else:
+            why = "no improvement of it lost"
+        print(f"{args.problem} rep {rep}: leaves greedy alone's path {where}; {why}; final {result.best_fitness:.2f} "
+              f"(greedy alone {best:.2f})", flush=True)
 
 
 def search(args) -> None:
@@ -460,7 +528,7 @@ def plateau(args) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh", "transfer", "plateau"])
+    parser.add_argument("what", choices=["search", "accuracy", "race-replay", "fresh", "transfer", "plateau", "path"])
     parser.add_argument("--problem", default="rq1-seed1", choices=["rq1-seed1", "rq1-seed2", "rq2"])
     parser.add_argument("--repetitions", type=int, default=10)
     parser.add_argument("--from-rep", type=int, default=0,
@@ -502,7 +570,8 @@ def main() -> None:
         parser.error("--also must name the OTHER seed (the held-out repetition would leak into training)")
     warnings.simplefilter("ignore")
     {"search": search, "accuracy": accuracy, "race-replay": race_replay, "fresh": fresh,
-     "transfer": transfer, "plateau": plateau}[args.what](args)
+     "transfer": transfer, "plateau": plateau,
+     "path": path}[args.what](args)
 
 
 if __name__ == "__main__":
