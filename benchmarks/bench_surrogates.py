@@ -194,7 +194,7 @@ def path(args) -> None:
                              skips_spend_budget=args.skips_spend_budget)
     for rep in range(args.from_rep, args.from_rep + args.repetitions):
         with EvaluationStore(PAPER / f"{args.problem}-rep{rep}.sqlite") as store:
-            alone = [(e.test_key, -np.inf if e.fitness is None else e.fitness) for e in store][1:]  # the seed aside
+            seed, *alone = [(e.test_key, -np.inf if e.fitness is None else e.fitness) for e in store]
         with tempfile.TemporaryDirectory() as scratch:
             env, agent, _ = _screened_search(args.problem, rep, args.mode, Path(scratch) / "s.sqlite",
                                              max(args.from_rep, 10), config, args.also)
@@ -212,7 +212,7 @@ def path(args) -> None:
             result = agent.run(env, seed=rep)
             env.close()
         fitness = dict(alone)
-        improvements, best = [], -np.inf
+        improvements, best = [], seed[1]
         for key, f in alone:
             if f > best:
                 improvements.append(key)
