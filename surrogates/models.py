@@ -221,7 +221,9 @@ class SurrogateModel:
         self.train_y: np.ndarray | None = None
         self.train_groups: np.ndarray | None = None  # the store (search) each training row comes from
         self.train_first_runs: np.ndarray | None = None  # fitness of each row's first k runs (racing calibration)
+        self.common_noise: bool | None = None  # the training evaluations' noise mode (None: not recorded)
         self.metrics: dict = {}
+        self.path: Path | None = None  # the folder it was loaded from
 
     # --- scale ---------------------------------------------------------------------------------------------------
     def to_scale(self, y) -> np.ndarray:
@@ -253,6 +255,7 @@ class SurrogateModel:
 
     def fit_dataset(self, dataset: Dataset) -> "SurrogateModel":
         dataset.target(self.target)  # checks the name
+        self.common_noise = dataset.common_noise
         return self.fit(dataset.X, dataset.targets[self.target], dataset.groups, dataset.first_runs)
 
     def predict(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -282,7 +285,8 @@ class SurrogateModel:
                         "train_first_runs": torch.as_tensor(self.train_first_runs)})
         torch.save(tensors, out / "weights.pt")
         meta = {"format": FORMAT, "kind": self.kind, "target": self.target, "seed": self.seed,
-                "log_scale": self.log_scale, "config": asdict(self.regressor.config),
+                "log_scale": self.log_scale, "common_noise": self.common_noise,
+                "config": asdict(self.regressor.config),
                 "features": self.featurizer.names, "n_train": int(len(self.train_y)), "metrics": self.metrics,
                 "featurizer": self.featurizer.to_dict()}
         self.featurizer.save(out)
@@ -312,7 +316,9 @@ class SurrogateModel:
             model.train_first_runs = (np.full((len(model.train_y), 0), np.nan) if first_runs is None
                                       else first_runs.numpy())
             model.log_scale = bool(meta["log_scale"])
+            model.common_noise = meta.get("common_noise")  # models saved before it was recorded: unknown
             model.metrics = meta.get("metrics", {})
+            model.path = folder
         except SurrealistError:
             raise
         except Exception as err:  # missing file, bad JSON, bad pickle, missing key: all mean "not a model"

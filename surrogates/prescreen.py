@@ -56,7 +56,7 @@ import numpy as np
 from search.base import Agent, SearchResult
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
 
-from .dataset import Featurizer, stack_rows
+from .dataset import Featurizer, describe_noise, stack_rows
 from .lowfi import FITNESS as LOWFI_FITNESS
 from .models import SurrogateModel
 
@@ -344,6 +344,7 @@ class Prescreened(Agent):
 
     # --- Agent hooks ---------------------------------------------------------------------------------------------
     def _setup(self, info: dict) -> None:
+        self._check_noise_mode()
         self.skipped = []
         self._told: dict[str, tuple[float, dict]] = {}  # what each skipped or dropped test was told, by key
         self.retrains = 0
@@ -364,6 +365,17 @@ class Prescreened(Agent):
         self.margin = self._calibrated_margin()
         self.race_margins = self._calibrated_race_margins()
         self._add_point(info)
+
+    def _check_noise_mode(self) -> None:
+        """A model trained on evaluations flown in the other noise mode would race with margins that do not hold:
+        under common random numbers two tests' first runs differ far less than under each test's own noise."""
+        trained = None if self._initial is None else self._initial.common_noise
+        flies = self._env.evaluator.sim_config.common_noise
+        if trained is not None and bool(trained) != flies:
+            name = self._initial.path or "the surrogate model"
+            raise SurrealistError(f"{name}: trained on evaluations flown with {describe_noise(trained)}, this search "
+                                  f"flies {describe_noise(flies)} (train it on stores flown the same way, or match "
+                                  f"--common-noise)")
 
     def _ask(self) -> list[np.ndarray]:  # the inner agent's candidates (run() tells back the simulated ones)
         return self._candidates
@@ -545,6 +557,7 @@ class Prescreened(Agent):
             kind, config = cfg.kind, None
         model = SurrogateModel(self._featurizer, kind, "fitness", config, seed=(self.seed or 0) + self.retrains)
         self.model = model.fit(X, y, groups, first)
+        model.common_noise = self._env.evaluator.sim_config.common_noise
         self.margin = self._calibrated_margin()
         self.race_margins = self._calibrated_race_margins()
         self.retrains += 1

@@ -54,7 +54,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    from surrogates.dataset import Featurizer, load_dataset
+    from surrogates.dataset import Featurizer, describe_noise, load_dataset
     from surrogates.models import SurrogateModel, evaluate_model, predict_dataset
 
     if args.action == "eval":
@@ -93,8 +93,8 @@ def run(args) -> int:
     model.metrics["train"] = evaluate_model(model, data)
     _print_metrics("training set", model.metrics["train"], model.log_scale)
     out = model.save(args.out)
-    print(f"model ({args.kind}, {args.target}, {len(model.train_y)} evaluations, {data.X.shape[1]} features) "
-          f"in {out}/: weights.pt, meta.json")
+    print(f"model ({args.kind}, {args.target}, {len(model.train_y)} evaluations flown with "
+          f"{describe_noise(data.common_noise)}, {data.X.shape[1]} features) in {out}/: weights.pt, meta.json")
     if args.lowfi and args.target == "fitness":
         from surrogates.prescreen import PrescreenConfig, model_margin
 

@@ -57,3 +57,22 @@ def test_datasets_of_two_stores_join(rq1_stores, replicate_featurizer):
     both = a.concat(b)
     assert len(both) == len(a) + len(b) and set(both.groups) == {0, 1}
     assert np.array_equal(both.X[len(a):], b.X) and both.keys[len(a):] == b.keys
+
+
+def test_a_dataset_keeps_one_noise_mode(rq2_store, generate_featurizer, tmp_path):
+    # a store flown with common random numbers next to one flown with each test's own noise: one line naming both
+    import gymnasium as gym
+
+    import surrealist_gym  # noqa: F401 - registers the envs
+
+    crn = tmp_path / "crn.sqlite"
+    env = gym.make("Surrealist-Generate-v0", budget=1, runs=1, executor="inline", store=crn,
+                   sim_config={"common_noise": True})
+    env.reset(seed=0)
+    env.close()
+    assert load_dataset([crn], generate_featurizer).common_noise is True
+    assert load_dataset([rq2_store], generate_featurizer).common_noise is False
+    with pytest.raises(DatasetError, match=r"crn\.sqlite: flown with common noise, .*rq2-rep0\.sqlite with each test"):
+        load_dataset([rq2_store, crn], generate_featurizer)
+    with pytest.raises(DatasetError, match="cannot be joined"):
+        load_dataset([rq2_store], generate_featurizer).concat(load_dataset([crn], generate_featurizer))

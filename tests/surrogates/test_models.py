@@ -68,6 +68,7 @@ def test_cli_train_and_eval(rq1_stores, tmp_path, capsys):
                  "--holdout", "1"]) == 0
     text = capsys.readouterr().out
     assert text.startswith("held-out (1 of 2 stores): ") and "Spearman" in text and "weights.pt, meta.json" in text
+    assert "flown with each test's own noise" in text
     png = tmp_path / "plots" / "eval.png"
     assert main(["surrogate", "eval", str(out), str(rq1_stores[1]), "--plot", str(png)]) == 0
     assert "within 1 sd (68% ideal)" in capsys.readouterr().out

@@ -9,7 +9,7 @@ import surrealist_gym  # noqa: F401 - registers the envs
 from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
 from surrogates.dataset import load_dataset
-from surrogates.models import train_model
+from surrogates.models import SurrogateModel, train_model
 from surrogates.prescreen import PrescreenConfig, Prescreened, race_margin, replay_margin, wrap
 
 BUDGET = 4
@@ -272,3 +272,28 @@ def test_a_dropped_candidate_tells_its_first_runs_trajectory_and_how_many_runs()
     assert all(i["first_runs"] in (1, 2) and i["trajectory"].shape[1] == 3 for i in dropped)
     flown = [i for i in told if not i.get("skipped")]
     assert all(len(i["first_runs_trajectories"]) == 2 for i in flown if i.get("trajectory") is not None)
+
+
+def test_a_model_races_only_searches_flown_in_its_own_noise_mode(model, tmp_path, capsys):
+    # the knn model learnt from an RQ2 store flown with each test's own noise; under common random numbers the
+    # first runs of two tests differ far less, so its racing margins would not hold: refused, in one line
+    assert model.common_noise is False
+    folder = model.save(tmp_path / "m")
+    assert SurrogateModel.load(folder).common_noise is False
+    crn = gym.make("Surrealist-Generate-v0", budget=2, runs=2, executor="inline", sim_config={"common_noise": True})
+    with pytest.raises(SurrealistError, match="each test's own noise, this search flies common noise"):
+        Prescreened(AdaptiveGreedy("paper"), SurrogateModel.load(folder), seed=0).run(crn, seed=0)
+    from surrealist_gym.cli import main
+    out = tmp_path / "crn"
+    assert main(["generate", "--budget", "2", "--runs", "2", "--workers", "1", "--common-noise",
+                 "--surrogate", str(folder), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(folder) in err[0] and "--common-noise" in err[0]
+
+
+def test_an_online_model_keeps_the_noise_mode_it_learnt_from():
+    env = gym.make("Surrealist-Generate-v0", budget=3, runs=1, executor="inline", sim_config={"common_noise": True})
+    agent = Prescreened(AdaptiveGreedy("paper"), "online",
+                        PrescreenConfig(min_points=2, retrain_every=1, kind="knn", lowfi=False), seed=0)
+    agent.run(env, seed=0)
+    assert agent.model is not None and agent.model.common_noise is True
