@@ -5,9 +5,10 @@ Run i of a test flies with a seed derived from (test, base seed, i) (or from (ba
 ``SimConfig.common_noise``; a store holds one noise mode), so the same test always gets the same runs and the memo
 is exact. Objectives turn the runs of a test into a fitness (maximised) and the terms behind it; the
 term ``first_runs_fitness`` holds the fitness of its first k runs alone (k = 1 .. n-1), so a search can judge a
-partial evaluation, and (replication) ``Evaluation.first_runs_trajectories`` the first k runs' averaged trajectories,
-so a partial evaluation's trajectory can be compared like for like (``evaluate(test, runs=k)``: only the first k runs are flown; evaluating the test in full later
-flies only the rest, with the same seeds, so the result is the same as in one go).
+partial evaluation, and (replication) ``Evaluation.first_runs_trajectories`` the first k runs' averaged
+trajectories, so a partial evaluation's trajectory can be compared like for like. ``evaluate(test, runs=k)`` flies
+only the first k runs; evaluating the test in full later flies only the rest, with the same seeds, so the result is
+the same as in one go.
 """
 from __future__ import annotations
 
