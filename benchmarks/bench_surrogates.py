@@ -32,7 +32,7 @@ with ``PrescreenConfig.verify_stop`` (an early stop checked by an unscreened res
 
 ``search --from-rep 10`` runs repetitions 10.. (``reproduce_paper.py --repetitions 20``) with models trained on
 repetitions 0-9: a confirmation on repetitions no setting was chosen with (``--from-rep 20``: repetitions 20..,
-models trained on 0-19).
+models trained on 0-19; with ``--repetitions 30`` repetitions 20-49 pooled, each set of 10 printed as well).
 
 ``--common-noise`` runs every command on the stores of ``reproduce_paper.py --common-noise --out
 results/paper-crn`` and flies the pre-screened greedy with the same common random numbers (run i of every test
@@ -299,6 +299,16 @@ def _summary(args, rows, target: float) -> None:
         if n >= 3:
             p, test = compare(gs, ps)
             print(f"  p = {p:.3g} ({test}), A12(greedy needs more) = {vargha_delaney_a12(gs, ps):.2f}")
+    if n > 10:  # a long run: each set of 10 repetitions too, as a 10-repetition run would print it
+        for block in range(0, n, 10):
+            part = rows[block:block + 10]
+            gs, ps = [r["greedy_sims"] for r in part], [r["pre_sims_to_reach"] for r in part]
+            strict = 1 - np.mean([r["pre_sims_to_reach_strict"] for r in part]) / np.mean(gs)
+            p, test = compare(gs, ps)
+            print(f"  repetitions {part[0]['rep']}-{part[-1]['rep']}: to greedy's own final: greedy {np.mean(gs):.0f}, "
+                  f"pre-screened {np.mean(ps):.0f} ({1 - np.mean(ps) / np.mean(gs):.0%} fewer), reached "
+                  f"{sum(r['reached'] for r in part)}/{len(part)}; p = {p:.3g} ({test}), A12 = "
+                  f"{vargha_delaney_a12(gs, ps):.2f}; strict {strict:.0%} fewer")
     gf, pf = [r["greedy_final"] for r in rows], [r["pre_final"] for r in rows]
     if n >= 3:
         p, test = compare(pf, gf)

@@ -237,8 +237,8 @@ class Dataset:
         names: feature names.
         first_runs: (n, runs - 1) fitness of each test's first k runs alone (column k-1; NaN when not stored), to
             calibrate racing (:mod:`surrogates.prescreen`).
-        common_noise: whether the evaluations were flown with common random numbers (``SimConfig.common_noise``):
-            the racing margins calibrated on them hold only for searches flown the same way.
+        common_noise: whether the evaluations were flown with common random numbers (``SimConfig.common_noise``),
+            None when the stores mix both noise modes.
     """
 
     X: np.ndarray
@@ -248,7 +248,7 @@ class Dataset:
     keys: tuple[str, ...]
     names: tuple[str, ...] = field(default=())
     first_runs: np.ndarray | None = None
-    common_noise: bool = False
+    common_noise: bool | None = False
 
     def __post_init__(self):
         if self.first_runs is None:
@@ -268,14 +268,13 @@ class Dataset:
         """The rows of both datasets (same features); the other's store indices follow this one's."""
         if self.names != other.names:
             raise DatasetError("datasets with different features cannot be joined")
-        if self.common_noise != other.common_noise:
-            raise DatasetError("datasets flown with common noise and with each test's own noise cannot be joined")
         offset = int(self.groups.max()) + 1 if len(self) else 0
         return Dataset(np.concatenate([self.X, other.X]),
                        {k: np.concatenate([v, other.targets[k]]) for k, v in self.targets.items()},
                        np.concatenate([self.trajectories, other.trajectories]),
                        np.concatenate([self.groups, other.groups + offset]), self.keys + other.keys, self.names,
-                       stack_rows([*self.first_runs, *other.first_runs]), self.common_noise)
+                       stack_rows([*self.first_runs, *other.first_runs]),
+                       self.common_noise if self.common_noise == other.common_noise else None)
 
     def target(self, name: str = "fitness") -> tuple[np.ndarray, np.ndarray]:
         """``(X, y)`` for one target, without the rows whose value is unknown (fitness of an unflown test)."""
@@ -287,19 +286,14 @@ class Dataset:
 
 
 def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
-    """A dataset from one or more evaluation stores (paths or EvaluationStore) searched on one problem, all flown
-    in one noise mode (each test's own noise, or common random numbers)."""
+    """A dataset from one or more evaluation stores (paths or EvaluationStore) searched on one problem."""
     X, fit, mind, unsafe, crash, trajs, groups, keys, first = [], [], [], [], [], [], [], [], []
-    modes: dict[bool, str] = {}  # noise mode -> the first store flown with it
+    modes = set()  # the noise modes the evaluations were flown with
     for g, source in enumerate(stores):
         store = source if isinstance(source, EvaluationStore) else _open(source)
         try:
             for ev in store:
-                common = bool((ev.info or {}).get("common_noise", False))
-                modes.setdefault(common, str(store.path))
-                if len(modes) > 1:
-                    raise DatasetError(f"{store.path}: flown with {describe_noise(common)}, {modes[not common]} with "
-                                       f"{describe_noise(not common)}; a model learns from one noise mode")
+                modes.add(bool((ev.info or {}).get("common_noise", False)))
                 try:
                     X.append(featurizer.features(_obstacles_of(ev.test)))
                 except SurrealistError as err:
@@ -322,7 +316,7 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
     return Dataset(np.asarray(X), {"fitness": np.asarray(fit), "min_distance": np.asarray(mind),
                                    "unsafe": np.asarray(unsafe), "crash": np.asarray(crash)},
                    np.asarray(trajs), np.asarray(groups), tuple(keys), tuple(featurizer.names), stack_rows(first),
-                   next(iter(modes)))
+                   modes.pop() if len(modes) == 1 else None)
 
 
 def describe_noise(common: bool) -> str:

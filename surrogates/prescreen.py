@@ -48,6 +48,7 @@ from __future__ import annotations
 import itertools
 import logging
 import math
+import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -367,15 +368,15 @@ class Prescreened(Agent):
         self._add_point(info)
 
     def _check_noise_mode(self) -> None:
-        """A model trained on evaluations flown in the other noise mode would race with margins that do not hold:
-        under common random numbers two tests' first runs differ far less than under each test's own noise."""
+        """Warn when the model learnt from evaluations flown in the other noise mode: its racing margins were
+        calibrated on first runs whose noise the incumbent's did (common noise) or did not (each test's own) share."""
         trained = None if self._initial is None else self._initial.common_noise
         flies = self._env.evaluator.sim_config.common_noise
         if trained is not None and bool(trained) != flies:
             name = self._initial.path or "the surrogate model"
-            raise SurrealistError(f"{name}: trained on evaluations flown with {describe_noise(trained)}, this search "
-                                  f"flies {describe_noise(flies)} (train it on stores flown the same way, or match "
-                                  f"--common-noise)")
+            warnings.warn(f"{name}: trained on evaluations flown with {describe_noise(trained)}, this search flies "
+                          f"{describe_noise(flies)}; its racing margins were calibrated in the other mode (train it "
+                          f"on stores flown the same way, or match --common-noise)", UserWarning, stacklevel=2)
 
     def _ask(self) -> list[np.ndarray]:  # the inner agent's candidates (run() tells back the simulated ones)
         return self._candidates

@@ -59,8 +59,8 @@ def test_datasets_of_two_stores_join(rq1_stores, replicate_featurizer):
     assert np.array_equal(both.X[len(a):], b.X) and both.keys[len(a):] == b.keys
 
 
-def test_a_dataset_keeps_one_noise_mode(rq2_store, generate_featurizer, tmp_path):
-    # a store flown with common random numbers next to one flown with each test's own noise: one line naming both
+def test_a_dataset_knows_the_noise_mode_of_its_stores(rq2_store, generate_featurizer, tmp_path):
+    # a store flown with common random numbers, one flown with each test's own noise, and both (mixed: None)
     import gymnasium as gym
 
     import surrealist_gym  # noqa: F401 - registers the envs
@@ -70,9 +70,7 @@ def test_a_dataset_keeps_one_noise_mode(rq2_store, generate_featurizer, tmp_path
                    sim_config={"common_noise": True})
     env.reset(seed=0)
     env.close()
-    assert load_dataset([crn], generate_featurizer).common_noise is True
-    assert load_dataset([rq2_store], generate_featurizer).common_noise is False
-    with pytest.raises(DatasetError, match=r"crn\.sqlite: flown with common noise, .*rq2-rep0\.sqlite with each test"):
-        load_dataset([rq2_store, crn], generate_featurizer)
-    with pytest.raises(DatasetError, match="cannot be joined"):
-        load_dataset([rq2_store], generate_featurizer).concat(load_dataset([crn], generate_featurizer))
+    common, own = (load_dataset([s], generate_featurizer) for s in (crn, rq2_store))
+    assert common.common_noise is True and own.common_noise is False
+    assert load_dataset([rq2_store, crn], generate_featurizer).common_noise is None
+    assert own.concat(common).common_noise is None and own.concat(own).common_noise is False
