@@ -96,6 +96,23 @@ def improvement_shortfalls(proxy, fitness, groups) -> list[float]:
     return shortfalls
 
 
+def tie_improvements(first_runs, fitness, groups) -> int:
+    """Past searches replayed (rows of one group, in the order evaluated): how many real improvements scored exactly
+    as their incumbent on their first k runs at some stage (``first_runs``: (rows, k) fitness of the first 1..k runs,
+    NaN where unknown); racing with ``drop_ties`` would have dropped them."""
+    first_runs = np.asarray(first_runs, dtype=np.float64).reshape(len(fitness), -1)
+    fitness, groups = np.asarray(fitness), np.asarray(groups)
+    count = 0
+    for group in np.unique(groups):
+        best, incumbent = -np.inf, None
+        for first, real in zip(first_runs[groups == group], fitness[groups == group]):
+            if real > best:
+                if incumbent is not None:
+                    count += any(np.isfinite(a) and np.isfinite(b) and is_tie(a, b) for a, b in zip(incumbent, first))
+                best, incumbent = real, first
+    return count
+
+
 def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | None:
     """The shortfall in a cheap proxy of the fitness (the low-fidelity fitness, or the fitness of the first runs)
     that only ``miss_rate`` of the real improvements of past searches exceeded (:func:`improvement_shortfalls`).
@@ -162,9 +179,10 @@ class PrescreenConfig:
             below the best). With common random numbers (``SimConfig.common_noise``) that means the mutation left
             those flights unchanged (an obstacle slid along the path): in the 10 RQ2 stores of greedy alone under
             common noise 113 of 440 candidates tied on their first run, none improved the best and 105 tied over
-            all ten runs. It is not a proof: in the 20 case0 stores 2 candidates tied on the first run and one of
-            them (a lower box) improved over all five. None (default): on when the env flies common noise (without
-            it no two tests fly the same runs, so nothing ties).
+            all ten runs. It is not a proof: in 50 case0 seed-1 stores 7 candidates tied the incumbent at some
+            stage and 2 of them (a lower box) improved over all five runs. None (default): on when the env flies
+            common noise (without it no two tests fly the same runs, so nothing ties) and no real improvement in the
+            model's training stores tied its incumbent (:func:`tie_improvements`; checked again at each retrain).
         skips_spend_budget: the inner agent sees a budget from which every skipped or dropped candidate was spent
             as a whole evaluation (``budget_left`` as without screening; needs ``agent_counts_skips``), so it also
             plans its round budgets and stops as without screening: with a screen that drops no improvement it
@@ -351,8 +369,6 @@ class Prescreened(Agent):
         self.retrains = 0
         self.verified_at = None
         self._consecutive = 0
-        self._drop_ties = (self.config.drop_ties if self.config.drop_ties is not None
-                           else self._env.evaluator.sim_config.common_noise)
         self._featurizer = (self._initial.featurizer if self._initial is not None
                             else Featurizer.for_env(self._env, self.config.lowfi))
         if self.config.rule == "lowfi" and self._featurizer.lowfi is None:
@@ -365,6 +381,7 @@ class Prescreened(Agent):
         self._first: list[list[float]] = []
         self.margin = self._calibrated_margin()
         self.race_margins = self._calibrated_race_margins()
+        self._drop_ties = self._tie_rule()
         self._add_point(info)
 
     def _check_noise_mode(self) -> None:
@@ -526,6 +543,16 @@ class Prescreened(Agent):
         share = self.config.miss_rate / max(len(stages), 1)
         return {k: None if self.model is None else race_margin(self.model, k, share) for k in stages}
 
+    def _tie_rule(self) -> bool:
+        """Whether racing drops ties (``PrescreenConfig.drop_ties``; None: under common noise, unless a tie improved
+        in the model's training stores)."""
+        if self.config.drop_ties is not None:
+            return self.config.drop_ties
+        if not self._env.evaluator.sim_config.common_noise:
+            return False
+        model = self.model
+        return model is None or not tie_improvements(model.train_first_runs, model.train_y, model.train_groups)
+
     # --- online training -----------------------------------------------------------------------------------------
     def _add_point(self, info: dict) -> None:
         test, fitness = info.get("test"), info.get("fitness")
@@ -561,6 +588,7 @@ class Prescreened(Agent):
         model.common_noise = self._env.evaluator.sim_config.common_noise
         self.margin = self._calibrated_margin()
         self.race_margins = self._calibrated_race_margins()
+        self._drop_ties = self._tie_rule()
         self.retrains += 1
         self._since_retrain = 0
         log.info("surrogate retrained on %d evaluations", len(y))

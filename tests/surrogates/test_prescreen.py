@@ -8,9 +8,9 @@ import pytest
 import surrealist_gym  # noqa: F401 - registers the envs
 from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
-from surrogates.dataset import load_dataset
+from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import SurrogateModel, train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened, race_margin, replay_margin, wrap
+from surrogates.prescreen import PrescreenConfig, Prescreened, race_margin, replay_margin, tie_improvements, wrap
 
 BUDGET = 4
 
@@ -296,3 +296,27 @@ def test_an_online_model_keeps_the_noise_mode_it_learnt_from():
                         PrescreenConfig(min_points=2, retrain_every=1, kind="knn", lowfi=False), seed=0)
     agent.run(env, seed=0)
     assert agent.model is not None and agent.model.common_noise is True
+
+
+def test_ties_are_raced_only_where_no_tie_improved_in_the_training_stores():
+    # two searches replayed in the order evaluated: in the first, an improvement (-40 over -50) tied its incumbent's
+    # first run (a lower box under common noise: run 1 unchanged, the others better); in the second, no tie improved
+    first = [[-60.0, -55.0], [-60.0, -45.0], [-70.0, -65.0],  # search 0: the seed, a tie that improves, a worse one
+             [-60.0, -55.0], [-60.0, -58.0], [-50.0, -48.0]]  # search 1: the seed, a tie that does not, an improvement
+    fitness, groups = [-50.0, -40.0, -66.0, -50.0, -52.0, -45.0], [0, 0, 0, 1, 1, 1]
+    assert tie_improvements(first, fitness, groups) == 1
+    assert tie_improvements(first[3:], fitness[3:], groups[3:]) == 0
+    assert tie_improvements(np.full((6, 0), np.nan), fitness, groups) == 0  # stores without first runs
+
+    def drops_ties(rows) -> bool:
+        model = SurrogateModel(Featurizer.for_problem("generate"), "knn").fit(
+            np.random.default_rng(0).normal(size=(len(rows), len(Featurizer.for_problem("generate").names))),
+            [fitness[i] for i in rows], [groups[i] for i in rows], [first[i] for i in rows])
+        env = gym.make("Surrealist-Generate-v0", budget=1, runs=3, executor="inline",
+                       sim_config={"common_noise": True})
+        _, info = env.reset(seed=0)
+        agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig(rule="none", first_runs=1), seed=0)
+        agent.setup(env, info)
+        return agent._drop_ties
+
+    assert drops_ties([3, 4, 5]) and not drops_ties([0, 1, 2, 3, 4, 5])
