@@ -61,7 +61,7 @@ from surrealist_gym.envs.replicate import ReplicateEnv
 from surrealist_gym.sim import SimConfig
 from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
-from surrogates.dataset import Featurizer, load_dataset
+from surrogates.dataset import Featurizer, load_dataset, stack_rows
 from surrogates.models import evaluate_model, train_model
 from surrogates.prescreen import RULES, PrescreenConfig, Prescreened, race_verdict
 
@@ -453,11 +453,12 @@ def transfer(args) -> None:
 
 def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
     """One racing setting replayed on every search (margins from the other searches): simulations saved and in
-    all, improvements missed and in all, drops that were ties (ties drop under common noise only, as
-    ``PrescreenConfig.drop_ties``), each search's margins per stage, and per search (greedy's simulations to its
-    final, racing's simulations to that final, whether racing missed none of its improvements; a search that missed
-    one is counted at greedy's whole search, as if it never came back to greedy's path: the replay cannot follow it)."""
-    from surrogates.prescreen import replay_margin
+    all, improvements missed and in all, drops that were ties (as ``PrescreenConfig.drop_ties``: under common noise,
+    where no improvement on the other searches tied its incumbent), each search's margins per stage, and per search
+    (greedy's simulations to its final, racing's simulations to that final, whether racing missed none of its
+    improvements; a search that missed one is counted at greedy's whole search, as if it never came back to greedy's
+    path: the replay cannot follow it)."""
+    from surrogates.prescreen import replay_margin, tie_improvements
 
     saved = total = missed = improvements = ties = 0
     margins, reach = [], []
@@ -466,6 +467,8 @@ def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
         groups = [i for i, s in enumerate(searches) if i != held for _ in s]
         ours = [replay_margin([r[2][k - 1] for r in others], [r[0] for r in others], groups,
                               miss_rate / len(stages)) for k in stages]
+        drop_ties = common_noise and not tie_improvements(stack_rows([r[2] for r in others]),
+                                                          [r[0] for r in others], groups)  # as the wrapper decides
         if any(m is None for m in ours):
             continue
         margins.append(ours)
@@ -480,7 +483,7 @@ def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
             improvements += improves
             dropped_at = None
             for k, margin in zip(stages, ours) if incumbent is not None else ():
-                verdict = race_verdict(incumbent[k - 1], first[k - 1], margin, common_noise)
+                verdict = race_verdict(incumbent[k - 1], first[k - 1], margin, drop_ties)
                 if verdict:
                     dropped_at, ties = k, ties + (verdict == "tie")
                     break
