@@ -80,37 +80,34 @@ def race_verdict(incumbent: float, candidate: float, margin: float | None, drop_
     return "behind" if margin is not None and incumbent - candidate > margin else None
 
 
-def improvement_shortfalls(proxy, fitness, groups) -> list[float]:
-    """Past searches replayed (rows of one group, in the order evaluated): for every real improvement (a fitness
-    above the best so far), the incumbent's proxy minus its own. Rows whose proxy is unknown (NaN) are skipped."""
-    proxy, fitness, groups = (np.asarray(a) for a in (proxy, fitness, groups))
-    shortfalls = []
+def replayed_improvements(values, fitness, groups, known=None):
+    """Past searches replayed (rows of one group, in the order evaluated, those with ``known`` True): for every real
+    improvement (a fitness above the best so far), its incumbent's value and its own (rows of ``values``)."""
+    values, fitness, groups = np.asarray(values), np.asarray(fitness), np.asarray(groups)
     for group in np.unique(groups):
+        rows = groups == group if known is None else (groups == group) & known
         best, incumbent = -np.inf, None
-        rows = (groups == group) & np.isfinite(proxy)
-        for low, real in zip(proxy[rows], fitness[rows]):
+        for value, real in zip(values[rows], fitness[rows]):
             if real > best:
                 if incumbent is not None:
-                    shortfalls.append(float(incumbent - low))
-                best, incumbent = real, low
-    return shortfalls
+                    yield incumbent, value
+                best, incumbent = real, value
+
+
+def improvement_shortfalls(proxy, fitness, groups) -> list[float]:
+    """For every real improvement of past searches (:func:`replayed_improvements`), the incumbent's proxy minus its
+    own. Rows whose proxy is unknown (NaN) are skipped."""
+    proxy = np.asarray(proxy)
+    return [float(theirs - ours) for theirs, ours in replayed_improvements(proxy, fitness, groups, np.isfinite(proxy))]
 
 
 def tie_improvements(first_runs, fitness, groups) -> int:
-    """Past searches replayed (rows of one group, in the order evaluated): how many real improvements scored exactly
-    as their incumbent on their first k runs at some stage (``first_runs``: (rows, k) fitness of the first 1..k runs,
-    NaN where unknown); racing with ``drop_ties`` would have dropped them."""
+    """How many real improvements of past searches (:func:`replayed_improvements`) scored exactly as their incumbent
+    on their first k runs at some stage (``first_runs``: (rows, k) fitness of the first 1..k runs, NaN where
+    unknown); racing with ``drop_ties`` would have dropped them."""
     first_runs = np.asarray(first_runs, dtype=np.float64).reshape(len(fitness), -1)
-    fitness, groups = np.asarray(fitness), np.asarray(groups)
-    count = 0
-    for group in np.unique(groups):
-        best, incumbent = -np.inf, None
-        for first, real in zip(first_runs[groups == group], fitness[groups == group]):
-            if real > best:
-                if incumbent is not None:
-                    count += any(np.isfinite(a) and np.isfinite(b) and is_tie(a, b) for a, b in zip(incumbent, first))
-                best, incumbent = real, first
-    return count
+    return sum(any(np.isfinite(a) and np.isfinite(b) and is_tie(a, b) for a, b in zip(theirs, ours))
+               for theirs, ours in replayed_improvements(first_runs, fitness, groups))
 
 
 def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | None:
