@@ -214,11 +214,21 @@ def _first_runs(evaluation: Evaluation, k: int) -> Evaluation:
                       trajectories[k - 1] if len(trajectories) >= k else None, trajectories[:k - 1], cached=True)
 
 
+def flown_with_common_noise(stored: StoredEvaluation) -> bool:
+    """The noise mode a stored evaluation was flown with (``SimConfig.common_noise``)."""
+    return bool((stored.info or {}).get("common_noise", False))
+
+
+def describe_noise(common_noise: bool) -> str:
+    """A noise mode in words, for messages."""
+    return "common noise" if common_noise else "each test's own noise"
+
+
 def _check_noise_mode(store: EvaluationStore, common_noise: bool) -> None:
     """A store holds one noise mode: reading back evaluations flown under the other would mix two problems."""
     first = next(iter(store), None)
-    if first is not None and bool((first.info or {}).get("common_noise", False)) != common_noise:
-        held = "common noise" if not common_noise else "each test's own noise"
+    if first is not None and flown_with_common_noise(first) != common_noise:
+        held = describe_noise(not common_noise)
         raise SurrealistError(f"{store.path}: holds evaluations flown with {held}, this search flies with "
                               f"{'common' if common_noise else 'its own'} noise (use another store or results "
                               f"folder, or match --common-noise)")

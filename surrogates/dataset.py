@@ -32,6 +32,7 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from surrealist_gym.errors import SurrealistError
+from surrealist_gym.evaluation import flown_with_common_noise
 from surrealist_gym.geometry import obstacle_distances
 from surrealist_gym.store import EvaluationStore
 from surrealist_gym.testcase import Obstacle, TestCase, _parse_obstacles
@@ -293,7 +294,7 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
         store = source if isinstance(source, EvaluationStore) else _open(source)
         try:
             for ev in store:
-                modes.add(bool((ev.info or {}).get("common_noise", False)))
+                modes.add(flown_with_common_noise(ev))
                 try:
                     X.append(featurizer.features(_obstacles_of(ev.test)))
                 except SurrealistError as err:
@@ -317,10 +318,6 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
                                    "unsafe": np.asarray(unsafe), "crash": np.asarray(crash)},
                    np.asarray(trajs), np.asarray(groups), tuple(keys), tuple(featurizer.names), stack_rows(first),
                    modes.pop() if len(modes) == 1 else None)
-
-
-def describe_noise(common: bool) -> str:
-    return "common noise" if common else "each test's own noise"
 
 
 def stack_rows(rows) -> np.ndarray:

@@ -56,8 +56,9 @@ import numpy as np
 
 from search.base import Agent, SearchResult
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
+from surrealist_gym.evaluation import describe_noise
 
-from .dataset import Featurizer, describe_noise, stack_rows
+from .dataset import Featurizer, stack_rows
 from .lowfi import FITNESS as LOWFI_FITNESS
 from .models import SurrogateModel
 

@@ -54,7 +54,8 @@ def run(args) -> int:
 
     import numpy as np
 
-    from surrogates.dataset import Featurizer, describe_noise, load_dataset
+    from surrealist_gym.evaluation import describe_noise
+    from surrogates.dataset import Featurizer, load_dataset
     from surrogates.models import SurrogateModel, evaluate_model, predict_dataset
 
     if args.action == "eval":

@@ -308,10 +308,12 @@ def test_ties_are_raced_only_where_no_tie_improved_in_the_training_stores():
     assert tie_improvements(first[3:], fitness[3:], groups[3:]) == 0
     assert tie_improvements(np.full((6, 0), np.nan), fitness, groups) == 0  # stores without first runs
 
+    featurizer = Featurizer.for_problem("generate")
+
     def drops_ties(rows) -> bool:
-        model = SurrogateModel(Featurizer.for_problem("generate"), "knn").fit(
-            np.random.default_rng(0).normal(size=(len(rows), len(Featurizer.for_problem("generate").names))),
-            [fitness[i] for i in rows], [groups[i] for i in rows], [first[i] for i in rows])
+        features = np.random.default_rng(0).normal(size=(len(rows), len(featurizer.names)))
+        model = SurrogateModel(featurizer, "knn").fit(features, [fitness[i] for i in rows], [groups[i] for i in rows],
+                                                      [first[i] for i in rows])
         env = gym.make("Surrealist-Generate-v0", budget=1, runs=3, executor="inline",
                        sim_config={"common_noise": True})
         _, info = env.reset(seed=0)
