@@ -219,8 +219,10 @@ def flown_with_common_noise(stored: StoredEvaluation) -> bool:
     return bool((stored.info or {}).get("common_noise", False))
 
 
-def describe_noise(common_noise: bool) -> str:
-    """A noise mode in words, for messages."""
+def describe_noise(common_noise: bool | None) -> str:
+    """A noise mode in words, for messages (None: evaluations of both modes)."""
+    if common_noise is None:
+        return "a mix of both noise modes"
     return "common noise" if common_noise else "each test's own noise"
 
 

@@ -73,4 +73,6 @@ def test_a_dataset_knows_the_noise_mode_of_its_stores(rq2_store, generate_featur
     common, own = (load_dataset([s], generate_featurizer) for s in (crn, rq2_store))
     assert common.common_noise is True and own.common_noise is False
     assert load_dataset([rq2_store, crn], generate_featurizer).common_noise is None
+    from surrealist_gym.evaluation import describe_noise
+    assert describe_noise(None) == "a mix of both noise modes"  # as `surrogate train` prints a mixed dataset
     assert own.concat(common).common_noise is None and own.concat(own).common_noise is False
