@@ -159,6 +159,7 @@ class PlannerOutput:
     velocity: tuple[float, float, float]
     yaw: float
     waypoint: tuple[float, float, float]
+    position = None  #: this planner commands a velocity, not a position setpoint
 
 
 class LocalPlanner:

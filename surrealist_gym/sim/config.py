@@ -24,7 +24,7 @@ PX4_DEFAULTS: Mapping[str, float] = FrozenDict({
     "MPC_Z_VEL_P_ACC": 4.0, "MPC_Z_VEL_I_ACC": 2.0, "MPC_Z_VEL_D_ACC": 0.0,
     "MPC_XY_CRUISE": 5.0, "MPC_XY_VEL_MAX": 12.0, "MPC_Z_VEL_MAX_UP": 3.0, "MPC_Z_VEL_MAX_DN": 1.0,
     "MPC_TILTMAX_AIR": 45.0, "MPC_THR_HOVER": 0.5, "MPC_USE_HTE": 1, "MPC_THR_MIN": 0.12, "MPC_THR_MAX": 1.0,
-    "MPC_ACC_HOR": 3.0, "MPC_ACC_UP_MAX": 4.0, "MPC_ACC_DOWN_MAX": 3.0, "MPC_JERK_AUTO": 4.0,
+    "MPC_ACC_HOR": 3.0, "MPC_ACC_UP_MAX": 4.0, "MPC_ACC_DOWN_MAX": 3.0, "MPC_JERK_AUTO": 4.0, "MPC_JERK_MAX": 8.0,
     "MPC_TKO_SPEED": 1.5, "MPC_TKO_RAMP_T": 3.0, "MPC_LAND_SPEED": 0.7, "MPC_LAND_ALT1": 10.0,
     "MPC_LAND_ALT2": 5.0, "MPC_YAWRAUTO_MAX": 45.0, "MPC_YAW_MODE": 0, "MPC_XY_TRAJ_P": 0.5,
     # attitude and rate control (mc_att_control, mc_rate_control)
@@ -48,6 +48,13 @@ class VehicleModel(str, Enum):
 
     PX4_VISION = "px4_vision"
     IRIS = "iris"
+
+
+class AvoidanceModel(str, Enum):
+    """Which obstacle-avoidance planner flies with ``COM_OBS_AVOID = 1``."""
+
+    PX4 = "px4"        #: PX4-Avoidance's local planner as in Aerialist's SITL (sim/px4_avoidance.py)
+    SIMPLE = "simple"  #: a reactive histogram planner tuned to the real PX4 Vision flight case0 (sim/avoidance.py)
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,7 +109,11 @@ class SimConfig:
             ``i`` alone), so two tests are compared under the same wind and sensor errors and their fitness
             differs only by what the tests change. Default False: the noise also derives from the test (the
             product's semantics: each test meets its own conditions).
-        avoidance_config / sensor_config: the planner's and the depth sensor's configurations (None = defaults).
+        avoidance_model: which planner flies with avoidance (:class:`AvoidanceModel`).
+        avoidance_config / sensor_config: the planner's and the depth sensor's configurations (None = the
+            model's defaults: :class:`~surrealist_gym.sim.px4_avoidance.Px4AvoidanceConfig` and the SITL Iris depth
+            camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.AvoidanceConfig` and the PX4 Vision's camera
+            for ``simple``).
     """
 
     vehicle: VehicleModel = VehicleModel.PX4_VISION
@@ -120,11 +131,13 @@ class SimConfig:
     stuck_distance_m: float = 0.5
     noise: NoiseConfig = NoiseConfig()
     common_noise: bool = False
+    avoidance_model: AvoidanceModel = AvoidanceModel.SIMPLE
     avoidance_config: Any = None
     sensor_config: Any = None
 
     def __post_init__(self):
         object.__setattr__(self, "vehicle", VehicleModel(self.vehicle))
+        object.__setattr__(self, "avoidance_model", AvoidanceModel(self.avoidance_model))
         object.__setattr__(self, "params", FrozenDict(dict(self.params)))
         if self.physics_hz < 200:
             raise ValueError(f"SimConfig.physics_hz must be >= 200 Hz, got {self.physics_hz:g}")

@@ -131,7 +131,10 @@ class Navigator:
                 vd = vland
             pos_sp, vel_sp = (self.target[0], self.target[1], NAN), (0.0, 0.0, -vd)
         elif ph == Phase.CRUISE:
-            if planner is not None:
+            if planner is not None and planner.position is not None:
+                vel_sp = self._to_injected_setpoint(pos, planner.position)
+                yaw_target = planner.yaw
+            elif planner is not None:
                 vel_sp = self._approach(pos, planner.velocity)
                 yaw_target = planner.yaw
             else:
@@ -281,6 +284,21 @@ class Navigator:
         cap = self.p["MPC_XY_P"] * d + 0.1
         n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
         return v if n <= cap else (v[0] * cap / n, v[1] * cap / n, v[2] * cap / n)
+
+    def _to_injected_setpoint(self, pos, target):
+        """PX4 v1.12 FlightTaskAutoLineSmoothVel with an avoidance setpoint injected: the trajectory heads for the
+        setpoint at the speed that can still stop there (TrajMath, jerk MPC_JERK_AUTO, acceleration MPC_ACC_HOR),
+        at most the cruise speed; vertically the position error times MPC_Z_P within the vertical limits."""
+        ref = self.carrot if self.carrot is not None else pos
+        dx, dy, dz = target[0] - ref[0], target[1] - ref[1], target[2] - ref[2]
+        dxy = math.hypot(dx, dy)
+        a, j = self.p["MPC_ACC_HOR"], max(self.p["MPC_JERK_AUTO"], 1e-3)
+        b = 4.0 * a * a / j
+        v = min(self.cruise, 0.5 * (-b + math.sqrt(b * b + 8.0 * a * dxy)))
+        vz = min(max(self.p["MPC_Z_P"] * dz, -self.p["MPC_Z_VEL_MAX_DN"]), self.p["MPC_Z_VEL_MAX_UP"])
+        if dxy < 1e-6:
+            return (0.0, 0.0, vz)
+        return (dx / dxy * v, dy / dxy * v, vz)
 
     def _carrot(self, pos, v, dt):
         """The position setpoint that moves with the velocity setpoint (PX4's trajectory setpoint: position and

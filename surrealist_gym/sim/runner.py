@@ -23,6 +23,7 @@ from ..mission import Command
 from ..trajectory import Trajectory
 from .config import SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
+from .avoidance import LocalPlanner
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
 from .vehicle import preset
@@ -162,10 +163,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     with World(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz) as world:
         sensor = None
         if avoidance:
-            from .avoidance import AvoidanceConfig, LocalPlanner
-            from .sensor import DepthSensor, DepthSensorConfig
-            sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig())
-            plan_cfg = cfg.avoidance_config or AvoidanceConfig()
+            sensor, make_planner = _avoidance(test, cfg, params)
         yaw0 = _initial_yaw(mission)
         runs = []
         for body, index in zip(world.vehicles, indices):
@@ -177,7 +175,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             r.ks = np.zeros(10)
             r.wind = (0.0, 0.0, 0.0)
             r.nav = Navigator(mission, params, cfg.takeoff_delay_s)
-            r.planner = LocalPlanner(plan_cfg) if avoidance else None
+            r.planner = make_planner() if avoidance else None
             r.noise = NoiseSource(run_seed_sequence(noise_key, seed, index), cfg.noise, test.wind, outer_dt)
             r.q_sp, r.thrust = (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)), 0.0
             r.status, r.message, r.end_t = None, "", 0.0
@@ -188,6 +186,31 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             runs.append(r)
         _loop(world, runs, cfg, params, vehicle, sensor, timeout)
     return [_result(r, test, cfg, params, seed) for r in runs]
+
+
+# The SITL Iris depth camera (PX4-SITL_gazebo-classic models/depth_camera): 59 deg x 46 deg, clip 0.5-18 m, no
+# noise; rays on a 2 deg grid, the resolution the planner subsamples its cloud to. Gazebo's camera sees the ground.
+SITL_DEPTH_CAMERA = dict(fov_h_deg=59.0, fov_v_deg=46.0, range_min=0.5, range_max=18.0, rays_h=30, rays_v=23,
+                         noise_std=0.0, returns_ground=True)
+
+
+def _avoidance(test, cfg: SimConfig, params):
+    """The depth sensor and a factory of planners for the configured avoidance model."""
+    from .config import AvoidanceModel
+    from .sensor import DepthSensor, DepthSensorConfig
+
+    if cfg.avoidance_model == AvoidanceModel.PX4:
+        from .px4_avoidance import Px4AvoidanceConfig, Px4LocalPlanner
+
+        sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig(**SITL_DEPTH_CAMERA))
+        plan_cfg = cfg.avoidance_config or Px4AvoidanceConfig()
+        return sensor, lambda: Px4LocalPlanner(plan_cfg, params["MPC_XY_CRUISE"], params["MPC_ACC_HOR"],
+                                               params.get("MPC_JERK_MAX", 8.0))
+    from .avoidance import AvoidanceConfig, LocalPlanner
+
+    sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig())
+    plan_cfg = cfg.avoidance_config or AvoidanceConfig()
+    return sensor, lambda: LocalPlanner(plan_cfg)
 
 
 def _initial_yaw(mission) -> float:
@@ -288,7 +311,10 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
             hits = sensor.scan((pos[0], pos[1], -pos[2]), yaw, r.noise.rng)
             if len(hits):
                 hits = hits + np.array([pe[0], pe[1], -(pe[2])])
-            r.plan_out = r.planner.update(t, pos_up, vel_up, nav.goal(), hits, max_speed=nav.cruise)
+            if isinstance(r.planner, LocalPlanner):
+                r.plan_out = r.planner.update(t, pos_up, vel_up, nav.goal(), hits, max_speed=nav.cruise)
+            else:
+                r.plan_out = r.planner.update(t, pos_up, vel_up, yaw, nav.goal(), nav.prev, hits)
         plan = r.plan_out
     pos_sp, vel_ff, acc_ff, yaw_sp = nav.update(t, pos_up, vel_up, yaw, outer_dt, r.ground, plan)
     r.ground = False  # collects the contacts of the next outer period

@@ -4,8 +4,9 @@ World frame: x north, y east, z up [m]; yaw [rad] from north toward east, headin
 The camera is level (the UAV's roll and pitch are ignored) and looks along the yaw heading; its rays go through
 a regular pixel grid of a pinhole image (``rays_h`` x ``rays_v``), like a subsampled depth image.
 
-The ground (z = 0) hides what lies behind it but is never returned as a hit: :meth:`DepthSensor.scan` returns
-obstacle points only, so a planner never mistakes the ground for an obstacle.
+The ground (z = 0) hides what lies behind it. It is returned as a hit only with ``returns_ground`` (a Gazebo depth
+camera sees the ground plane, and PX4-Avoidance treats those points as obstacles); by default :meth:`DepthSensor.scan`
+returns obstacle points only.
 
 Example::
 
@@ -43,6 +44,7 @@ class DepthSensorConfig:
         rays_h: Rays per image row (~1.9 deg apart with the defaults).
         rays_v: Rays per image column (~4.2 deg apart with the defaults).
         noise_std: Standard deviation of the Gaussian range noise [m], applied only when ``scan`` gets an rng.
+        returns_ground: Whether points on the ground plane are returned too.
     """
 
     fov_h_deg: float = 59.0
@@ -52,6 +54,7 @@ class DepthSensorConfig:
     rays_h: int = 32
     rays_v: int = 12
     noise_std: float = 0.02
+    returns_ground: bool = False
 
     def __post_init__(self):
         for name in ("fov_h_deg", "fov_v_deg"):
@@ -122,12 +125,13 @@ class DepthSensor:
         else:
             noise = self._zeros
         k = _cast(float(position[0]), float(position[1]), float(position[2]), math.cos(yaw), math.sin(yaw),
-                  self._rays, self._boxes, self._cyls, c.range_min, c.range_max, noise, self._out)
+                  self._rays, self._boxes, self._cyls, c.range_min, c.range_max, noise, self._out,
+                  bool(c.returns_ground))
         return self._out[:k].copy()
 
 
 @njit(cache=True)
-def _cast(px, py, pz, cy, sy, rays, boxes, cyls, rmin, rmax, noise, out):  # pragma: no cover - compiled
+def _cast(px, py, pz, cy, sy, rays, boxes, cyls, rmin, rmax, noise, out, ground):  # pragma: no cover - compiled
     """Fill ``out`` with the obstacle hit points of every ray; return their count."""
     k = 0
     for i in range(rays.shape[0]):
@@ -137,10 +141,11 @@ def _cast(px, py, pz, cy, sy, rays, boxes, cyls, rmin, rmax, noise, out):  # pra
         dz = up
         best = rmax
         hit = False
-        if dz < -1e-12:  # the ground occludes
+        if dz < -1e-12:  # the ground occludes (and is a hit when the camera returns it)
             tg = -pz / dz
             if tg < best:
                 best = tg
+                hit = ground
         for j in range(boxes.shape[0]):
             ox, oy, oz = px - boxes[j, 0], py - boxes[j, 1], pz - boxes[j, 2]
             c, s = boxes[j, 3], boxes[j, 4]
