@@ -21,6 +21,7 @@ COMMANDS = {
     "compare": ("surrealist_gym.cli.compare", "run several search agents on the same problems and compare them"),
     "train-ppo": ("surrealist_gym.cli.train_ppo", "train an RL policy (PPO/SAC) across generated problems"),
     "surrogate": ("surrealist_gym.cli.surrogate", "train or evaluate a surrogate model on evaluation stores"),
+    "fidelity": ("surrealist_gym.cli.fidelity", "fly a labelled set of tests and report how far our UAV agrees"),
 }
 
 

@@ -26,7 +26,7 @@ PX4_DEFAULTS: Mapping[str, float] = FrozenDict({
     "MPC_TILTMAX_AIR": 45.0, "MPC_THR_HOVER": 0.5, "MPC_USE_HTE": 1, "MPC_THR_MIN": 0.12, "MPC_THR_MAX": 1.0,
     "MPC_ACC_HOR": 3.0, "MPC_ACC_UP_MAX": 4.0, "MPC_ACC_DOWN_MAX": 3.0, "MPC_JERK_AUTO": 4.0, "MPC_JERK_MAX": 8.0,
     "MPC_TKO_SPEED": 1.5, "MPC_TKO_RAMP_T": 3.0, "MPC_LAND_SPEED": 0.7, "MPC_LAND_ALT1": 10.0,
-    "MPC_LAND_ALT2": 5.0, "MPC_YAWRAUTO_MAX": 45.0, "MPC_YAW_MODE": 0, "MPC_XY_TRAJ_P": 0.5,
+    "MPC_LAND_ALT2": 5.0, "MPC_YAWRAUTO_MAX": 45.0, "MPC_YAW_MODE": 0, "MPC_XY_TRAJ_P": 0.5, "MPC_XY_ERR_MAX": 2.0,
     # attitude and rate control (mc_att_control, mc_rate_control)
     "MC_ROLL_P": 6.5, "MC_PITCH_P": 6.5, "MC_YAW_P": 2.8, "MC_YAW_WEIGHT": 0.4,
     "MC_ROLLRATE_P": 0.15, "MC_ROLLRATE_I": 0.2, "MC_ROLLRATE_D": 0.003, "MC_ROLLRATE_K": 1.0,

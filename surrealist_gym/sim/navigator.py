@@ -24,6 +24,7 @@ import math
 from enum import Enum
 
 from ..mission import Command, Mission
+from .flight_task import AvoidanceFlightTask
 
 NAN = float("nan")
 
@@ -69,6 +70,7 @@ class Navigator:
         self.finished_in_air = False
         self.t = 0.0
         self.carrot = None
+        self.task: AvoidanceFlightTask | None = None  # PX4's flight task while avoidance injects setpoints
 
     # --- public --------------------------------------------------------------------------------------------------
     @property
@@ -132,7 +134,10 @@ class Navigator:
             pos_sp, vel_sp = (self.target[0], self.target[1], NAN), (0.0, 0.0, -vd)
         elif ph == Phase.CRUISE:
             if planner is not None and planner.position is not None:
-                vel_sp = self._to_injected_setpoint(pos, planner.position)
+                if self.task is None:
+                    self.task = AvoidanceFlightTask(self.p, self.cruise, pos, vel)
+                pos_sp, vel_sp, acc = self.task.update(dt, pos, planner.position, self.prev, self.target)
+                self.v_cmd = list(vel_sp)
                 yaw_target = planner.yaw
             elif planner is not None:
                 vel_sp = self._approach(pos, planner.velocity)
@@ -140,10 +145,11 @@ class Navigator:
             else:
                 vel_sp = self._line_velocity(pos)
                 yaw_target = self._yaw_mode(pos, vel, self.target)
-            old = self.v_cmd
-            vel_sp = self._slew(vel_sp, dt)
-            acc = tuple((vel_sp[i] - old[i]) / dt for i in range(3))
-            pos_sp = self._carrot(pos, vel_sp, dt)
+            if self.task is None:
+                old = self.v_cmd
+                vel_sp = self._slew(vel_sp, dt)
+                acc = tuple((vel_sp[i] - old[i]) / dt for i in range(3))
+                pos_sp = self._carrot(pos, vel_sp, dt)
         self.yaw_sp = self._yaw_step(self.yaw_sp, yaw_target, dt)
         ned_pos = (pos_sp[0], pos_sp[1], -pos_sp[2])
         return ned_pos, (vel_sp[0], vel_sp[1], -vel_sp[2]), (acc[0], acc[1], -acc[2]), self.yaw_sp
@@ -225,6 +231,7 @@ class Navigator:
     def _go(self, t, phase, target, pos):
         self.phase, self.phase_t0 = phase, t
         self.carrot = None
+        self.task = None
         self.target = tuple(target)
         self.landed_since = None
 
@@ -239,7 +246,15 @@ class Navigator:
         if it is not None and it.command in (Command.LAND, Command.RETURN_TO_LAUNCH):
             rad = min(rad, max(self.p["NAV_ACC_RAD"], 0.1))
         dh = math.hypot(pos[0] - self.target[0], pos[1] - self.target[1])
+        if self.task is not None and self._passed(pos):
+            rad = dh + 0.5  # ObstacleAvoidance::checkAvoidanceProgress: passed along the line counts as reached
         return dh < rad and abs(pos[2] - self.target[2]) < max(self.p["NAV_MC_ALT_RAD"], 0.1)
+
+    def _passed(self, pos) -> bool:
+        """Whether the vehicle's projection on the line from the previous item lies beyond the target."""
+        ux, uy = self.target[0] - self.prev[0], self.target[1] - self.prev[1]
+        n2 = ux * ux + uy * uy
+        return n2 > 1e-6 and ((pos[0] - self.prev[0]) * ux + (pos[1] - self.prev[1]) * uy) / n2 > 1.0
 
     def _next_position(self):
         for it in self.items[self.index + 1:]:
@@ -284,21 +299,6 @@ class Navigator:
         cap = self.p["MPC_XY_P"] * d + 0.1
         n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
         return v if n <= cap else (v[0] * cap / n, v[1] * cap / n, v[2] * cap / n)
-
-    def _to_injected_setpoint(self, pos, target):
-        """PX4 v1.12 FlightTaskAutoLineSmoothVel with an avoidance setpoint injected: the trajectory heads for the
-        setpoint at the speed that can still stop there (TrajMath, jerk MPC_JERK_AUTO, acceleration MPC_ACC_HOR),
-        at most the cruise speed; vertically the position error times MPC_Z_P within the vertical limits."""
-        ref = self.carrot if self.carrot is not None else pos
-        dx, dy, dz = target[0] - ref[0], target[1] - ref[1], target[2] - ref[2]
-        dxy = math.hypot(dx, dy)
-        a, j = self.p["MPC_ACC_HOR"], max(self.p["MPC_JERK_AUTO"], 1e-3)
-        b = 4.0 * a * a / j
-        v = min(self.cruise, 0.5 * (-b + math.sqrt(b * b + 8.0 * a * dxy)))
-        vz = min(max(self.p["MPC_Z_P"] * dz, -self.p["MPC_Z_VEL_MAX_DN"]), self.p["MPC_Z_VEL_MAX_UP"])
-        if dxy < 1e-6:
-            return (0.0, 0.0, vz)
-        return (dx / dxy * v, dy / dxy * v, vz)
 
     def _carrot(self, pos, v, dt):
         """The position setpoint that moves with the velocity setpoint (PX4's trajectory setpoint: position and

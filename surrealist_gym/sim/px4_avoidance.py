@@ -24,8 +24,8 @@ One :meth:`Px4LocalPlanner.update` is one planner cycle (~10 Hz):
    path goes from the vehicle to the deepest open node.
 4. **Waypoint generator** (``WaypointGenerator``): TRY_PATH follows the path from its first node at the cruise
    speed since the tree was built, DIRECT (no tree, or the path used up) heads for the goal. The speed is the
-   cruise speed times a field-of-view factor (0 when the heading to fly lies outside the camera's horizontal
-   field of view), low-passed (0.9 s), at most the distance to the goal; the setpoint lies that far ahead and is
+   cruise speed times a field-of-view factor (``1 - 2 |bearing error| / fov_h_deg``, 0 outside the camera's
+   horizontal field of view: ``scaleToFOV`` with one camera), low-passed (0.9 s), at most the distance to the goal; the setpoint lies that far ahead and is
    smoothed by a critically damped filter (gains ``smoothing_speed_xy`` / ``_z``). The yaw setpoint turns toward
    the direction flown.
 
@@ -67,7 +67,6 @@ class Px4AvoidanceConfig:
         fov_h_deg / fov_v_deg: The field of view the planner learns from the camera's clouds [deg] (the SITL
             Iris depth camera: 59 x 46).
         speed_filter_tau_s: Time constant of the speed low-pass [s] (waypoint_generator.cpp, 0.9).
-        fov_ramp_deg: Width of the speed ramp at the edge of the field of view [deg] (waypoint_generator.cpp, 3).
         max_speed_sensor: Whether the cruise speed is capped by the sensor-limited speed (the positive root of
             ``u^2 + 2 a (a / j) u - 2 a R = 0`` with MPC_ACC_HOR, MPC_JERK_MAX and max_sensor_range).
     """
@@ -89,7 +88,6 @@ class Px4AvoidanceConfig:
     fov_h_deg: float = 59.0
     fov_v_deg: float = 46.0
     speed_filter_tau_s: float = 0.9
-    fov_ramp_deg: float = 3.0
     max_speed_sensor: bool = True
 
     def __post_init__(self):
@@ -99,7 +97,7 @@ class Px4AvoidanceConfig:
             if not (isinstance(value, (int, float)) and value > 0 and math.isfinite(value)):
                 raise ValueError(f"Px4AvoidanceConfig.{name}: expected a positive number, got {value!r}")
         for name in ("min_sensor_range", "pitch_cost_param", "yaw_cost_param", "velocity_cost_param",
-                     "obstacle_cost_param", "tree_heuristic_weight", "smoothing_margin_degrees", "fov_ramp_deg"):
+                     "obstacle_cost_param", "tree_heuristic_weight", "smoothing_margin_degrees"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value >= 0 and math.isfinite(value)):
                 raise ValueError(f"Px4AvoidanceConfig.{name}: expected a number >= 0, got {value!r}")
@@ -171,6 +169,7 @@ class Px4LocalPlanner:
         self._sp_v = (0.0, 0.0, 0.0)
         self._yaw = None
         self._yaw_rate = 0.0
+        self._yaw_at_goal = None
 
     @property
     def cloud(self) -> np.ndarray:
@@ -222,41 +221,44 @@ class Px4LocalPlanner:
         ax, ay, az = aim[0] - px, aim[1] - py, aim[2] - pz
         norm = math.sqrt(ax * ax + ay * ay + az * az)
         ux, uy, uz = (ax / norm, ay / norm, az / norm) if norm > 1e-6 else (0.0, 0.0, 0.0)
-        if dist_goal < 1.0:
+        if dist_goal < 1.0:  # adaptSpeed: at the goal, aim at it at the distance left; the yaw is latched
             ux, uy, uz = ((gx - px) / max(dist_goal, 1e-6), (gy - py) / max(dist_goal, 1e-6),
                           (gz - pz) / max(dist_goal, 1e-6))
-            speed = dist_goal
-            self._speed = speed
+            target = dist_goal
+            if self._yaw_at_goal is None:
+                self._yaw_at_goal = self._yaw if self._yaw is not None else yaw
         else:
+            # scaleToFOV with one camera: a linear ramp over the whole field of view, 0 outside
             heading = math.atan2(uy, ux) if abs(ux) + abs(uy) > 1e-9 else yaw
             off = abs(math.degrees(math.remainder(heading - yaw, 2.0 * math.pi)))
-            half = 0.5 * c.fov_h_deg
-            if off <= half - c.fov_ramp_deg:
-                factor = 1.0
-            elif off >= half:
-                factor = 0.0
-            else:
-                factor = (half - off) / c.fov_ramp_deg if c.fov_ramp_deg > 0 else 0.0
-            target = self.cruise * factor
-            alpha = dt / (c.speed_filter_tau_s + dt)
-            self._speed += alpha * (target - self._speed)
-            speed = min(self._speed, dist_goal)
+            target = self.cruise * max(0.0, 1.0 - 2.0 * off / c.fov_h_deg)
+            self._yaw_at_goal = None
+        alpha = dt / (c.speed_filter_tau_s + dt)
+        self._speed += alpha * (target - self._speed)
+        speed = min(self._speed, dist_goal)
         adapted = (px + ux * speed, py + uy * speed, pz + uz * speed)
-        # critically damped smoothing toward the adapted point, the vehicle's velocity as reference
+        # smoothWaypoint: critically damped filter toward the adapted point; reference: the vehicle's velocity
+        # (0 when the adapted point is the goal)
         if self._sp is None:
             self._sp, self._sp_v = (px, py, pz), (float(velocity[0]), float(velocity[1]), float(velocity[2]))
+        at_goal = math.dist(adapted, (gx, gy, gz)) < 0.1
         kp = (c.smoothing_speed_xy, c.smoothing_speed_xy, c.smoothing_speed_z)
         sp, sv = list(self._sp), list(self._sp_v)
         for i in range(3):
-            acc = kp[i] * (adapted[i] - sp[i]) + 2.0 * math.sqrt(kp[i]) * (float(velocity[i]) - sv[i])
+            ref = 0.0 if at_goal else float(velocity[i])
+            acc = kp[i] * (adapted[i] - sp[i]) + 2.0 * math.sqrt(kp[i]) * (ref - sv[i])
             sv[i] += acc * dt
             sp[i] += sv[i] * dt
         self._sp, self._sp_v = tuple(sp), tuple(sv)
-        # yaw toward the direction flown, through the same filter (xy gain)
-        want = math.atan2(uy, ux) if abs(ux) + abs(uy) > 1e-9 and dist_goal >= 1.0 else (
-            self._yaw if self._yaw is not None else yaw)
+        # nextSmoothYaw: toward the point aimed at, through the same filter (xy gain)
         if self._yaw is None:
             self._yaw, self._yaw_rate = yaw, 0.0
+        if self._yaw_at_goal is not None:
+            want = self._yaw_at_goal
+        elif math.hypot(ax, ay) > 0.1:
+            want = math.atan2(ay, ax)
+        else:
+            want = yaw
         err = math.remainder(want - self._yaw, 2.0 * math.pi)
         kyaw = c.smoothing_speed_xy
         self._yaw_rate += (kyaw * err - 2.0 * math.sqrt(kyaw) * self._yaw_rate) * dt

@@ -1,0 +1,473 @@
+"""Fidelity: how far the simulated UAV agrees with the system that produced a labelled set of Aerialist tests.
+
+Each test of a labelled set (:mod:`surrealist_gym.labels`) is flown in the simulator and compared with its label
+on the 2-D competition distance (:func:`~surrealist_gym.geometry.competition_distance`), the outcome and the
+airborne time (first to last moment above 0.3 m).
+
+Outcome mapping: their ``flown`` (or ``success``) is our ``success``; their ``no_result`` (Aerialist's 500 s
+timeout: no metric) or ``timeout`` is our ``timeout``; ``collision`` is ``collision``. Our ``stuck``, and any
+status that no label of the set maps to, is a status the labels never show. Our ``timeout`` and ``stuck`` count as
+blocked. A test "flew" when it has a distance: theirs is ``flown``; ours has at least one run that ended neither
+in ``timeout`` nor ``error``.
+
+Example::
+
+    >>> report = measure_fidelity("rilast-mission1/tests.csv", limit=20, workers=2)   # doctest: +SKIP
+    >>> report.close.spearman, report.close.auc                                         # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import time
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .errors import SurrealistError
+from .fitness import UNSAFE_DISTANCE_M
+from .frozendict import FrozenDict
+from .geometry import competition_distance
+from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
+from .testcase import TestCase
+
+__all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "RunOutcome",
+           "TestRow", "airborne_time", "build_report", "fly_labelled_set", "fly_test", "load_labelled_set",
+           "measure_fidelity", "plot_report", "region_stats", "sim_config_for", "write_report"]
+
+DISTANCE_NAME = "2-D competition distance"
+AIRBORNE_Z_M = 0.3        # [m] above the ground: airborne
+TARGET_PRECISION = 0.6    # the best recall is sought at this precision or above
+# their (normalised) result -> our status that means the same
+SAME_STATUS = {"flown": "success", "timeout": "timeout", "collision": "collision"}
+BLOCKED = ("timeout", "stuck")
+NO_DISTANCE = ("timeout", "error")
+STATUS_ORDER = ("success", "timeout", "stuck", "collision", "error")
+
+
+# --- flying ------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True)
+class RunOutcome:
+    """One simulated run: status, 2-D competition distance [m], airborne time [s], duration since arming [s]."""
+
+    status: str
+    distance: float
+    airborne_s: float
+    duration_s: float
+    message: str = ""
+
+
+def airborne_time(t, xyz, threshold: float = AIRBORNE_Z_M) -> float:
+    """Time [s] from the first to the last sample with z above ``threshold`` [m] (to the end if never landed)."""
+    up = np.flatnonzero(np.asarray(xyz)[:, 2] > threshold)
+    return float(t[up[-1]] - t[up[0]]) if up.size else 0.0
+
+
+def sim_config_for(uav: str | None = None, config=None):
+    """The one place where a UAV profile becomes a SimConfig. Profiles are not available yet: ``uav`` must be None."""
+    if uav is not None:
+        raise SurrealistError(f"--uav {uav!r}: UAV profiles are not available yet (leave --uav out to fly the "
+                              f"default UAV)")
+    return config
+
+
+def fly_test(test: TestCase, runs: int, seed: int, config=None, buffer: float = 0.0) -> tuple[RunOutcome, ...]:
+    """Fly ``runs`` runs of a test and reduce each to a :class:`RunOutcome` (the function the workers call)."""
+    from .executors import fly
+
+    out = []
+    for r in fly(test, range(runs), seed, config):
+        traj = r.trajectory
+        distance = competition_distance(traj, test.obstacles, buffer) if len(traj) else math.nan
+        out.append(RunOutcome(str(getattr(r.status, "value", r.status)), distance,
+                              airborne_time(r.true_t, r.true_xyz), float(r.duration), r.message))
+    return tuple(out)
+
+
+def _fly_guarded(test, runs, seed, config, buffer):
+    """The retry of a test that raised, in this process: if it raises again, its runs end in ``error``."""
+    try:
+        return fly_test(test, runs, seed, config, buffer)
+    except Exception as err:  # noqa: BLE001 - one broken test must not end the measurement
+        message = f"{type(err).__name__}: {err}"
+        return tuple(RunOutcome("error", math.nan, 0.0, 0.0, message) for _ in range(runs))
+
+
+def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,
+                     buffer: float = 0.0, progress: Callable[[int, int], None] | None = None
+                     ) -> list[tuple[RunOutcome, ...]]:
+    """Fly every test of ``lset`` on ``workers`` processes (default: all cores; 1: in this process).
+
+    Returns one tuple of run outcomes per test, in the set's order. A test that raises is retried once; if it
+    raises again, its runs end in ``error`` with the exception as message.
+    """
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from .executors import _die_with_parent
+
+    workers = workers or os.cpu_count() or 1
+    out: list = [None] * len(lset)
+    if workers == 1:
+        for i, test in enumerate(lset.tests):
+            try:
+                out[i] = fly_test(test, runs, seed, config, buffer)
+            except Exception:  # noqa: BLE001 - retried once
+                out[i] = _fly_guarded(test, runs, seed, config, buffer)
+            if progress:
+                progress(i + 1, len(lset))
+        return out
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(lset)), initializer=_die_with_parent)
+    try:
+        futures = {pool.submit(fly_test, test, runs, seed, config, buffer): i for i, test in enumerate(lset.tests)}
+        for done, future in enumerate(as_completed(futures), start=1):
+            i = futures[future]
+            try:
+                out[i] = future.result()
+            except Exception:  # noqa: BLE001 - retried once in this process
+                out[i] = _fly_guarded(lset.tests[i], runs, seed, config, buffer)
+            if progress:
+                progress(done, len(lset))
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    return out
+
+
+# --- the report --------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True)
+class TestRow:
+    """One labelled test with its simulated runs."""
+
+    __test__ = False  # not a pytest class
+
+    label: Label
+    runs: tuple[RunOutcome, ...]
+
+    @property
+    def distances(self) -> list[float]:
+        return [r.distance for r in self.runs if r.status not in NO_DISTANCE and not math.isnan(r.distance)]
+
+    @property
+    def distance(self) -> float:
+        """Median 2-D competition distance [m] over the runs that flew (nan if none did)."""
+        d = self.distances
+        return float(np.median(d)) if d else math.nan
+
+    @property
+    def failure_probability(self) -> float:
+        """Share of the runs that flew with a distance below 1.5 m (nan if none flew)."""
+        d = self.distances
+        return float(np.mean(np.asarray(d) < UNSAFE_DISTANCE_M)) if d else math.nan
+
+    @property
+    def status(self) -> str:
+        """The most common status of the runs (ties: the first in success, timeout, stuck, collision, error)."""
+        counts = Counter(r.status for r in self.runs)
+        rank = {s: i for i, s in enumerate(STATUS_ORDER)}
+        return min(counts, key=lambda s: (-counts[s], rank.get(s, len(rank)), s))
+
+    @property
+    def airborne_s(self) -> float:
+        """Median airborne time [s] over the runs that did not end in error."""
+        a = [r.airborne_s for r in self.runs if r.status != "error"]
+        return float(np.median(a)) if a else math.nan
+
+    def to_dict(self) -> dict:
+        lab = self.label
+        ratio = self.airborne_s / lab.airborne_s if lab.airborne_s > 0 else math.nan
+        return {"test": lab.test_id, "their_result": lab.result, "their_distance_m": _r(lab.distance),
+                "our_distance_m": _r(self.distance), "our_failure_probability": _r(self.failure_probability),
+                "our_status": self.status, "our_statuses": " ".join(f"{s}:{n}" for s, n in
+                                                                    Counter(r.status for r in self.runs).items()),
+                "runs": len(self.runs), "their_airborne_s": _r(lab.airborne_s, 1),
+                "our_airborne_s": _r(self.airborne_s, 1), "airborne_ratio": _r(ratio),
+                "our_duration_s": _r(float(np.median([r.duration_s for r in self.runs])), 1)}
+
+
+@dataclass(frozen=True, slots=True)
+class RegionStats:
+    """Agreement on the tests both flew in a region (all tests, or those with theirs < close)."""
+
+    tests: int                  # tests both flew
+    their_failures: int         # of them, theirs < 1.5 m
+    spearman: float             # ours vs theirs, 2-D competition distance
+    auc: float                  # their failures scored by our distance (smaller = riskier)
+    precision: float            # of "ours < 1.5 m" for "theirs < 1.5 m"
+    recall: float
+    best_recall: float          # the largest recall at precision >= 0.6 over thresholds "ours <= t"
+    best_threshold_m: float     # that t [m]
+    their_failure_rate: float   # share of the tests with theirs < 1.5 m
+    our_failure_rate: float     # mean share of our runs < 1.5 m
+
+
+@dataclass(frozen=True, slots=True)
+class FidelityReport:
+    """Agreement of the simulated UAV with a labelled set (see the module docstring for the mapping)."""
+
+    source: str
+    labels_file: str
+    runs: int
+    seed: int
+    close_m: float
+    buffer_m: float
+    uav: str | None
+    rows: tuple[TestRow, ...]
+    overall: RegionStats
+    close: RegionStats
+    confusion: FrozenDict            # their result -> our status -> runs
+    blocked: FrozenDict              # agreement on timeouts / blocked flights
+    unseen: FrozenDict               # runs ending in a status the labels never show
+    durations: FrozenDict | None     # airborne ratios ours / theirs, when labelled
+    wall_s: float
+
+    def to_dict(self) -> dict:
+        """The summary (no per-test rows), JSON-ready: nan and inf become None."""
+        return {"distance": f"{DISTANCE_NAME} [m], buffer {self.buffer_m:g} m", "source": self.source,
+               "labels_file": self.labels_file, "tests": len(self.rows), "runs_per_test": self.runs,
+               "seed": self.seed, "close_m": self.close_m, "uav": self.uav,
+               "their_results": dict(Counter(r.label.result for r in self.rows)),
+               "our_statuses": dict(Counter(run.status for r in self.rows for run in r.runs)),
+               "overall": _clean(_asdict(self.overall)), "close": _clean(_asdict(self.close)),
+               "confusion": {k: dict(v) for k, v in self.confusion.items()}, "blocked": _clean(dict(self.blocked)),
+               "unseen_statuses": _clean(dict(self.unseen)),
+               "durations": None if self.durations is None else _clean(dict(self.durations)),
+               "wall_s": round(self.wall_s, 2),
+               "tests_per_s": round(len(self.rows) / self.wall_s, 3) if self.wall_s > 0 else None}
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+
+def _asdict(obj) -> dict:
+    return {name: getattr(obj, name) for name in obj.__slots__}
+
+
+def _r(value: float, digits: int = 4):
+    return None if value is None or not math.isfinite(value) else round(float(value), digits)
+
+
+def _clean(d: dict) -> dict:
+    return {k: (_r(v) if isinstance(v, float) else v) for k, v in d.items()}
+
+
+def _spearman(a, b) -> float:
+    from scipy.stats import spearmanr
+
+    if len(a) < 3 or np.ptp(a) == 0 or np.ptp(b) == 0:
+        return math.nan
+    return float(spearmanr(a, b).statistic)
+
+
+def _auc(positive: np.ndarray, scores: np.ndarray) -> float:
+    """P(score of a positive < score of a negative), ties half (Mann-Whitney U)."""
+    from scipy.stats import mannwhitneyu
+
+    pos, neg = scores[positive], scores[~positive]
+    if not pos.size or not neg.size:
+        return math.nan
+    return float(mannwhitneyu(neg, pos).statistic / (pos.size * neg.size))
+
+
+def _best_recall(positive: np.ndarray, scores: np.ndarray) -> tuple[float, float]:
+    """Largest recall with precision >= TARGET_PRECISION over "score <= t", and the smallest such t."""
+    if not positive.any():
+        return math.nan, math.nan
+    order = np.argsort(scores, kind="stable")
+    s, p = scores[order], positive[order]
+    last = np.r_[s[1:] != s[:-1], True]  # the last index of each distinct score
+    tp = np.cumsum(p)[last]
+    k = np.flatnonzero(last) + 1
+    precision, recall = tp / k, tp / positive.sum()
+    ok = precision >= TARGET_PRECISION
+    if not ok.any():
+        return 0.0, math.nan
+    best = np.flatnonzero(ok & (recall == recall[ok].max()))[0]
+    return float(recall[best]), float(s[last][best])
+
+
+def region_stats(theirs: np.ndarray, ours: np.ndarray, failure_prob: np.ndarray) -> RegionStats:
+    """Agreement on paired distances [m] (tests both flew) and our per-test failure probabilities."""
+    positive = theirs < UNSAFE_DISTANCE_M
+    predicted = ours < UNSAFE_DISTANCE_M
+    tp = int((positive & predicted).sum())
+    best_recall, threshold = _best_recall(positive, ours)
+    n = len(theirs)
+    return RegionStats(
+        tests=n, their_failures=int(positive.sum()), spearman=_spearman(theirs, ours), auc=_auc(positive, ours),
+        precision=tp / predicted.sum() if predicted.any() else math.nan,
+        recall=tp / positive.sum() if positive.any() else math.nan, best_recall=best_recall,
+        best_threshold_m=threshold, their_failure_rate=float(positive.mean()) if n else math.nan,
+        our_failure_rate=float(failure_prob.mean()) if n else math.nan)
+
+
+def build_report(lset: LabelledSet, outcomes: Sequence[tuple[RunOutcome, ...]], *, runs: int = 1, seed: int = 0,
+                 close: float = 3.0, buffer: float = 0.0, uav: str | None = None, wall_s: float = 0.0
+                 ) -> FidelityReport:
+    """Compare flown ``outcomes`` (one tuple of runs per test of ``lset``) with the labels."""
+    rows = tuple(TestRow(label, tuple(o)) for label, o in zip(lset.labels, outcomes, strict=True))
+    both = [r for r in rows if r.label.result == "flown" and not math.isnan(r.distance)]
+    theirs = np.array([r.label.distance for r in both])
+    ours = np.array([r.distance for r in both])
+    prob = np.array([r.failure_probability for r in both])
+    near = theirs < close
+    confusion: dict[str, Counter] = {}
+    for r in rows:
+        confusion.setdefault(r.label.result, Counter()).update(run.status for run in r.runs)
+    statuses = [s for s in STATUS_ORDER if any(s in c for c in confusion.values())]
+    statuses += sorted({s for c in confusion.values() for s in c} - set(statuses))
+    confusion_table = FrozenDict({k: FrozenDict({s: c.get(s, 0) for s in statuses}) for k, c in confusion.items()})
+    all_runs = [(r.label.result, run.status) for r in rows for run in r.runs]
+    ours_blocked = [res for res, s in all_runs if s in BLOCKED]
+    on_timeouts = [s for res, s in all_runs if res == "timeout"]
+    blocked = FrozenDict({
+        "their_timeouts": sum(r.label.result == "timeout" for r in rows),
+        "our_blocked_runs": len(ours_blocked),
+        "recall": sum(s in BLOCKED for s in on_timeouts) / len(on_timeouts) if on_timeouts else math.nan,
+        "precision": ours_blocked.count("timeout") / len(ours_blocked) if ours_blocked else math.nan})
+    seen = {SAME_STATUS[r.label.result] for r in rows}
+    unseen_counts = Counter(s for _, s in all_runs if s not in seen)
+    unseen = FrozenDict({"share": sum(unseen_counts.values()) / max(1, len(all_runs)),
+                         "statuses": FrozenDict(unseen_counts), "labels_show": tuple(sorted(seen))})
+    return FidelityReport(
+        source=lset.source, labels_file=lset.labels_file, runs=runs, seed=seed, close_m=close, buffer_m=buffer,
+        uav=uav, rows=rows, overall=region_stats(theirs, ours, prob),
+        close=region_stats(theirs[near], ours[near], prob[near]), confusion=confusion_table, blocked=blocked,
+        unseen=unseen, durations=_durations(rows), wall_s=wall_s)
+
+
+def _durations(rows) -> FrozenDict | None:
+    pairs = [(r.airborne_s, r.label.airborne_s) for r in rows
+             if r.label.airborne_s > 0 and math.isfinite(r.airborne_s) and r.airborne_s > 0]
+    if not pairs:
+        return None
+    ours, theirs = np.array(pairs).T
+    q1, median, q3 = np.percentile(ours / theirs, [25, 50, 75])
+    return FrozenDict({"tests": len(pairs), "median_ratio": float(median), "q1_ratio": float(q1),
+                       "q3_ratio": float(q3), "spearman": _spearman(ours, theirs)})
+
+
+def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: int = 0, uav: str | None = None,
+                     config=None, workers: int | None = None, limit: int | None = None, every: int = 1,
+                     close: float = 3.0, buffer: float = 0.0,
+                     progress: Callable[[int, int], None] | None = None) -> FidelityReport:
+    """Fly a labelled set (see :func:`load_labelled_set`) and report how far our UAV agrees with the labels.
+
+    Args:
+        path, labels, mission: the labelled set (see :func:`load_labelled_set`), or a :class:`LabelledSet`.
+        runs: runs per test; seed: base seed of the noise.
+        uav: UAV profile (None only, for now); config: a SimConfig (default: the simulator's).
+        workers: processes (default: all cores); limit, every: fly every ``every``-th test, at most ``limit``.
+        close: the close region is theirs < ``close`` [m]; buffer: polyline buffer of the distance [m].
+        progress: called with (tests done, tests) as tests finish.
+    """
+    if runs < 1 or every < 1 or (limit is not None and limit < 1) or close <= 0 or buffer < 0:
+        raise ValueError(f"invalid options: runs={runs}, every={every}, limit={limit}, close={close}, "
+                         f"buffer={buffer}")
+    config = sim_config_for(uav, config)
+    lset = path if isinstance(path, LabelledSet) else load_labelled_set(path, labels, mission)
+    lset = lset.subset(limit, every)
+    start = time.perf_counter()
+    outcomes = fly_labelled_set(lset, runs, seed, config, workers, buffer, progress)
+    return build_report(lset, outcomes, runs=runs, seed=seed, close=close, buffer=buffer, uav=uav,
+                        wall_s=time.perf_counter() - start)
+
+
+def write_report(report: FidelityReport, out) -> dict[str, Path]:
+    """Write ``fidelity.csv`` (one row per test), ``fidelity.json`` (the summary) and ``fidelity.png``."""
+    out = Path(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        paths = {"csv": out / "fidelity.csv", "json": out / "fidelity.json", "png": out / "fidelity.png"}
+        rows = [r.to_dict() for r in report.rows]
+        with open(paths["csv"], "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+        paths["json"].write_text(report.to_json() + "\n")
+        plot_report(report, paths["png"])
+    except OSError as err:
+        raise SurrealistError(f"{out}: cannot write the fidelity report ({err.strerror or err})") from err
+    return paths
+
+
+_STATUS_COLOURS = {"success": "tab:blue", "timeout": "tab:orange", "stuck": "tab:purple", "collision": "tab:red",
+                   "error": "black"}
+
+
+def plot_report(report: FidelityReport, path, floor: float = 0.05) -> None:
+    """Write the fidelity PNG: theirs vs ours beside the outcome table and the key figures.
+
+    The scatter shows the 2-D competition distance on log axes (values below ``floor`` [m] drawn at it), the 1.5 m
+    lines and the close region shaded, one colour per our status.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
+
+    fig = Figure(figsize=(12, 5.5))
+    FigureCanvasAgg(fig)
+    ax, side = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
+    both = [r for r in report.rows if r.label.result == "flown" and math.isfinite(r.distance)]
+    values = [v for r in both for v in (r.label.distance, r.distance)]
+    top = max([2 * report.close_m, *values]) * 1.3
+    low = min(1.0, max(floor, min(values, default=floor) / 1.5)) * 0.8
+    ax.axvspan(low, report.close_m, color="0.85", alpha=0.5, linewidth=0,
+               label=f"close region (theirs < {report.close_m:g} m)")
+    rank = {s: i for i, s in enumerate(STATUS_ORDER)}
+    for status in sorted({r.status for r in both}, key=lambda s: (rank.get(s, len(rank)), s)):
+        pts = np.array([(r.label.distance, r.distance) for r in both if r.status == status])
+        ax.scatter(np.maximum(pts[:, 0], floor), np.maximum(pts[:, 1], floor), s=12, alpha=0.7,
+                   color=_STATUS_COLOURS.get(status, "tab:gray"), label=f"ours: {status}", zorder=3)
+    ax.plot([low, top], [low, top], color="0.4", linewidth=0.8, label="ours = theirs")
+    ax.axvline(UNSAFE_DISTANCE_M, color="darkred", linestyle="--", linewidth=0.8)
+    ax.axhline(UNSAFE_DISTANCE_M, color="darkred", linestyle="--", linewidth=0.8, label="soft failure, 1.5 m")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FormatStrFormatter("%g"))
+        axis.set_minor_formatter(NullFormatter())
+    ax.set_xlim(low, top)
+    ax.set_ylim(low, top)
+    ax.set_xlabel(f"theirs: {DISTANCE_NAME} [m]")
+    ax.set_ylabel(f"ours: {DISTANCE_NAME} [m]" + (f", median of {report.runs} runs" if report.runs > 1 else ""))
+    ax.set_title(f"{len(both)} tests both flew" + (f" (values < {floor:g} m drawn at {floor:g} m)"
+                                                   if min(values, default=1.0) < floor else ""))
+    ax.grid(True, which="both", linewidth=0.3)
+    ax.legend(loc="upper left", fontsize="small")
+    side.axis("off")
+    statuses = list(next(iter(report.confusion.values()), {}))
+    names = {"flown": "theirs: flown", "timeout": "theirs: no result / timeout", "collision": "theirs: collision"}
+    table = side.table(cellText=[[str(v) for v in row.values()] for row in report.confusion.values()],
+                       rowLabels=[names.get(k, k) for k in report.confusion], colLabels=statuses,
+                       loc="upper right", bbox=[0.38, 0.62, 0.62, 0.3])
+    table.set_fontsize(9)
+    side.set_title("runs: their result vs our status")
+    o, c = report.overall, report.close
+    lines = [f"{DISTANCE_NAME}, buffer {report.buffer_m:g} m", "",
+             f"{'':26}{'all':>8}{'close':>8}",
+             f"{'tests both flew':26}{o.tests:>8}{c.tests:>8}",
+             f"{'Spearman':26}{_fmt(o.spearman):>8}{_fmt(c.spearman):>8}",
+             f"{'AUC, theirs < 1.5 m':26}{_fmt(o.auc):>8}{_fmt(c.auc):>8}",
+             f"{'precision, ours < 1.5 m':26}{_fmt(o.precision):>8}{_fmt(c.precision):>8}",
+             f"{'recall, ours < 1.5 m':26}{_fmt(o.recall):>8}{_fmt(c.recall):>8}",
+             f"{'failure rate theirs':26}{_fmt(o.their_failure_rate):>8}{_fmt(c.their_failure_rate):>8}",
+             f"{'failure rate ours':26}{_fmt(o.our_failure_rate):>8}{_fmt(c.our_failure_rate):>8}"]
+    if report.durations is not None:
+        d = report.durations
+        lines += ["", f"airborne time ours / theirs: median {_fmt(d['median_ratio'])}",
+                  f"  (quartiles {_fmt(d['q1_ratio'])}-{_fmt(d['q3_ratio'])}, Spearman {_fmt(d['spearman'])}, "
+                  f"{d['tests']} tests)"]
+    side.text(0.0, 0.55, "\n".join(lines), family="monospace", fontsize=9, va="top", transform=side.transAxes)
+    source = Path(report.source)
+    fig.suptitle(f"fidelity: {source.parent.name}/{source.name}, {len(report.rows)} tests, {report.runs} run(s) each")
+    fig.tight_layout()
+    fig.savefig(os.fspath(path), dpi=110)
+
+
+def _fmt(value: float) -> str:
+    return "-" if value is None or not math.isfinite(value) else f"{value:.2f}"
