@@ -21,6 +21,14 @@ class InvalidTestCase(SurrealistError):
     """A test case (or its YAML) is invalid: wrong field, non-positive size, overlapping obstacles, missing file."""
 
 
+class InvalidProfile(SurrealistError):
+    """A UAV profile (preset name or YAML) is unknown or holds an unknown key or an out-of-range value."""
+
+
+class InvalidLabels(SurrealistError):
+    """A labelled set for ``surrealist fidelity`` is invalid: missing column, unknown test, non-numeric value."""
+
+
 class SimulationError(SurrealistError):
     """A simulation could not be set up from the given test case."""
 

@@ -68,12 +68,13 @@ def airborne_time(t, xyz, threshold: float = AIRBORNE_Z_M) -> float:
     return float(t[up[-1]] - t[up[0]]) if up.size else 0.0
 
 
-def sim_config_for(uav: str | None = None, config=None):
-    """The one place where a UAV profile becomes a SimConfig. Profiles are not available yet: ``uav`` must be None."""
-    if uav is not None:
-        raise SurrealistError(f"--uav {uav!r}: UAV profiles are not available yet (leave --uav out to fly the "
-                              f"default UAV)")
-    return config
+def sim_config_for(uav=None, config=None):
+    """The one place where a UAV profile becomes a SimConfig: ``uav`` (a preset name, a YAML path or a
+    :class:`~surrealist_gym.sim.profiles.UavProfile`; default the PX4 SITL Iris that produced the competition's
+    labels) applied to ``config``."""
+    from .sim.profiles import SITL_IRIS, load_profile
+
+    return load_profile(uav if uav is not None else SITL_IRIS).sim_config(config)
 
 
 def fly_test(test: TestCase, runs: int, seed: int, config=None, buffer: float = 0.0) -> tuple[RunOutcome, ...]:
@@ -359,7 +360,8 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
     Args:
         path, labels, mission: the labelled set (see :func:`load_labelled_set`), or a :class:`LabelledSet`.
         runs: runs per test; seed: base seed of the noise.
-        uav: UAV profile (None only, for now); config: a SimConfig (default: the simulator's).
+        uav: UAV profile, a preset name or YAML (default ``px4-v1.12-sitl-iris``); config: the SimConfig the
+            profile applies to (default :class:`~surrealist_gym.sim.config.SimConfig`).
         workers: processes (default: all cores); limit, every: fly every ``every``-th test, at most ``limit``.
         close: the close region is theirs < ``close`` [m]; buffer: polyline buffer of the distance [m].
         progress: called with (tests done, tests) as tests finish.
@@ -372,7 +374,7 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
     lset = lset.subset(limit, every)
     start = time.perf_counter()
     outcomes = fly_labelled_set(lset, runs, seed, config, workers, buffer, progress)
-    return build_report(lset, outcomes, runs=runs, seed=seed, close=close, buffer=buffer, uav=uav,
+    return build_report(lset, outcomes, runs=runs, seed=seed, close=close, buffer=buffer, uav=config.profile,
                         wall_s=time.perf_counter() - start)
 
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Sequence
 
-from .errors import InvalidTestCase, SurrealistError
+from .errors import InvalidLabels, InvalidTestCase, SurrealistError
 from .testcase import Obstacle, TestCase, load_test
 
 # their result (lower case) -> normalised result
@@ -35,10 +35,6 @@ RESULTS = {"flown": "flown", "success": "flown", "no_result": "timeout", "timeou
 # field -> accepted column names, first preferred
 COLUMNS = {"id": ("test_id", "test"), "distance": ("px4_min_distance_2d", "min_distance_2d"),
            "result": ("px4_result", "status", "result"), "airborne": ("airborne_s", "duration_s")}
-
-
-class InvalidLabels(SurrealistError):
-    """A labelled set is invalid: missing column, unknown test, non-numeric value, mismatched mission."""
 
 
 @dataclass(frozen=True, slots=True)

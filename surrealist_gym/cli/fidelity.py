@@ -26,7 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="base test (mission, parameters) of a tests CSV "
                              "(default <CSV folder>/../case_studies/mission1.yaml)")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
-                        help="UAV profile (not available yet: the default UAV flies)")
+                        help="UAV profile: a preset (px4-v1.12-sitl-iris, the default; px4-vision-case0) or a "
+                             "profile YAML")
     parser.add_argument("--runs", type=int, default=1, help="runs per test (default 1)")
     parser.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
@@ -73,6 +74,7 @@ def summary_text(report) -> str:
              + f"), {report.runs} run(s) each, seed {report.seed}",
              f"distance: {DISTANCE_NAME} (box footprint to the 0.5 s polyline, buffer {report.buffer_m:g} m), "
              f"theirs vs ours" + (" (median of the runs)" if report.runs > 1 else ""),
+             f"UAV profile: {report.uav}",
              row("", "all tests", f"close (theirs < {report.close_m:g} m)"),
              row("tests both flew", str(o.tests), str(c.tests)),
              row("Spearman, 2-D competition distance", _f(o.spearman), _f(c.spearman)),

@@ -102,14 +102,20 @@ class SimConfig:
         use_reference_params: read the parameters of the test's reference log, below the test's own.
         takeoff_delay_s: time on the ground between arming (start of the log) and the mission start [s].
         timeout_s: simulated-time limit [s]; None = 90 s + 4 s per metre of the mission's path.
-        stuck_window_s / stuck_distance_m: the run is STUCK when its distance to the current goal has not
-            shrunk by stuck_distance_m [m] during the last stuck_window_s [s] of flight.
+        stuck_window_s / stuck_distance_m: early stopping, off by default (None): the run ends as STUCK when
+            its distance to the current goal has not shrunk by stuck_distance_m [m] during the last
+            stuck_window_s [s] of flight. PX4 keeps flying such flights (and often finishes them).
         noise: noise configuration.
         common_noise: common random numbers: run ``i`` of every test draws the same noise (from the base seed and
             ``i`` alone), so two tests are compared under the same wind and sensor errors and their fitness
             differs only by what the tests change. Default False: the noise also derives from the test (the
             product's semantics: each test meets its own conditions).
         avoidance_model: which planner flies with avoidance (:class:`AvoidanceModel`).
+        airframe_params: PX4 parameters of the airframe (a UAV profile's), above PX4's defaults and below the
+            reference log's and the test's.
+        profile: name of the UAV profile this configuration came from (recorded with results), or None.
+        obstacle_collision_scale: horizontal scale of the obstacles' collision shapes; the depth camera and the
+            reported distances use the full obstacle (Aerialist's Gazebo boxes: 0.8).
         avoidance_config / sensor_config: the planner's and the depth sensor's configurations (None = the
             model's defaults: :class:`~surrealist_gym.sim.px4_avoidance.Px4AvoidanceConfig` and the SITL Iris depth
             camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.AvoidanceConfig` and the PX4 Vision's camera
@@ -127,11 +133,14 @@ class SimConfig:
     use_reference_params: bool = True
     takeoff_delay_s: float = 4.0
     timeout_s: float | None = None
-    stuck_window_s: float = 20.0
+    stuck_window_s: float | None = None
     stuck_distance_m: float = 0.5
     noise: NoiseConfig = NoiseConfig()
     common_noise: bool = False
     avoidance_model: AvoidanceModel = AvoidanceModel.SIMPLE
+    airframe_params: Mapping[str, float] = field(default_factory=dict)
+    profile: str | None = None
+    obstacle_collision_scale: float = 1.0
     avoidance_config: Any = None
     sensor_config: Any = None
 
@@ -139,6 +148,9 @@ class SimConfig:
         object.__setattr__(self, "vehicle", VehicleModel(self.vehicle))
         object.__setattr__(self, "avoidance_model", AvoidanceModel(self.avoidance_model))
         object.__setattr__(self, "params", FrozenDict(dict(self.params)))
+        object.__setattr__(self, "airframe_params", FrozenDict(dict(self.airframe_params)))
+        if not 0.0 < self.obstacle_collision_scale <= 1.0:
+            raise ValueError(f"SimConfig.obstacle_collision_scale must be in (0, 1], got {self.obstacle_collision_scale!r}")
         if self.physics_hz < 200:
             raise ValueError(f"SimConfig.physics_hz must be >= 200 Hz, got {self.physics_hz:g}")
         if not 0 < self.control_hz <= self.physics_hz or _not_divisor(self.physics_hz, self.control_hz):
@@ -192,8 +204,9 @@ def _log_params(path: str) -> Mapping[str, float]:
 
 
 def resolve_params(test, config: SimConfig) -> dict[str, float]:
-    """The PX4 parameters of a run: defaults < reference log < test params < config overrides."""
+    """The PX4 parameters of a run: defaults < airframe < reference log < test params < config overrides."""
     params: dict[str, float] = dict(PX4_DEFAULTS)
+    params.update(config.airframe_params)
     ref = getattr(test, "reference_log", None)
     if config.use_reference_params and ref and str(ref).lower().endswith(".ulg"):
         params.update(_log_params(str(ref)))

@@ -10,7 +10,7 @@ One :meth:`Px4LocalPlanner.update` is one planner cycle (~10 Hz):
 1. **Point cloud and memory** (``processPointcloud``): the camera's new points within ``(min_sensor_range,
    max_sensor_range)`` are subsampled to one per 2 deg polar cell around the vehicle; an older point is kept when it
    is younger than ``max_point_age_s``, within range, its 2 deg cell got no new point and it lies outside the
-   camera's field of view (tested on the 6 deg histogram indices, as the planner does).
+   camera's field of view (body frame).
 2. **Polar histogram** (6 deg cells, 30 x 60): the mean distance of the points per cell, 0 = empty.
 3. **Look-ahead tree** (``StarPlanner::buildLookAheadTree``), built only when the vehicle's own histogram is not
    empty: from the vehicle, up to ``n_expanded_nodes`` expansions of the cheapest open node within
@@ -21,7 +21,8 @@ One :meth:`Px4LocalPlanner.update` is one planner cycle (~10 Hz):
    normalised), plus ``velocity_cost_param (|v| - u.v)``, ``yaw_cost_param`` times the squared azimuth error to
    the goal (split half and half with the azimuth to the mission line when no obstacle lies in the goal's
    window), and ``pitch_cost_param`` times the squared elevation error (stronger within 5 m of the goal). The
-   path goes from the vehicle to the deepest open node.
+   path goes from the vehicle to the first open node of the greatest depth. (Near the poles the planner evaluates
+   every ``1 / cos(elevation)``-th azimuth and interpolates; here every cell is evaluated.)
 4. **Waypoint generator** (``WaypointGenerator``): TRY_PATH follows the path from its first node at the cruise
    speed since the tree was built, DIRECT (no tree, or the path used up) heads for the goal. The speed is the
    cruise speed times a field-of-view factor (``1 - 2 |bearing error| / fov_h_deg``, 0 outside the camera's
@@ -354,11 +355,7 @@ def _process_cloud(new, old, old_age, px, py, pz, yaw_deg, pitch_deg, elapsed, p
         out[k, 0], out[k, 1], out[k, 2] = new[i, 0], new[i, 1], new[i, 2]
         out_age[k] = 0.0
         k += 1
-    # field of view on the 6 deg indices (calculateFOV / pointInsideFOV): azimuth inclusive, elevation exclusive
-    az_lo = int(math.floor((yaw_deg - 0.5 * hfov) / ALPHA_RES + 180.0 / ALPHA_RES))
-    az_hi = int(math.floor((yaw_deg + 0.5 * hfov) / ALPHA_RES + 180.0 / ALPHA_RES))
-    e_lo = int(math.floor((pitch_deg - 0.5 * vfov) / ALPHA_RES + 90.0 / ALPHA_RES))
-    e_hi = int(math.floor((pitch_deg + 0.5 * vfov) / ALPHA_RES + 90.0 / ALPHA_RES))
+    half_h, half_v = 0.5 * hfov, 0.5 * vfov
     for i in range(old.shape[0]):
         if old_age[i] >= max_age:
             continue
@@ -369,15 +366,11 @@ def _process_cloud(new, old, old_age, px, py, pz, yaw_deg, pitch_deg, elapsed, p
         ie, iz = _hist_index(dx, dy, dz, SUB_RES)
         if occupied[ie, iz]:
             continue
-        e6, z6 = _hist_index(dx, dy, dz, ALPHA_RES)
-        zz = z6
-        # unwrap the azimuth index into [az_lo, az_lo + N_Z)
-        while zz < az_lo:
-            zz += N_Z
-        while zz >= az_lo + N_Z:
-            zz -= N_Z
-        if zz <= az_hi and e_lo < e6 < e_hi:
-            continue  # inside the field of view: the camera would see it if it were there
+        # pointInsideFOV in the body frame: the camera would see the point if it were still there
+        off_az = (_atan2_deg(dy, dx) - yaw_deg + 180.0) % 360.0 - 180.0
+        off_el = _atan2_deg(dz, math.sqrt(dx * dx + dy * dy)) - pitch_deg
+        if abs(off_az) <= half_h and abs(off_el) <= half_v:
+            continue
         occupied[ie, iz] = True
         out[k, 0], out[k, 1], out[k, 2] = old[i, 0], old[i, 1], old[i, 2]
         out_age[k] = old_age[i] + elapsed
@@ -622,15 +615,11 @@ def _build_tree(cloud, px, py, pz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, p
         if best < 0:
             break
         origin = best
-    # the path ends at the deepest open node (the cheapest among equally deep ones)
-    end = -1
+    # the path ends at the first open node of the greatest depth (PR #555), the root when none is open
+    end, deepest = 0, 0
     for i in range(size):
-        if closed[i]:
-            continue
-        if end < 0 or depth[i] > depth[end] or (depth[i] == depth[end] and total[i] < total[end]):
-            end = i
-    if end < 0:
-        end = origin
+        if not closed[i] and depth[i] > deepest:
+            end, deepest = i, depth[i]
     n = 0
     while end >= 0:
         path[n, 0], path[n, 1], path[n, 2] = pos[end, 0], pos[end, 1], pos[end, 2]

@@ -36,7 +36,7 @@ class RunStatus(str, Enum):
     SUCCESS = "success"      # mission completed (landed and disarmed, or last item reached in the air)
     COLLISION = "collision"  # PyBullet contact between the vehicle and an obstacle
     TIMEOUT = "timeout"      # simulated-time limit reached
-    STUCK = "stuck"          # no progress for SimConfig.stuck_window_s
+    STUCK = "stuck"          # no progress for SimConfig.stuck_window_s (early stopping, only when asked for)
     ERROR = "error"          # the vehicle flipped or its state became invalid
 
 
@@ -160,7 +160,8 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
     # modelled as converged: the controller's hover thrust is the vehicle's physical one.
     ctl_params = dict(params, MPC_THR_HOVER=vehicle.hover_command) if params.get("MPC_USE_HTE", 1) else params
-    with World(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz) as world:
+    with World(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz,
+               cfg.obstacle_collision_scale) as world:
         sensor = None
         if avoidance:
             sensor, make_planner = _avoidance(test, cfg, params)
@@ -188,21 +189,16 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     return [_result(r, test, cfg, params, seed) for r in runs]
 
 
-# The SITL Iris depth camera (PX4-SITL_gazebo-classic models/depth_camera): 59 deg x 46 deg, clip 0.5-18 m, no
-# noise; rays on a 2 deg grid, the resolution the planner subsamples its cloud to. Gazebo's camera sees the ground.
-SITL_DEPTH_CAMERA = dict(fov_h_deg=59.0, fov_v_deg=46.0, range_min=0.5, range_max=18.0, rays_h=30, rays_v=23,
-                         noise_std=0.0, returns_ground=True)
-
-
 def _avoidance(test, cfg: SimConfig, params):
     """The depth sensor and a factory of planners for the configured avoidance model."""
     from .config import AvoidanceModel
     from .sensor import DepthSensor, DepthSensorConfig
 
     if cfg.avoidance_model == AvoidanceModel.PX4:
+        from .profiles import SITL_IRIS
         from .px4_avoidance import Px4AvoidanceConfig, Px4LocalPlanner
 
-        sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig(**SITL_DEPTH_CAMERA))
+        sensor = DepthSensor(test.obstacles, cfg.sensor_config or SITL_IRIS.sensor_config())
         plan_cfg = cfg.avoidance_config or Px4AvoidanceConfig()
         return sensor, lambda: Px4LocalPlanner(plan_cfg, params["MPC_XY_CRUISE"], params["MPC_ACC_HOR"],
                                                params.get("MPC_JERK_MAX", 8.0))
@@ -333,7 +329,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
                                                  outer_dt, r.pp, r.ps)
         r.q_sp = (qw, qx, qy, qz)
     # stuck: the distance to the current goal has not shrunk by stuck_d during the last stuck_w seconds
-    if nav.phase in (Phase.CRUISE, Phase.TAKEOFF, Phase.CLIMB, Phase.DESCEND):
+    if stuck_w is not None and nav.phase in (Phase.CRUISE, Phase.TAKEOFF, Phase.CLIMB, Phase.DESCEND):
         g = nav.target
         gz = 0.0 if nav.phase == Phase.DESCEND else g[2]
         d = math.sqrt((g[0] - pos[0]) ** 2 + (g[1] - pos[1]) ** 2 + (gz + pos[2]) ** 2)

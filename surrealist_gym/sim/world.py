@@ -42,7 +42,7 @@ class World:
     """
 
     def __init__(self, obstacles: Sequence[Obstacle], vehicle: VehicleParams, n_vehicles: int, physics_hz: float,
-                 control_hz: float | None = None):
+                 control_hz: float | None = None, collision_scale: float = 1.0):
         self.cid = cid = _client()
         try:
             pb.setGravity(0.0, 0.0, GRAVITY, physicsClientId=cid)
@@ -55,7 +55,7 @@ class World:
             self.ground = pb.createMultiBody(0, plane, physicsClientId=cid)
             self.obstacles: list[int] = []
             for o in obstacles:
-                self.obstacles.append(self._add_obstacle(o))
+                self.obstacles.append(self._add_obstacle(o, collision_scale))
             for body in [self.ground, *self.obstacles]:
                 pb.setCollisionFilterGroupMask(body, -1, _STATIC_GROUP, _STATIC_GROUP | _VEHICLE_GROUP,
                                                physicsClientId=cid)
@@ -76,12 +76,13 @@ class World:
             self.close()
             raise
 
-    def _add_obstacle(self, o: Obstacle) -> int:
+    def _add_obstacle(self, o: Obstacle, scale: float) -> int:
         cid = self.cid
         if o.shape == Shape.CYLINDER:
-            shape = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=o.l / 2, height=o.h, physicsClientId=cid)
+            shape = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=scale * o.l / 2, height=o.h, physicsClientId=cid)
         else:
-            shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[o.l / 2, o.w / 2, o.h / 2], physicsClientId=cid)
+            shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[scale * o.l / 2, scale * o.w / 2, o.h / 2],
+                                            physicsClientId=cid)
         a = math.radians(o.r) / 2
         return pb.createMultiBody(0, shape, basePosition=[o.x, o.y, -(o.z + o.h / 2)],
                                   baseOrientation=[0.0, 0.0, math.sin(a), math.cos(a)], physicsClientId=cid)

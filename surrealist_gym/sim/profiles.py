@@ -1,0 +1,196 @@
+"""UAV profiles: which vehicle, PX4 parameters, avoidance planner and depth camera fly a test, as one named value.
+
+A profile is saved as YAML (every key optional except ``name``)::
+
+    name: my-iris
+    description: PX4 v1.12 SITL Iris with a narrower camera
+    vehicle: iris                      # a preset of sim/vehicle.py
+    avoidance_model: px4               # px4 (PX4-Avoidance) or simple (the case0-tuned reactive planner)
+    params: {MPC_XY_CRUISE: 5}         # PX4 parameters of the airframe, above PX4's defaults, below the test's
+    planner: {max_sensor_range: 15}    # fields of the model's planner config
+    sensor: {fov_h_deg: 59}            # fields of DepthSensorConfig
+    takeoff_delay_s: 15.0              # on the ground between arming and the mission start [s]
+    timeout_s: 500                     # simulated-time limit [s]; null = the mission's default
+    obstacle_collision_scale: 0.8      # obstacles collide at this share of their footprint (Gazebo boxes: 0.8)
+
+Presets: :data:`PRESETS` (``px4-v1.12-sitl-iris``, ``px4-vision-case0``). :func:`load_profile` takes a preset's name
+or a YAML path; :meth:`UavProfile.sim_config` turns a profile into a :class:`~surrealist_gym.sim.config.SimConfig`.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..errors import InvalidProfile
+from ..frozendict import FrozenDict
+from .config import AvoidanceModel, SimConfig, VehicleModel
+
+__all__ = ["PRESETS", "UavProfile", "default_profile_name", "load_profile", "save_profile"]
+
+
+@dataclass(frozen=True, slots=True)
+class UavProfile:
+    """A UAV under test: vehicle preset, airframe parameters, avoidance planner and camera, mission timing."""
+
+    name: str
+    description: str = ""
+    vehicle: VehicleModel = VehicleModel.PX4_VISION
+    avoidance_model: AvoidanceModel = AvoidanceModel.SIMPLE
+    params: Mapping[str, float] = field(default_factory=dict)
+    planner: Mapping[str, Any] = field(default_factory=dict)
+    sensor: Mapping[str, Any] = field(default_factory=dict)
+    takeoff_delay_s: float = 4.0
+    timeout_s: float | None = None
+    obstacle_collision_scale: float = 1.0
+
+    def __post_init__(self):
+        where = f"profile {self.name!r}"
+        if not isinstance(self.name, str) or not self.name:
+            raise InvalidProfile("profile: field 'name': expected a non-empty string")
+        try:
+            object.__setattr__(self, "vehicle", VehicleModel(self.vehicle))
+        except ValueError:
+            raise InvalidProfile(f"{where}: field 'vehicle': expected one of "
+                                 f"{[v.value for v in VehicleModel]}, got {self.vehicle!r}") from None
+        try:
+            object.__setattr__(self, "avoidance_model", AvoidanceModel(self.avoidance_model))
+        except ValueError:
+            raise InvalidProfile(f"{where}: field 'avoidance_model': expected one of "
+                                 f"{[m.value for m in AvoidanceModel]}, got {self.avoidance_model!r}") from None
+        for key in ("params", "planner", "sensor"):
+            value = getattr(self, key)
+            if not isinstance(value, Mapping):
+                raise InvalidProfile(f"{where}: field {key!r}: expected a mapping, got {value!r}")
+            object.__setattr__(self, key, FrozenDict(dict(value)))
+        for k, v in self.params.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise InvalidProfile(f"{where}: field 'params.{k}': expected a finite number, got {v!r}")
+        if not _number(self.takeoff_delay_s) or self.takeoff_delay_s < 0:
+            raise InvalidProfile(f"{where}: field 'takeoff_delay_s': expected a number >= 0, got "
+                                 f"{self.takeoff_delay_s!r}")
+        if self.timeout_s is not None and (not _number(self.timeout_s) or self.timeout_s <= 0):
+            raise InvalidProfile(f"{where}: field 'timeout_s': expected a positive number or null, got "
+                                 f"{self.timeout_s!r}")
+        if not _number(self.obstacle_collision_scale) or not 0 < self.obstacle_collision_scale <= 1:
+            raise InvalidProfile(f"{where}: field 'obstacle_collision_scale': expected a number in (0, 1], got "
+                                 f"{self.obstacle_collision_scale!r}")
+        self.planner_config()  # checks the planner's and the camera's fields
+        self.sensor_config()
+
+    def planner_config(self):
+        """The planner configuration of the profile's avoidance model."""
+        if self.avoidance_model == AvoidanceModel.PX4:
+            from .px4_avoidance import Px4AvoidanceConfig as cls
+        else:
+            from .avoidance import AvoidanceConfig as cls
+        return _construct(cls, self.planner, f"profile {self.name!r}: field 'planner")
+
+    def sensor_config(self):
+        """The depth camera of the profile."""
+        from .sensor import DepthSensorConfig
+
+        return _construct(DepthSensorConfig, self.sensor, f"profile {self.name!r}: field 'sensor")
+
+    def sim_config(self, base: SimConfig | None = None) -> SimConfig:
+        """``base`` (default :class:`SimConfig`) flying this UAV."""
+        return dataclasses.replace(base or SimConfig(), vehicle=self.vehicle, avoidance_model=self.avoidance_model,
+                                   airframe_params=self.params, avoidance_config=self.planner_config(),
+                                   sensor_config=self.sensor_config(), takeoff_delay_s=float(self.takeoff_delay_s),
+                                   timeout_s=self.timeout_s, profile=self.name,
+                                   obstacle_collision_scale=float(self.obstacle_collision_scale))
+
+    def to_dict(self) -> dict:
+        """The profile as plain YAML-friendly values."""
+        return {"name": self.name, "description": self.description, "vehicle": self.vehicle.value,
+                "avoidance_model": self.avoidance_model.value, "params": dict(self.params),
+                "planner": dict(self.planner), "sensor": dict(self.sensor),
+                "takeoff_delay_s": self.takeoff_delay_s, "timeout_s": self.timeout_s,
+                "obstacle_collision_scale": self.obstacle_collision_scale}
+
+
+def _number(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+
+
+def _construct(cls, values: Mapping[str, Any], where: str):
+    names = {f.name for f in dataclasses.fields(cls)}
+    for key in values:
+        if key not in names:
+            raise InvalidProfile(f"{where}.{key}': unknown key (expected one of {sorted(names)})")
+    try:
+        return cls(**dict(values))
+    except (TypeError, ValueError) as err:
+        raise InvalidProfile(f"{where}': {err}") from None
+
+
+# PX4 v1.12.3 SITL + PX4-Avoidance + Gazebo Iris, as Aerialist and the UAV Testing Competition fly it
+# (../shared/PX4-AVOIDANCE.md): airframe 1015_iris_obs_avoid sets COM_OBS_AVOID 1 and MPC_XY_CRUISE 5; the planner
+# keeps LocalPlannerNode.cfg's defaults; the depth camera is the SITL model's (59 x 46 deg, clip 0.5-18 m, no
+# noise, sees the ground); the boxes collide at 0.8 x their footprint (Aerialist's box.xacro). Take-off 15 s after
+# arming: the 24 PX4 trajectories of competition/rilast-mission1 leave
+# the ground 15.0-18.0 s (median 16.0 s) after their first sample. Time limit: the competition's 500 s.
+SITL_IRIS = UavProfile(
+    name="px4-v1.12-sitl-iris",
+    description="PX4 v1.12.3 SITL + PX4-Avoidance local planner + Gazebo Iris with depth camera (Aerialist, "
+                "UAV Testing Competition)",
+    vehicle=VehicleModel.IRIS, avoidance_model=AvoidanceModel.PX4,
+    params={"COM_OBS_AVOID": 1, "MPC_XY_CRUISE": 5.0},
+    sensor={"fov_h_deg": 59.0, "fov_v_deg": 46.0, "range_min": 0.5, "range_max": 18.0, "rays_h": 30, "rays_v": 23,
+            "noise_std": 0.0, "returns_ground": True},
+    takeoff_delay_s=15.0, timeout_s=500.0, obstacle_collision_scale=0.8)
+
+# The real PX4 Vision DevKit of case0.ulg (the paper's RQ1): the reactive planner calibrated on that flight
+# (docs/simulator.md), the Structure Core camera, 4 s on the ground as in the log, the mission's default limit.
+VISION_CASE0 = UavProfile(
+    name="px4-vision-case0",
+    description="Holybro PX4 Vision DevKit of the paper's real flight case0.ulg, with the case0-calibrated planner",
+    vehicle=VehicleModel.PX4_VISION, avoidance_model=AvoidanceModel.SIMPLE, takeoff_delay_s=4.0, timeout_s=None)
+
+PRESETS: Mapping[str, UavProfile] = FrozenDict({p.name: p for p in (SITL_IRIS, VISION_CASE0)})
+
+
+def default_profile_name(test) -> str:
+    """The profile a test flies when none is chosen: the real PX4 Vision for a test replicating a real flight log
+    (it has a reference log), else the PX4 SITL Iris that Aerialist's ``ros`` simulator flies."""
+    return VISION_CASE0.name if getattr(test, "reference_log", None) else SITL_IRIS.name
+
+
+def load_profile(name_or_path) -> UavProfile:
+    """A preset by name, or a profile YAML file."""
+    if isinstance(name_or_path, UavProfile):
+        return name_or_path
+    key = str(name_or_path)
+    if key in PRESETS:
+        return PRESETS[key]
+    path = Path(key)
+    if not path.suffix.lower() in (".yaml", ".yml"):
+        raise InvalidProfile(f"--uav {key!r}: not a preset ({', '.join(PRESETS)}) nor a .yaml file")
+    import yaml
+
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as err:
+        raise InvalidProfile(f"{key}: cannot read profile ({err.strerror})") from None
+    except (yaml.YAMLError, UnicodeDecodeError) as err:
+        raise InvalidProfile(f"{key}: not a valid YAML file ({type(err).__name__})") from None
+    if not isinstance(doc, dict):
+        raise InvalidProfile(f"{key}: expected a mapping of profile fields")
+    names = {f.name for f in dataclasses.fields(UavProfile)}
+    for k in doc:
+        if k not in names:
+            raise InvalidProfile(f"{key}: field {k!r}: unknown key (expected one of {sorted(names)})")
+    doc.setdefault("name", path.stem)
+    try:
+        return UavProfile(**doc)
+    except InvalidProfile as err:
+        raise InvalidProfile(f"{key}: {err}") from None
+
+
+def save_profile(profile: UavProfile, path) -> None:
+    """Write a profile as YAML; :func:`load_profile` reads it back equal."""
+    import yaml
+
+    Path(path).write_text(yaml.safe_dump(profile.to_dict(), sort_keys=False), encoding="utf-8")
