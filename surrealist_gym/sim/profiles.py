@@ -9,6 +9,7 @@ A profile is saved as YAML (every key optional except ``name``)::
     params: {MPC_XY_CRUISE: 5}         # PX4 parameters of the airframe, above PX4's defaults, below the test's
     planner: {max_sensor_range: 15}    # fields of the model's planner config
     sensor: {fov_h_deg: 59}            # fields of DepthSensorConfig
+    noise: {turbulence_std: 0}         # fields of NoiseConfig (estimator errors, ambient turbulence)
     takeoff_delay_s: 15.0              # on the ground between arming and the mission start [s]
     timeout_s: 500                     # simulated-time limit [s]; null = the mission's default
     obstacle_collision_scale: 0.8      # obstacles collide at this share of their footprint (Gazebo boxes: 0.8)
@@ -42,6 +43,7 @@ class UavProfile:
     params: Mapping[str, float] = field(default_factory=dict)
     planner: Mapping[str, Any] = field(default_factory=dict)
     sensor: Mapping[str, Any] = field(default_factory=dict)
+    noise: Mapping[str, Any] = field(default_factory=dict)
     takeoff_delay_s: float = 4.0
     timeout_s: float | None = None
     obstacle_collision_scale: float = 1.0
@@ -60,7 +62,7 @@ class UavProfile:
         except ValueError:
             raise InvalidProfile(f"{where}: field 'avoidance_model': expected one of "
                                  f"{[m.value for m in AvoidanceModel]}, got {self.avoidance_model!r}") from None
-        for key in ("params", "planner", "sensor"):
+        for key in ("params", "planner", "sensor", "noise"):
             value = getattr(self, key)
             if not isinstance(value, Mapping):
                 raise InvalidProfile(f"{where}: field {key!r}: expected a mapping, got {value!r}")
@@ -77,8 +79,9 @@ class UavProfile:
         if not _number(self.obstacle_collision_scale) or not 0 < self.obstacle_collision_scale <= 1:
             raise InvalidProfile(f"{where}: field 'obstacle_collision_scale': expected a number in (0, 1], got "
                                  f"{self.obstacle_collision_scale!r}")
-        self.planner_config()  # checks the planner's and the camera's fields
+        self.planner_config()  # checks the planner's, the camera's and the noise's fields
         self.sensor_config()
+        self.noise_config()
 
     def planner_config(self):
         """The planner configuration of the profile's avoidance model."""
@@ -94,11 +97,18 @@ class UavProfile:
 
         return _construct(DepthSensorConfig, self.sensor, f"profile {self.name!r}: field 'sensor")
 
+    def noise_config(self):
+        """The run-to-run variation of the profile (:class:`~surrealist_gym.sim.config.NoiseConfig` fields)."""
+        from .config import NoiseConfig
+
+        return _construct(NoiseConfig, self.noise, f"profile {self.name!r}: field 'noise")
+
     def sim_config(self, base: SimConfig | None = None) -> SimConfig:
         """``base`` (default :class:`SimConfig`) flying this UAV."""
         return dataclasses.replace(base or SimConfig(), vehicle=self.vehicle, avoidance_model=self.avoidance_model,
                                    airframe_params=self.params, avoidance_config=self.planner_config(),
-                                   sensor_config=self.sensor_config(), takeoff_delay_s=float(self.takeoff_delay_s),
+                                   sensor_config=self.sensor_config(), noise=self.noise_config(),
+                                   takeoff_delay_s=float(self.takeoff_delay_s),
                                    timeout_s=self.timeout_s, profile=self.name,
                                    obstacle_collision_scale=float(self.obstacle_collision_scale))
 
@@ -106,7 +116,7 @@ class UavProfile:
         """The profile as plain YAML-friendly values."""
         return {"name": self.name, "description": self.description, "vehicle": self.vehicle.value,
                 "avoidance_model": self.avoidance_model.value, "params": dict(self.params),
-                "planner": dict(self.planner), "sensor": dict(self.sensor),
+                "planner": dict(self.planner), "sensor": dict(self.sensor), "noise": dict(self.noise),
                 "takeoff_delay_s": self.takeoff_delay_s, "timeout_s": self.timeout_s,
                 "obstacle_collision_scale": self.obstacle_collision_scale}
 
@@ -127,19 +137,30 @@ def _construct(cls, values: Mapping[str, Any], where: str):
 
 
 # PX4 v1.12.3 SITL + PX4-Avoidance + Gazebo Iris, as Aerialist and the UAV Testing Competition fly it
+# (measured corrections are named and documented in docs/fidelity.md)
 # (../shared/PX4-AVOIDANCE.md): airframe 1015_iris_obs_avoid sets COM_OBS_AVOID 1 and MPC_XY_CRUISE 5; the planner
 # keeps LocalPlannerNode.cfg's defaults; the depth camera is the SITL model's (59 x 46 deg, clip 0.5-18 m, no
 # noise, sees the ground); the boxes collide at 0.8 x their footprint (Aerialist's box.xacro). Take-off 15 s after
 # arming: the 24 PX4 trajectories of competition/rilast-mission1 leave
 # the ground 15.0-18.0 s (median 16.0 s) after their first sample. Time limit: the competition's 500 s.
+# Estimator errors measured on m0.ulg (SITL Iris, local position vs ground truth): 0.02-0.03 m horizontally,
+# correlated over seconds (autocorrelation 0.9 at 1 s), velocity 0.02-0.03 m/s; no ambient turbulence (Aerialist's
+# world has no wind unless the test sets one).
+# Measured correction: the planner's cruise speed is capped at 2.3 m/s, so its setpoint lies at most 2.3 m ahead.
+# PX4 SITL holds ~1.3 m/s on the mission line with boxes in view (rilast trajectories of runs 0-2: median 1.38 m/s;
+# runs 3-4: 1.31 m/s) where the code as read (setpoint 5 m ahead, stop-at-setpoint speed) gives 2.5 m/s; 2.2 / 2.4 m
+# give 1.29 / 1.37 m/s here (docs/fidelity.md).
 SITL_IRIS = UavProfile(
     name="px4-v1.12-sitl-iris",
     description="PX4 v1.12.3 SITL + PX4-Avoidance local planner + Gazebo Iris with depth camera (Aerialist, "
                 "UAV Testing Competition)",
     vehicle=VehicleModel.IRIS, avoidance_model=AvoidanceModel.PX4,
     params={"COM_OBS_AVOID": 1, "MPC_XY_CRUISE": 5.0},
+    planner={"cruise_speed_max": 2.3},
     sensor={"fov_h_deg": 59.0, "fov_v_deg": 46.0, "range_min": 0.5, "range_max": 18.0, "rays_h": 30, "rays_v": 23,
             "noise_std": 0.0, "returns_ground": True},
+    noise={"pos_noise_std": 0.003, "pos_drift_std": 0.03, "pos_drift_tau_s": 3.0, "vel_noise_std": 0.02,
+           "turbulence_std": 0.0},
     takeoff_delay_s=15.0, timeout_s=500.0, obstacle_collision_scale=0.8)
 
 # The real PX4 Vision DevKit of case0.ulg (the paper's RQ1): the reactive planner calibrated on that flight

@@ -70,6 +70,8 @@ class Px4AvoidanceConfig:
         speed_filter_tau_s: Time constant of the speed low-pass [s] (waypoint_generator.cpp, 0.9).
         max_speed_sensor: Whether the cruise speed is capped by the sensor-limited speed (the positive root of
             ``u^2 + 2 a (a / j) u - 2 a R = 0`` with MPC_ACC_HOR, MPC_JERK_MAX and max_sensor_range).
+        cruise_speed_max: Cap on the planner's cruise speed [m/s]; the setpoint lies at most that many metres
+            ahead (the code as read has none beyond MPC_XY_CRUISE). A measured correction: see the SITL Iris profile.
     """
 
     max_sensor_range: float = 15.0
@@ -90,8 +92,12 @@ class Px4AvoidanceConfig:
     fov_v_deg: float = 46.0
     speed_filter_tau_s: float = 0.9
     max_speed_sensor: bool = True
+    cruise_speed_max: float = math.inf
 
     def __post_init__(self):
+        if not (isinstance(self.cruise_speed_max, (int, float)) and self.cruise_speed_max > 0):
+            raise ValueError(f"Px4AvoidanceConfig.cruise_speed_max: expected a positive number, got "
+                             f"{self.cruise_speed_max!r}")
         for name in ("max_sensor_range", "tree_node_distance", "fov_h_deg", "fov_v_deg", "speed_filter_tau_s",
                      "smoothing_speed_xy", "smoothing_speed_z", "max_point_age_s"):
             value = getattr(self, name)
@@ -150,7 +156,7 @@ class Px4LocalPlanner:
                  acc_hor: float = 3.0, jerk_max: float = 8.0):
         c = self.config = config
         limit = sensor_limited_speed(acc_hor, jerk_max, c.max_sensor_range) if c.max_speed_sensor else math.inf
-        self.cruise = min(float(cruise_speed), limit)
+        self.cruise = min(float(cruise_speed), limit, c.cruise_speed_max)
         self._params = np.array([
             c.min_sensor_range, c.max_sensor_range, c.pitch_cost_param, c.yaw_cost_param, c.velocity_cost_param,
             c.obstacle_cost_param, c.tree_heuristic_weight, float(int(math.ceil(c.smoothing_margin_degrees / ALPHA_RES))),

@@ -1,0 +1,157 @@
+"""The PX4-Avoidance model: its kernels against direct computations, memory, tree, waypoint generator, flight task."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
+from surrealist_gym.sim.px4_avoidance import (N_E, N_Z, Px4AvoidanceConfig, Px4LocalPlanner, _atan2_deg,
+                                              _smooth_polar)
+from surrealist_gym.sim.config import PX4_DEFAULTS
+from surrealist_gym.sim.sensor import DepthSensor, DepthSensorConfig
+from surrealist_gym.sim.profiles import SITL_IRIS
+from surrealist_gym.testcase import Obstacle
+
+CAMERA = SITL_IRIS.sensor_config()
+
+
+def _direct_smoothing(matrix: np.ndarray, r: int) -> np.ndarray:
+    """smoothPolarMatrix written out: polar padding, then the conic kernel in elevation and azimuth."""
+    ne, nz = matrix.shape
+    kernel = np.array([max(0.0, 1.0 + r - abs(i - r)) for i in range(2 * r + 1)])
+    kernel /= kernel.max()
+    padded = np.zeros((ne + 2 * r, nz + 2 * r))
+    padded[r:r + ne, r:r + nz] = matrix
+    for i in range(r):
+        for z in range(nz):
+            padded[r - 1 - i, r + z] = matrix[i, (z + nz // 2) % nz]
+            padded[r + ne + i, r + z] = matrix[ne - 1 - i, (z + nz // 2) % nz]
+    padded[:, :r] = padded[:, nz:nz + r]
+    padded[:, r + nz:] = padded[:, r:2 * r]
+    rows = padded.copy()
+    for z in range(nz + 2 * r):
+        for e in range(ne):
+            rows[e + r, z] = (padded[e:e + 2 * r + 1, z] * kernel).sum()
+    out = np.zeros_like(matrix)
+    for e in range(ne):
+        for z in range(nz):
+            out[e, z] = (rows[r + e, z:z + 2 * r + 1] * kernel).sum()
+    return out
+
+
+def test_running_sum_smoothing_equals_the_conic_kernel():
+    rng = np.random.default_rng(3)
+    matrix = rng.random((N_E, N_Z)) * (rng.random((N_E, N_Z)) < 0.15) * 1e4
+    matrix[0, 5] = matrix[N_E - 1, 40] = 9000.0  # cells at the poles exercise the padding
+    expected = _direct_smoothing(matrix, 7)
+    got = matrix.copy()
+    _smooth_polar(got, 7, np.empty((N_E + 14, N_Z + 14)), np.empty(N_Z + 14))
+    assert np.abs(got - expected).max() < 1e-6 * expected.max()
+
+
+def test_fast_atan2_is_within_a_ten_thousandth_of_a_degree():
+    rng = np.random.default_rng(0)
+    worst = max(abs(_atan2_deg(y, x) - math.degrees(math.atan2(y, x))) for y, x in rng.normal(size=(20000, 2)))
+    assert worst < 1e-4
+
+
+def test_stopping_speed_is_trajmath():
+    # 1/2 (-b + sqrt(b^2 + 8 a d)), b = 4 a^2 / j with MPC_ACC_HOR 3, MPC_JERK_AUTO 4 (PX4-AVOIDANCE.md section 4)
+    assert [round(stopping_speed(4.0, 3.0, d), 2) for d in (0.5, 1, 2, 3, 5)] == [0.32, 0.62, 1.18, 1.68, 2.59]
+
+
+def test_nothing_in_view_flies_direct_with_the_speed_low_pass():
+    planner = Px4LocalPlanner(Px4AvoidanceConfig())
+    outs = [planner.update(0.1 * k, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), math.pi / 2, (0.0, 50.0, 10.0),
+                           (0.0, 0.0, 10.0), np.empty((0, 3))) for k in range(1, 11)]
+    assert all(o.state == "direct" for o in outs)
+    speeds = [o.speed for o in outs]
+    assert speeds == sorted(speeds) and 0 < speeds[0] < 0.6 and speeds[-1] < 5.0  # 0.9 s low-pass toward 5 m/s
+    assert outs[-1].position[1] > 0.1 and abs(outs[-1].position[0]) < 1e-6
+
+
+def test_goal_outside_the_field_of_view_stops_the_advance():
+    # facing north, the goal due south: scaleToFOV gives 0, so the setpoint stays where the vehicle is
+    planner = Px4LocalPlanner(Px4AvoidanceConfig())
+    out = None
+    for k in range(1, 11):
+        out = planner.update(0.1 * k, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), 0.0, (-50.0, 0.0, 10.0), (0.0, 0.0, 10.0),
+                             np.empty((0, 3)))
+    assert out.speed == 0.0 and math.dist(out.position, (0.0, 0.0, 10.0)) < 1e-9
+
+
+def test_a_wall_ahead_builds_a_tree_that_goes_around_it():
+    wall = Obstacle(l=4.0, w=10.0, h=20.0, x=12.0, y=1.0)  # across the path 10-14 m north, from y -4 to 6
+    sensor = DepthSensor([wall], CAMERA)
+    planner = Px4LocalPlanner(Px4AvoidanceConfig())
+    hits = sensor.scan((0.0, 0.0, 10.0), 0.0)
+    out = planner.update(0.1, (0.0, 0.0, 10.0), (1.0, 0.0, 0.0), 0.0, (40.0, 0.0, 10.0), (0.0, 0.0, 10.0), hits)
+    assert out.state == "try_path" and len(out.path) >= 3
+    assert out.path[0].tolist() == [0.0, 0.0, 10.0]
+    end = out.path[-1]
+    assert math.dist(out.path[1], out.path[0]) == pytest.approx(2.0, abs=1e-6)  # tree_node_distance
+    assert end[1] < -4.0 or end[1] > 6.0 or end[0] < 10.0  # the path leaves the wall's shadow or stops before it
+    # deterministic: the same inputs give the same path
+    again = Px4LocalPlanner(Px4AvoidanceConfig()).update(0.1, (0.0, 0.0, 10.0), (1.0, 0.0, 0.0), 0.0,
+                                                         (40.0, 0.0, 10.0), (0.0, 0.0, 10.0), hits)
+    assert np.array_equal(again.path, out.path)
+
+
+def test_memory_keeps_points_outside_the_view_and_forgets_those_in_view():
+    box = Obstacle(l=2.0, w=2.0, h=20.0, x=6.0, y=0.0)
+    hits = DepthSensor([box], CAMERA).scan((0.0, 0.0, 10.0), 0.0)
+    planner = Px4LocalPlanner(Px4AvoidanceConfig())
+    planner.update(0.1, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), 0.0, (0.0, 40.0, 10.0), (0.0, 0.0, 10.0), hits)
+    seen = len(planner.cloud)
+    assert seen > 50
+    # turned east: the box is outside the view and no new points arrive -> remembered
+    planner.update(0.2, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), math.pi / 2, (0.0, 40.0, 10.0), (0.0, 0.0, 10.0),
+                   np.empty((0, 3)))
+    assert len(planner.cloud) == seen
+    # back north with nothing returned (the box gone): points in view are dropped
+    planner.update(0.3, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), 0.0, (0.0, 40.0, 10.0), (0.0, 0.0, 10.0),
+                   np.empty((0, 3)))
+    assert len(planner.cloud) == 0
+    # and a remembered point is forgotten after max_point_age_s
+    short = Px4LocalPlanner(Px4AvoidanceConfig(max_point_age_s=0.5))
+    short.update(0.1, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), 0.0, (0.0, 40.0, 10.0), (0.0, 0.0, 10.0), hits)
+    for k in range(2, 12):
+        short.update(0.1 * k, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), math.pi / 2, (0.0, 40.0, 10.0), (0.0, 0.0, 10.0),
+                     np.empty((0, 3)))
+    assert len(short.cloud) == 0
+
+
+def _fly_task(task, setpoint_of, steps=400, dt=0.02, prev=(0.0, 0.0, 10.0), goal=(0.0, 50.0, 10.0)):
+    """Integrate the task with a vehicle that follows the trajectory exactly; return the speeds."""
+    speeds = []
+    pos = tuple(task.pos)
+    for _ in range(steps):
+        p, v, _ = task.update(dt, pos, setpoint_of(pos), prev, goal)
+        pos = p
+        speeds.append(math.hypot(v[0], v[1]))
+    return speeds
+
+
+def test_flight_task_stops_at_the_injected_setpoint_speed():
+    params = dict(PX4_DEFAULTS, NAV_ACC_RAD=0.5)
+    task = AvoidanceFlightTask(params, 5.0, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0))
+    speeds = _fly_task(task, lambda pos: (pos[0], pos[1] + 2.0, 10.0))  # always 2 m ahead, along the line
+    assert speeds[-1] == pytest.approx(stopping_speed(4.0, 3.0, 2.0), abs=0.05)
+    assert not task.turning
+
+
+def test_flight_task_locks_the_speed_while_turning_off_the_line():
+    """Starting slowly away from the mission line, PX4 keeps the speed it had when it last was not turning."""
+    params = dict(PX4_DEFAULTS, NAV_ACC_RAD=0.5)
+    task = AvoidanceFlightTask(params, 5.0, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0))
+    lead = [0.0]
+
+    def setpoint(pos):  # a setpoint that grows from 0 to 3 m ahead, 60 deg off the line (toward north-east)
+        lead[0] = min(3.0, lead[0] + 0.01)
+        return (pos[0] + lead[0] * math.cos(math.radians(30)), pos[1] + lead[0] * math.sin(math.radians(30)), 10.0)
+
+    speeds = _fly_task(task, setpoint, steps=1500)
+    assert task.turning
+    assert max(speeds[-500:]) < 0.5 < stopping_speed(4.0, 3.0, 3.0)  # locked near where it crossed 0.2 m/s
