@@ -74,6 +74,31 @@ def speed(repeat: int) -> None:
           f"{simulated:.1f} s simulated in {ten * 1e3:.1f} ms -> {simulated / ten:.0f}x real time (aggregate)")
     print(f"plain PyBullet loop, same {run.duration:.1f} s at {cfg.physics_hz:g} Hz: {base * 1e3:.1f} ms -> "
           f"{run.duration / base:.0f}x real time; one full run costs {one / base:.1f}x the bare loop")
+    sitl_speed(repeat)
+
+
+def sitl_speed(repeat: int) -> None:
+    """One run of a competition test with the PX4 SITL Iris profile (PX4-Avoidance model, look-ahead tree)."""
+    import json
+
+    import surrealist_gym as sg
+    from surrealist_gym.sim import simulate
+    from surrealist_gym.sim.profiles import load_profile
+
+    competition = ROOT.parent / "shared" / "data" / "competition"
+    with open(competition / "rilast-mission1" / "tests.csv") as f:
+        import csv
+        row = next(r for r in csv.DictReader(f) if r["test_id"] == "random_run3_194")
+    test = sg.load_test(competition / "case_studies" / "mission1.yaml").with_obstacles(
+        [sg.Obstacle(**o) for o in json.loads(row["obstacles"])])
+    cfg = load_profile("px4-v1.12-sitl-iris").sim_config()
+    (run,) = simulate(test, runs=1, config=cfg)
+    one = _best(lambda: simulate(test, runs=1, config=cfg), repeat)
+    base = _best(lambda: plain_pybullet(run.duration, cfg.physics_hz), repeat)
+    print(f"one run, competition mission1 + rilast random_run3_194 (2 boxes), profile px4-v1.12-sitl-iris "
+          f"({run.status.value}): {run.duration:.1f} s simulated in {one * 1e3:.0f} ms wall -> "
+          f"{run.duration / one:.0f}x real time; {one / base:.1f}x the bare PyBullet loop "
+          f"({run.duration / base:.0f}x real time)")
 
 
 def _stats(traj) -> dict:

@@ -27,7 +27,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="real flight to compare against (default: the test's assertion log, if any)")
     parser.add_argument("--no-reference", action="store_true", help="do not compare with the test's assertion log")
     parser.add_argument("--out", metavar="DIR", default="sim_out", help="output folder (default ./sim_out)")
-    parser.add_argument("--vehicle", choices=["px4_vision", "iris"], default="px4_vision", help="vehicle preset")
+    parser.add_argument("--vehicle", choices=["px4_vision", "iris"], default=None,
+                        help="vehicle preset (default px4_vision; a --uav profile sets its own)")
+    parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
+                        help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
+                             "px4-vision-case0, or a profile YAML (default: the simulator's defaults)")
     avoid = parser.add_mutually_exclusive_group()
     avoid.add_argument("--avoidance", dest="avoidance", action="store_true", default=None,
                        help="fly with the avoidance planner (default: the parameter COM_OBS_AVOID)")
@@ -57,6 +61,7 @@ def _params(items: list[str]) -> dict:
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from .. import load_test
+    from ..geometry import competition_distance
     from ..sim import SimConfig, simulate
 
     test = load_test(args.test)
@@ -70,7 +75,15 @@ def run(args: argparse.Namespace) -> int:
         reference = read_flight(ref_path)
         if args.reference:
             test = replace(test, reference_log=str(Path(args.reference).resolve()))
-    config = SimConfig(vehicle=args.vehicle, avoidance=args.avoidance, params=_params(args.param))
+    config = SimConfig(avoidance=args.avoidance, params=_params(args.param))
+    if args.uav is not None:
+        from ..sim.profiles import load_profile
+        if args.vehicle is not None:
+            from ..errors import SimulationError
+            raise SimulationError("--vehicle: give either --vehicle or --uav (the profile names its vehicle)")
+        config = load_profile(args.uav).sim_config(config)
+    elif args.vehicle is not None:
+        config = replace(config, vehicle=args.vehicle)
     start = time.perf_counter()
     results = simulate(test, runs=args.runs, seed=args.seed, config=config)
     wall = time.perf_counter() - start
@@ -80,8 +93,9 @@ def run(args: argparse.Namespace) -> int:
     rows = []
     for r in results:
         row = {"run": r.index, "status": r.status.value, "min_distance_m": round(r.min_distance, 3),
-               "min_distance_2d_m": round(r.min_distance_2d, 3), "duration_s": round(r.duration, 2),
-               "message": r.message}
+               "min_distance_2d_m": round(r.min_distance_2d, 3),
+               "competition_distance_m": round(competition_distance(r.trajectory, test.obstacles), 3),
+               "duration_s": round(r.duration, 2), "message": r.message}
         if reference is not None:
             from ..metrics import dtw, frechet
             row["dtw"] = round(dtw(r.trajectory, reference.trajectory), 2)
@@ -102,15 +116,18 @@ def run(args: argparse.Namespace) -> int:
     simulated = sum(r.duration for r in results)
     if args.json:
         print(json.dumps({"runs": rows, "plot": None if plot is None else str(plot), "wall_s": round(wall, 3),
-                          "simulated_s": round(simulated, 2)}, indent=2))
+                          "simulated_s": round(simulated, 2), "uav": config.profile}, indent=2))
         return 0
-    head = f"{'run':>3}  {'status':9}  {'min dist':>8}  {'min 2-D':>8}  {'duration':>8}"
+    print("distances: 3-D and 2-D clearance of the vehicle's centre (true position), and the competition's 2-D "
+          "distance (box footprint to the 0.5 s trajectory polyline)" + (f"; UAV {config.profile}" if config.profile
+                                                                          else ""))
+    head = f"{'run':>3}  {'status':9}  {'3-D':>8}  {'2-D':>8}  {'compet.':>8}  {'duration':>8}"
     if reference is not None:
         head += f"  {'DTW':>8}  {'Frechet':>8}"
     print(head)
     for row in rows:
         line = (f"{row['run']:>3}  {row['status']:9}  {row['min_distance_m']:>7.2f}m  {row['min_distance_2d_m']:>7.2f}m"
-                f"  {row['duration_s']:>7.1f}s")
+                f"  {row['competition_distance_m']:>7.2f}m  {row['duration_s']:>7.1f}s")
         if reference is not None:
             line += f"  {row['dtw']:>8.1f}  {row['frechet_m']:>7.2f}m"
         print(line)

@@ -157,6 +157,7 @@ class Px4LocalPlanner:
         c = self.config = config
         limit = sensor_limited_speed(acc_hor, jerk_max, c.max_sensor_range) if c.max_speed_sensor else math.inf
         self.cruise = min(float(cruise_speed), limit, c.cruise_speed_max)
+        self._line_band = float(cruise_speed)  # determineStrategy compares the line distance with MPC_XY_CRUISE
         self._params = np.array([
             c.min_sensor_range, c.max_sensor_range, c.pitch_cost_param, c.yaw_cost_param, c.velocity_cost_param,
             c.obstacle_cost_param, c.tree_heuristic_weight, float(int(math.ceil(c.smoothing_margin_degrees / ALPHA_RES))),
@@ -204,7 +205,7 @@ class Px4LocalPlanner:
                            dt, self._params, out, out_age)
         self._cloud, self._age = out[:n], out_age[:n]
         # closest point on the mission line at goal altitude, or the goal when near the line (determineStrategy)
-        cl = _closest_on_line(px, py, (float(prev_goal[0]), float(prev_goal[1])), (gx, gy), self.cruise)
+        cl = _closest_on_line(px, py, (float(prev_goal[0]), float(prev_goal[1])), (gx, gy), self._line_band)
         cpt = (cl[0], cl[1], gz) if cl is not None else (gx, gy, gz)
         built = False
         if n > 0:
