@@ -386,9 +386,10 @@ def _process_cloud(new, old, old_age, px, py, pz, yaw_deg, pitch_deg, elapsed, p
 
 
 @njit(cache=True)
-def _histogram(cloud, ox, oy, oz, dist):  # pragma: no cover - compiled
-    """Fill ``dist`` (N_E x N_Z) with the mean distance of the cloud's points per cell seen from (ox, oy, oz)."""
-    count = np.zeros((N_E, N_Z))
+def _histogram(cloud, ox, oy, oz, dist, count):  # pragma: no cover - compiled
+    """Fill ``dist`` (N_E x N_Z) with the mean distance of the cloud's points per cell seen from (ox, oy, oz);
+    ``count`` is a work buffer of the same shape."""
+    count[:, :] = 0.0
     dist[:, :] = 0.0
     for i in range(cloud.shape[0]):
         dx, dy, dz = cloud[i, 0] - ox, cloud[i, 1] - oy, cloud[i, 2] - oz
@@ -469,15 +470,15 @@ def _smooth_polar(matrix, radius, padded, box):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _best_cells(cloud, ox, oy, oz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, dist, obst, padded, box, cand_e,
-                cand_z, cand_c):
+def _best_cells(cloud, ox, oy, oz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, dist, count, obst, padded, box,
+                cand_e, cand_z, cand_c):
     # pragma: no cover - compiled
     """Histogram and cost matrix at (ox, oy, oz) with velocity v; fill the cheapest cells; return their count."""
     rmin, rmax = params[0], params[1]
     w_pitch, w_yaw, w_vel, obst_param = params[2], params[3], params[4], params[5]
     radius = int(params[7])
     n_best = int(params[8])
-    _histogram(cloud, ox, oy, oz, dist)
+    _histogram(cloud, ox, oy, oz, dist, count)
     obst[:, :] = 0.0
     any_obstacle = False
     for e in range(N_E):
@@ -558,6 +559,7 @@ def _build_tree(cloud, px, py, pz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, p
     heur = np.empty(MAX_NODES)
     closed = np.zeros(MAX_NODES, dtype=np.bool_)
     dist = np.empty((N_E, N_Z))
+    count = np.empty((N_E, N_Z))
     obst = np.empty((N_E, N_Z))
     radius = int(params[7])
     padded = np.empty((N_E + 2 * radius, N_Z + 2 * radius))
@@ -578,8 +580,8 @@ def _build_tree(cloud, px, py, pz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, p
         else:
             p = parent[origin]
             ux, uy, uz = ox - pos[p, 0], oy - pos[p, 1], oz - pos[p, 2]
-        k = _best_cells(cloud, ox, oy, oz, ux, uy, uz, gx, gy, gz, cx, cy, cz, params, dist, obst, padded, box, cand_e,
-                       cand_z, cand_c)
+        k = _best_cells(cloud, ox, oy, oz, ux, uy, uz, gx, gy, gz, cx, cy, cz, params, dist, count, obst, padded,
+                        box, cand_e, cand_z, cand_c)
         if it == 0:
             empty = True
             for e in range(N_E):
