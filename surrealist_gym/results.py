@@ -31,6 +31,7 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
     rows = write_evaluations_csv(env.evaluator.store, out / "evaluations.csv")
     summary = {
         "problem": problem,
+        "uav": env.evaluator.sim_config.profile,
         "seed_fitness": seed_eval.fitness, "best_fitness": best_eval.fitness,
         "seed_terms": seed_eval.terms, "best_terms": best_eval.terms,
         "evaluations": result.evaluations, "evaluations_to_best": result.evaluations_to_best,

@@ -28,6 +28,9 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
                         help="search agent: greedy (default), greedy-paper, random, cmaes, ppo:POLICY.zip, "
                              "module:Class")
     parser.add_argument("--random-seed", type=int, default=0, help="base seed of the simulation noise")
+    parser.add_argument("--uav", default=None, metavar="NAME_OR_YAML",
+                        help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
+                             "px4-vision-case0, or a profile YAML (default: the simulator's defaults, the case0 UAV)")
     parser.add_argument("--common-noise", action="store_true",
                         help="common random numbers: run i of every test flies with the same noise, so tests "
                              "differ only by what they change (default: each test draws its own)")
@@ -100,6 +103,12 @@ def prepare(args, command: str, keys: tuple[str, ...]) -> tuple[Path, dict]:
     if max(getattr(args, "first_runs", None) or [0]) >= args.runs:
         raise SurrealistError(f"--first-runs: expected numbers of runs below --runs ({args.runs}), "
                               f"got {','.join(map(str, args.first_runs))}")
+    if getattr(args, "uav", None) is not None:
+        from ..sim.profiles import PRESETS, load_profile
+
+        load_profile(args.uav)  # a bad profile fails here, before any folder exists
+        if args.uav not in PRESETS:
+            args.uav = str(Path(args.uav).resolve())
     out = Path(args.out or f"results/{command}-{datetime.now():%Y%m%d-%H%M%S}")
     options = {"command": command, **{k: getattr(args, k) for k in keys}}
     for key in ("log", "test", "seed"):
@@ -187,6 +196,12 @@ def executor_of(options: dict):
 
 
 def sim_config_of(options: dict):
+    """The search's SimConfig: its noise mode, flown by its UAV profile when it names one."""
     from ..sim import SimConfig
 
-    return SimConfig(common_noise=bool(options.get("common_noise")))
+    config = SimConfig(common_noise=bool(options.get("common_noise")))
+    if options.get("uav") is not None:
+        from ..sim.profiles import load_profile
+
+        config = load_profile(options["uav"]).sim_config(config)
+    return config

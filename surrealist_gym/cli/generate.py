@@ -4,7 +4,7 @@ from __future__ import annotations
 from ._search import add_search_arguments, executor_of, new_search_folder, run_search, sim_config_of
 
 KEYS = ("test", "budget", "runs", "workers", "dask_scheduler", "preset", "random_seed", "common_noise",
-        "surrogate", "first_runs", "screen", "skips_spend_budget", "verify_stop", "agent", "aggregate",
+        "uav", "surrogate", "first_runs", "screen", "skips_spend_budget", "verify_stop", "agent", "aggregate",
         "all_mutators")
 
 

@@ -40,7 +40,7 @@ class SurrealistEnv(gym.Env):
     metadata = {"render_modes": []}
 
     def __init__(self, seed_test: TestCase, mutators, budget: int, runs: int, executor=None, store=None,
-                 random_seed: int = 0, sim_config=None, workers: int | None = None):
+                 random_seed: int = 0, sim_config=None, workers: int | None = None, uav=None):
         if budget < 1:
             raise ValueError(f"budget must be >= 1, got {budget}")
         if not mutators:
@@ -52,6 +52,10 @@ class SurrealistEnv(gym.Env):
         if executor is None and workers is not None:
             from ..executors import LocalPoolExecutor
             executor = LocalPoolExecutor(workers)
+        if uav is not None:  # a UAV profile (preset name, YAML path or UavProfile) applied to sim_config
+            from ..sim.config import SimConfig
+            from ..sim.profiles import load_profile
+            sim_config = load_profile(uav).sim_config(SimConfig.coerce(sim_config))
         self.evaluator = Evaluator(self._objective(), runs=runs, seed=random_seed, sim_config=sim_config,
                                    executor=executor, store=store)
         n = len(self._mutators)

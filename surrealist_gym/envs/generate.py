@@ -17,7 +17,7 @@ class GenerateEnv(SurrealistEnv):
 
     def __init__(self, seed_test=None, runs: int = 10, budget: int = 50, mutators=None,
                  aggregate: str = "riskiest", executor=None, store=None, random_seed: int = 0, sim_config=None,
-                 workers: int | None = None):
+                 workers: int | None = None, uav=None):
         from .. import data_path
 
         if seed_test is None:
@@ -26,7 +26,7 @@ class GenerateEnv(SurrealistEnv):
             seed_test = load_test(seed_test)
         self.aggregate = aggregate
         mutators = mutators or default_mutators(seed_test, MOVE_KINDS, obstacles=[0])
-        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers)
+        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers, uav)
 
     def _objective(self):
         return GenerationObjective(self.aggregate)

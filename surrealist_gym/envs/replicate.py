@@ -20,7 +20,7 @@ class ReplicateEnv(SurrealistEnv):
 
     def __init__(self, reference_log=None, seed_test=None, runs: int = 5, budget: int = 100, mutators=None,
                  averaging: str = "dba", executor=None, store=None, random_seed: int = 0, sim_config=None,
-                 workers: int | None = None, reference_trajectory=None):
+                 workers: int | None = None, uav=None, reference_trajectory=None):
         """``reference_trajectory`` (a Trajectory) replaces the log's, e.g. a simulated flight with hidden
         obstacles that plays the real one; the seed test then must be given."""
         from .. import data_path
@@ -43,7 +43,7 @@ class ReplicateEnv(SurrealistEnv):
             self.reference = self.flight.trajectory
         self.averaging = averaging
         mutators = mutators or default_mutators(seed_test, AUTHORS_ORDER)
-        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers)
+        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers, uav)
 
     def _objective(self):
         return ReplicationObjective(self.reference, self.averaging)

@@ -144,3 +144,13 @@ def test_replication_keeps_its_first_runs_averaged_trajectories_through_the_stor
     _, from_store = again.probe(action, 1)
     assert again.evaluator.simulations == 0
     assert np.allclose(from_store["trajectory"], sinfo["first_runs_trajectories"][0], atol=1e-6)
+
+
+def test_envs_take_a_uav_profile():
+    from surrealist_gym.envs.generate import GenerateEnv
+    from surrealist_gym.sim.config import AvoidanceModel
+
+    env = GenerateEnv(runs=1, budget=2, uav="px4-v1.12-sitl-iris", sim_config={"common_noise": True})
+    cfg = env.evaluator.sim_config
+    assert cfg.profile == "px4-v1.12-sitl-iris" and cfg.avoidance_model == AvoidanceModel.PX4 and cfg.common_noise
+    assert GenerateEnv(runs=1, budget=2).evaluator.sim_config.profile is None

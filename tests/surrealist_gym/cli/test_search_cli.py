@@ -34,6 +34,17 @@ def test_generate_writes_the_results_folder(tmp_path, capsys):
     assert main(["simulate", str(out / "best.yaml"), "--runs", "1", "--out", str(tmp_path / "sim")]) == 0
 
 
+def test_generate_flies_and_records_a_uav_profile(tmp_path, capsys):
+    out = tmp_path / "gen-sitl"
+    assert main(["generate", "--uav", "px4-v1.12-sitl-iris", "--budget", "2", "--runs", "1", "--workers", "1",
+                 "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["uav"] == "px4-v1.12-sitl-iris"
+    assert json.loads((out / "run.json").read_text())["uav"] == "px4-v1.12-sitl-iris"
+    assert main(["generate", "--uav", "no-such-uav", "--budget", "2", "--out", str(tmp_path / "bad")]) == 2
+    assert "no-such-uav" in capsys.readouterr().err and not (tmp_path / "bad").exists()
+
+
 def test_replicate_with_a_seed(tmp_path):
     out = tmp_path / "rep"
     seed = sg.data_path("rq1-seed2.yaml")
