@@ -406,10 +406,10 @@ def _histogram(cloud, ox, oy, oz, dist, count):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _smooth_polar(matrix, radius, padded, box):  # pragma: no cover - compiled
-    """smoothPolarMatrix: pad with the polar wrap rules, then smooth with the conic kernel (1, r/(r+1), ...,
-    1/(r+1)), summed, in elevation then azimuth. The kernel is done as two running box sums of length r + 1.
-    ``padded`` (ne + 2r, nz + 2r) and ``box`` (>= max(ne, nz) + r) are work buffers."""
+def _smooth_columns(matrix, radius, padded, box):  # pragma: no cover - compiled
+    """smoothPolarMatrix, first half: pad with the polar wrap rules, then the conic kernel (1, r/(r+1), ...,
+    1/(r+1)), summed, along elevation, as two running box sums of length r + 1. ``padded`` (ne + 2r, nz + 2r)
+    holds the result; ``box`` (>= max(ne, nz) + r) is a work buffer. :func:`_smooth_row` finishes a row."""
     r = radius
     ne, nz = matrix.shape
     half = nz // 2
@@ -425,9 +425,8 @@ def _smooth_polar(matrix, radius, padded, box):  # pragma: no cover - compiled
         for i in range(r):
             padded[row, i] = padded[row, nz + i]
             padded[row, r + nz + i] = padded[row, r + i]
-    # elevation pass, column by column (all-zero columns stay zero)
     m = ne + r
-    for z in range(nz + 2 * r):
+    for z in range(nz + 2 * r):  # all-zero columns stay zero
         nonzero = False
         for row in range(ne + 2 * r):
             if padded[row, z] != 0.0:
@@ -449,24 +448,40 @@ def _smooth_polar(matrix, radius, padded, box):  # pragma: no cover - compiled
         for i in range(1, ne):  # writes row r + i, reads box only: safe in place
             s += box[i + length - 1] - box[i - 1]
             padded[r + i, z] = s / length
-    # azimuth pass, row by row
+
+
+@njit(cache=True)
+def _smooth_row(padded, radius, e, box, out):  # pragma: no cover - compiled
+    """smoothPolarMatrix, second half for elevation row ``e``: the conic kernel along azimuth into ``out``."""
+    r = radius
+    nz = out.shape[0]
+    length = r + 1
+    row = r + e
     m = nz + r
-    for e in range(ne):
-        row = r + e
-        s = 0.0
-        for j in range(length):
-            s += padded[row, j]
-        box[0] = s
-        for j in range(1, m):
-            s += padded[row, j + length - 1] - padded[row, j - 1]
-            box[j] = s
-        s = 0.0
-        for j in range(length):
-            s += box[j]
-        matrix[e, 0] = s / length
-        for i in range(1, nz):
-            s += box[i + length - 1] - box[i - 1]
-            matrix[e, i] = s / length
+    s = 0.0
+    for j in range(length):
+        s += padded[row, j]
+    box[0] = s
+    for j in range(1, m):
+        s += padded[row, j + length - 1] - padded[row, j - 1]
+        box[j] = s
+    s = 0.0
+    for j in range(length):
+        s += box[j]
+    out[0] = s / length
+    for i in range(1, nz):
+        s += box[i + length - 1] - box[i - 1]
+        out[i] = s / length
+
+
+@njit(cache=True)
+def _smooth_polar(matrix, radius, padded, box):  # pragma: no cover - compiled
+    """smoothPolarMatrix on the whole matrix (in place)."""
+    _smooth_columns(matrix, radius, padded, box)
+    row = np.empty(matrix.shape[1])
+    for e in range(matrix.shape[0]):
+        _smooth_row(padded, radius, e, box, row)
+        matrix[e, :] = row
 
 
 @njit(cache=True)
@@ -488,8 +503,9 @@ def _best_cells(cloud, ox, oy, oz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, d
                 x = obst_param - d
                 obst[e, z] = 5000.0 * (1.0 + x / math.sqrt(1.0 + x * x))
                 any_obstacle = True
-    if any_obstacle and radius > 0:
-        _smooth_polar(obst, radius, padded, box)
+    smooth = any_obstacle and radius > 0
+    if smooth:
+        _smooth_columns(obst, radius, padded, box)
     # goal and line directions from the origin
     dgx, dgy, dgz = gx - ox, gy - oy, gz - oz
     dist_goal = math.sqrt(dgx * dgx + dgy * dgy + dgz * dgz)
@@ -522,15 +538,29 @@ def _best_cells(cloud, ox, oy, oz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, d
         yaw_cost[z] = w_yaw * ((1.0 - w_line) * a * a + w_line * b * b)
         cos_a[z] = math.cos(az / _R2D)
         sin_a[z] = math.sin(az / _R2D)
-    n = 0
+    min_yaw = yaw_cost.min()
+    row_cost = np.empty(N_E)
     for e in range(N_E):
+        de = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0 - el_goal
+        row_cost[e] = w_pitch * de * de * pitch_scale
+    obst_row = np.zeros(N_Z)
+    n = 0
+    # rows by increasing pitch cost; a row whose every cost is at least its pitch cost plus the least yaw cost
+    # (obstacle and velocity costs are >= 0) cannot beat a full candidate list, and is skipped
+    for e in np.argsort(row_cost, kind="mergesort"):
+        pitch_cost = row_cost[e]
+        if n == n_best and pitch_cost + min_yaw >= cand_c[n - 1]:
+            break
         el = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0
-        de = el - el_goal
-        pitch_cost = w_pitch * de * de * pitch_scale
         ce, se = math.cos(el / _R2D), math.sin(el / _R2D)
+        if smooth:
+            _smooth_row(padded, radius, e, box, obst_row)
+        else:
+            for z in range(N_Z):
+                obst_row[z] = obst[e, z]
         for z in range(N_Z):
             dot = ce * (cos_a[z] * vx + sin_a[z] * vy) + se * vz
-            cost = obst[e, z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
+            cost = obst_row[z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
             # keep the n_best cheapest, sorted ascending
             if n < n_best:
                 j = n
