@@ -79,6 +79,7 @@ def speed(repeat: int) -> None:
 
 def sitl_speed(repeat: int) -> None:
     """One run of a competition test with the PX4 SITL Iris profile (PX4-Avoidance model, look-ahead tree)."""
+    import csv
     import json
 
     import surrealist_gym as sg
@@ -86,8 +87,7 @@ def sitl_speed(repeat: int) -> None:
     from surrealist_gym.sim.profiles import load_profile
 
     competition = ROOT.parent / "shared" / "data" / "competition"
-    with open(competition / "rilast-mission1" / "tests.csv") as f:
-        import csv
+    with open(competition / "rilast-mission1" / "tests.csv", newline="") as f:
         row = next(r for r in csv.DictReader(f) if r["test_id"] == "random_run3_194")
     test = sg.load_test(competition / "case_studies" / "mission1.yaml").with_obstacles(
         [sg.Obstacle(**o) for o in json.loads(row["obstacles"])])

@@ -34,11 +34,12 @@ from .fitness import UNSAFE_DISTANCE_M
 from .frozendict import FrozenDict
 from .geometry import competition_distance
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
+from .statistics import vargha_delaney_a12
 from .testcase import TestCase
 
 __all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "RunOutcome",
-           "TestRow", "airborne_time", "build_report", "fly_labelled_set", "fly_test", "load_labelled_set",
-           "measure_fidelity", "plot_report", "region_stats", "sim_config_for", "write_report"]
+           "TestRow", "airborne_time", "build_report", "fly_labelled_set", "fly_test", "format_figure",
+           "load_labelled_set", "measure_fidelity", "plot_report", "region_stats", "sim_config_for", "write_report"]
 
 DISTANCE_NAME = "2-D competition distance"
 AIRBORNE_Z_M = 0.3        # [m] above the ground: airborne
@@ -159,6 +160,11 @@ class TestRow:
         return float(np.median(d)) if d else math.nan
 
     @property
+    def both_flew(self) -> bool:
+        """Whether theirs and ours both have a distance (theirs flown, ours finite)."""
+        return self.label.result == "flown" and math.isfinite(self.distance)
+
+    @property
     def failure_probability(self) -> float:
         """Share of the runs that flew with a distance below 1.5 m (nan if none flew)."""
         d = self.distances
@@ -264,13 +270,12 @@ def _spearman(a, b) -> float:
 
 
 def _auc(positive: np.ndarray, scores: np.ndarray) -> float:
-    """P(score of a positive < score of a negative), ties half (Mann-Whitney U)."""
-    from scipy.stats import mannwhitneyu
-
+    """P(score of a positive < score of a negative), ties half: Vargha-Delaney A12 of the negatives over the
+    positives."""
     pos, neg = scores[positive], scores[~positive]
     if not pos.size or not neg.size:
         return math.nan
-    return float(mannwhitneyu(neg, pos).statistic / (pos.size * neg.size))
+    return vargha_delaney_a12(neg, pos)
 
 
 def _best_recall(positive: np.ndarray, scores: np.ndarray) -> tuple[float, float]:
@@ -310,7 +315,7 @@ def build_report(lset: LabelledSet, outcomes: Sequence[tuple[RunOutcome, ...]], 
                  ) -> FidelityReport:
     """Compare flown ``outcomes`` (one tuple of runs per test of ``lset``) with the labels."""
     rows = tuple(TestRow(label, tuple(o)) for label, o in zip(lset.labels, outcomes, strict=True))
-    both = [r for r in rows if r.label.result == "flown" and not math.isnan(r.distance)]
+    both = [r for r in rows if r.both_flew]
     theirs = np.array([r.label.distance for r in both])
     ours = np.array([r.distance for r in both])
     prob = np.array([r.failure_probability for r in both])
@@ -413,7 +418,7 @@ def plot_report(report: FidelityReport, path, floor: float = 0.05) -> None:
     fig = Figure(figsize=(12, 5.5))
     FigureCanvasAgg(fig)
     ax, side = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
-    both = [r for r in report.rows if r.label.result == "flown" and math.isfinite(r.distance)]
+    both = [r for r in report.rows if r.both_flew]
     values = [v for r in both for v in (r.label.distance, r.distance)]
     top = max([2 * report.close_m, *values]) * 1.3
     low = min(1.0, max(floor, min(values, default=floor) / 1.5)) * 0.8
@@ -453,16 +458,16 @@ def plot_report(report: FidelityReport, path, floor: float = 0.05) -> None:
     lines = [f"{DISTANCE_NAME}, buffer {report.buffer_m:g} m", "",
              f"{'':26}{'all':>8}{'close':>8}",
              f"{'tests both flew':26}{o.tests:>8}{c.tests:>8}",
-             f"{'Spearman':26}{_fmt(o.spearman):>8}{_fmt(c.spearman):>8}",
-             f"{'AUC, theirs < 1.5 m':26}{_fmt(o.auc):>8}{_fmt(c.auc):>8}",
-             f"{'precision, ours < 1.5 m':26}{_fmt(o.precision):>8}{_fmt(c.precision):>8}",
-             f"{'recall, ours < 1.5 m':26}{_fmt(o.recall):>8}{_fmt(c.recall):>8}",
-             f"{'failure rate theirs':26}{_fmt(o.their_failure_rate):>8}{_fmt(c.their_failure_rate):>8}",
-             f"{'failure rate ours':26}{_fmt(o.our_failure_rate):>8}{_fmt(c.our_failure_rate):>8}"]
+             f"{'Spearman':26}{format_figure(o.spearman):>8}{format_figure(c.spearman):>8}",
+             f"{'AUC, theirs < 1.5 m':26}{format_figure(o.auc):>8}{format_figure(c.auc):>8}",
+             f"{'precision, ours < 1.5 m':26}{format_figure(o.precision):>8}{format_figure(c.precision):>8}",
+             f"{'recall, ours < 1.5 m':26}{format_figure(o.recall):>8}{format_figure(c.recall):>8}",
+             f"{'failure rate theirs':26}{format_figure(o.their_failure_rate):>8}{format_figure(c.their_failure_rate):>8}",
+             f"{'failure rate ours':26}{format_figure(o.our_failure_rate):>8}{format_figure(c.our_failure_rate):>8}"]
     if report.durations is not None:
         d = report.durations
-        lines += ["", f"airborne time ours / theirs: median {_fmt(d['median_ratio'])}",
-                  f"  (quartiles {_fmt(d['q1_ratio'])}-{_fmt(d['q3_ratio'])}, Spearman {_fmt(d['spearman'])}, "
+        lines += ["", f"airborne time ours / theirs: median {format_figure(d['median_ratio'])}",
+                  f"  (quartiles {format_figure(d['q1_ratio'])}-{format_figure(d['q3_ratio'])}, Spearman {format_figure(d['spearman'])}, "
                   f"{d['tests']} tests)"]
     side.text(0.0, 0.55, "\n".join(lines), family="monospace", fontsize=9, va="top", transform=side.transAxes)
     source = Path(report.source)
@@ -471,5 +476,6 @@ def plot_report(report: FidelityReport, path, floor: float = 0.05) -> None:
     fig.savefig(os.fspath(path), dpi=110)
 
 
-def _fmt(value: float) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"{value:.2f}"
+def format_figure(value, digits: int = 2) -> str:
+    """A figure for the report's text: rounded, or "-" when missing or not finite."""
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"

@@ -41,6 +41,17 @@ def obstacle_distances(points, obstacles: Sequence[Obstacle], dims: int = 2) -> 
     return out
 
 
+def line_projection(px: float, py: float, a, b) -> tuple[float, float, float] | None:
+    """Projection of the point (px, py) on the line through ``a`` and ``b`` in the x-y plane: (fraction along
+    a -> b, foot x, foot y), or None when a and b (nearly) coincide. Plain floats, for the simulator's loops."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    if length2 < 1e-6:
+        return None
+    s = ((px - a[0]) * dx + (py - a[1]) * dy) / length2
+    return s, a[0] + s * dx, a[1] + s * dy
+
+
 def competition_distances(trajectory, obstacles: Sequence[Obstacle], buffer: float = 0.0) -> np.ndarray:
     """Per-obstacle 2-D competition distance [m] of a trajectory: Aerialist's (and the UAV Testing Competition's).
 

@@ -53,13 +53,9 @@ def _check(args) -> None:
         raise SurrealistError(f"--buffer: expected a non-negative number of metres, got {args.buffer:g}")
 
 
-def _f(value, digits: int = 2) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
-
-
 def summary_text(report) -> str:
     """The summary ``surrealist fidelity`` prints; every distance says which one it is."""
-    from ..fidelity import DISTANCE_NAME
+    from ..fidelity import DISTANCE_NAME, format_figure as _f
 
     results = {}
     for row in report.rows:

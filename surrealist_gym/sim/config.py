@@ -150,7 +150,8 @@ class SimConfig:
         object.__setattr__(self, "params", FrozenDict(dict(self.params)))
         object.__setattr__(self, "airframe_params", FrozenDict(dict(self.airframe_params)))
         if not 0.0 < self.obstacle_collision_scale <= 1.0:
-            raise ValueError(f"SimConfig.obstacle_collision_scale must be in (0, 1], got {self.obstacle_collision_scale!r}")
+            raise ValueError(f"SimConfig.obstacle_collision_scale must be in (0, 1], got "
+                             f"{self.obstacle_collision_scale!r}")
         if self.physics_hz < 200:
             raise ValueError(f"SimConfig.physics_hz must be >= 200 Hz, got {self.physics_hz:g}")
         if not 0 < self.control_hz <= self.physics_hz or _not_divisor(self.physics_hz, self.control_hz):

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import math
 
+from ..geometry import line_projection
+
 __all__ = ["AvoidanceFlightTask", "stopping_speed"]
 
 _COS_TURN = 0.98  # _updateTurningCheck: cos of the largest heading error that is not a turn
@@ -59,17 +61,14 @@ class AvoidanceFlightTask:
     def target(self, pos, prev, goal) -> tuple[float, float, float]:
         """PX4's own target: the mission item, the previous one, or the foot of the perpendicular on the line."""
         r = self.p["NAV_ACC_RAD"]
-        ux, uy = goal[0] - prev[0], goal[1] - prev[1]
-        n = math.hypot(ux, uy)
-        if n < 1e-6:
+        projection = line_projection(pos[0], pos[1], prev, goal)
+        if projection is None:
             return goal
-        ux, uy = ux / n, uy / n
-        if ux * (goal[0] - pos[0]) + uy * (goal[1] - pos[1]) < 0.0:
+        along, cx, cy = projection
+        if along > 1.0:
             return goal  # target behind
-        along = ux * (pos[0] - prev[0]) + uy * (pos[1] - prev[1])
         if along < 0.0 and math.hypot(pos[0] - prev[0], pos[1] - prev[1]) > r:
             return prev  # previous in front
-        cx, cy = prev[0] + ux * along, prev[1] + uy * along
         if math.hypot(pos[0] - cx, pos[1] - cy) > r:
             return (cx, cy, goal[2])  # offtrack
         return goal
@@ -82,9 +81,9 @@ class AvoidanceFlightTask:
         tgt = self.target(pos, prev, goal)
         vxy = math.hypot(tv[0], tv[1])
         tx, ty = tgt[0] - tp[0], tgt[1] - tp[1]
-        dt_xy = math.hypot(tx, ty)
-        self.turning = (vxy > _TURN_MIN_SPEED and dt_xy > p["NAV_ACC_RAD"]
-                        and (tv[0] * tx + tv[1] * ty) / (vxy * dt_xy) < _COS_TURN)
+        to_target = math.hypot(tx, ty)
+        self.turning = (vxy > _TURN_MIN_SPEED and to_target > p["NAV_ACC_RAD"]
+                        and (tv[0] * tx + tv[1] * ty) / (vxy * to_target) < _COS_TURN)
         # speed that stops at the injected point
         jerk = max(p["MPC_JERK_AUTO"], 1e-3)
         dx, dy, dz = setpoint[0] - tp[0], setpoint[1] - tp[1], setpoint[2] - tp[2]
@@ -101,13 +100,13 @@ class AvoidanceFlightTask:
         d = math.sqrt(dxy * dxy + dz * dz)
         if d > 1e-6:
             s = math.sqrt(xy_speed * xy_speed + z_speed * z_speed) / d
-            target = [dx * s, dy * s, dz * s]
-            h = math.hypot(target[0], target[1])
+            v_target = [dx * s, dy * s, dz * s]
+            h = math.hypot(v_target[0], v_target[1])
             if h > xy_speed > 0.0:
-                target[0], target[1] = target[0] * xy_speed / h, target[1] * xy_speed / h
-            target[2] = max(-z_speed, min(z_speed, target[2]))
+                v_target[0], v_target[1] = v_target[0] * xy_speed / h, v_target[1] * xy_speed / h
+            v_target[2] = max(-z_speed, min(z_speed, v_target[2]))
         else:
-            target = [0.0, 0.0, 0.0]
+            v_target = [0.0, 0.0, 0.0]
         # time stretch while the vehicle lags behind the trajectory
         ex, ey = tp[0] - pos[0], tp[1] - pos[1]
         stretch = 1.0
@@ -115,17 +114,17 @@ class AvoidanceFlightTask:
             stretch = 1.0 - min(max(math.hypot(ex, ey) / max(p["MPC_XY_ERR_MAX"], 1e-3), 0.0), 1.0)
         step = dt * stretch
         for i in range(3):
-            a_max = p["MPC_ACC_HOR"] if i < 2 else (p["MPC_ACC_UP_MAX"] if target[i] > tv[i] else
+            a_max = p["MPC_ACC_HOR"] if i < 2 else (p["MPC_ACC_UP_MAX"] if v_target[i] > tv[i] else
                                                    p["MPC_ACC_DOWN_MAX"])
-            dv = target[i] - tv[i]
+            dv = v_target[i] - tv[i]
             # the acceleration that still reaches the target velocity without overshoot at this jerk
             want = math.copysign(min(math.sqrt(2.0 * jerk * abs(dv)), a_max), dv)
             da = want - self.acc[i]
             lim = jerk * step
             self.acc[i] += max(-lim, min(lim, da))
             new_v = tv[i] + self.acc[i] * step
-            if (dv > 0.0 and new_v > target[i]) or (dv < 0.0 and new_v < target[i]):
-                new_v, self.acc[i] = target[i], 0.0
+            if (dv > 0.0 and new_v > v_target[i]) or (dv < 0.0 and new_v < v_target[i]):
+                new_v, self.acc[i] = v_target[i], 0.0
             tp[i] += 0.5 * (tv[i] + new_v) * step
             tv[i] = new_v
         return tuple(tp), tuple(tv), tuple(self.acc)

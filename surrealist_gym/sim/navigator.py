@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from enum import Enum
 
+from ..geometry import line_projection
 from ..mission import Command, Mission
 from .flight_task import AvoidanceFlightTask
 
@@ -133,19 +134,19 @@ class Navigator:
                 vd = vland
             pos_sp, vel_sp = (self.target[0], self.target[1], NAN), (0.0, 0.0, -vd)
         elif ph == Phase.CRUISE:
-            if planner is not None and planner.position is not None:
+            if planner is not None and planner.position is not None:  # a position setpoint: PX4's flight task
                 if self.task is None:
                     self.task = AvoidanceFlightTask(self.p, self.cruise, pos, vel)
                 pos_sp, vel_sp, acc = self.task.update(dt, pos, planner.position, self.prev, self.target)
                 self.v_cmd = list(vel_sp)
                 yaw_target = planner.yaw
-            elif planner is not None:
-                vel_sp = self._approach(pos, planner.velocity)
-                yaw_target = planner.yaw
-            else:
-                vel_sp = self._line_velocity(pos)
-                yaw_target = self._yaw_mode(pos, vel, self.target)
-            if self.task is None:
+            else:  # a velocity (or the mission line), slewed, with a position setpoint moving along
+                if planner is not None:
+                    vel_sp = self._approach(pos, planner.velocity)
+                    yaw_target = planner.yaw
+                else:
+                    vel_sp = self._line_velocity(pos)
+                    yaw_target = self._yaw_mode(pos, vel, self.target)
                 old = self.v_cmd
                 vel_sp = self._slew(vel_sp, dt)
                 acc = tuple((vel_sp[i] - old[i]) / dt for i in range(3))
@@ -252,9 +253,8 @@ class Navigator:
 
     def _passed(self, pos) -> bool:
         """Whether the vehicle's projection on the line from the previous item lies beyond the target."""
-        ux, uy = self.target[0] - self.prev[0], self.target[1] - self.prev[1]
-        n2 = ux * ux + uy * uy
-        return n2 > 1e-6 and ((pos[0] - self.prev[0]) * ux + (pos[1] - self.prev[1]) * uy) / n2 > 1.0
+        projection = line_projection(pos[0], pos[1], self.prev, self.target)
+        return projection is not None and projection[0] > 1.0
 
     def _next_position(self):
         for it in self.items[self.index + 1:]:

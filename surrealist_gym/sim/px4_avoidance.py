@@ -26,9 +26,9 @@ One :meth:`Px4LocalPlanner.update` is one planner cycle (~10 Hz):
 4. **Waypoint generator** (``WaypointGenerator``): TRY_PATH follows the path from its first node at the cruise
    speed since the tree was built, DIRECT (no tree, or the path used up) heads for the goal. The speed is the
    cruise speed times a field-of-view factor (``1 - 2 |bearing error| / fov_h_deg``, 0 outside the camera's
-   horizontal field of view: ``scaleToFOV`` with one camera), low-passed (0.9 s), at most the distance to the goal; the setpoint lies that far ahead and is
-   smoothed by a critically damped filter (gains ``smoothing_speed_xy`` / ``_z``). The yaw setpoint turns toward
-   the direction flown.
+   horizontal field of view: ``scaleToFOV`` with one camera), low-passed (0.9 s), at most the distance to the
+   goal; the setpoint lies that far ahead and is smoothed by a critically damped filter (gains
+   ``smoothing_speed_xy`` / ``_z``). The yaw setpoint turns toward the direction flown.
 
 The output is PX4's ``vehicle_trajectory_waypoint`` point: a position setpoint (no velocity) and a yaw.
 """
@@ -39,6 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+
+from ..geometry import line_projection
 
 __all__ = ["Px4AvoidanceConfig", "Px4LocalPlanner", "Px4PlannerOutput"]
 
@@ -160,7 +162,8 @@ class Px4LocalPlanner:
         self._line_band = float(cruise_speed)  # determineStrategy compares the line distance with MPC_XY_CRUISE
         self._params = np.array([
             c.min_sensor_range, c.max_sensor_range, c.pitch_cost_param, c.yaw_cost_param, c.velocity_cost_param,
-            c.obstacle_cost_param, c.tree_heuristic_weight, float(int(math.ceil(c.smoothing_margin_degrees / ALPHA_RES))),
+            c.obstacle_cost_param, c.tree_heuristic_weight,
+            float(int(math.ceil(c.smoothing_margin_degrees / ALPHA_RES))),
             float(c.children_per_node), float(c.n_expanded_nodes), c.tree_node_distance, c.max_point_age_s,
             c.fov_h_deg, c.fov_v_deg], dtype=np.float64)
         self.reset()
@@ -277,15 +280,10 @@ class Px4LocalPlanner:
 
 def _closest_on_line(px, py, a, b, near: float):
     """The vehicle's projection on the line a -> b, or None when a == b or the vehicle is within ``near`` of it."""
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    length2 = dx * dx + dy * dy
-    if length2 < 1e-6:
+    projection = line_projection(px, py, a, b)
+    if projection is None or math.hypot(px - projection[1], py - projection[2]) < near:
         return None
-    s = ((px - a[0]) * dx + (py - a[1]) * dy) / length2
-    cx, cy = a[0] + s * dx, a[1] + s * dy
-    if math.hypot(px - cx, py - cy) < near:
-        return None
-    return cx, cy
+    return projection[1], projection[2]
 
 
 def _point_on_path(path: np.ndarray, length: float):
@@ -472,16 +470,6 @@ def _smooth_row(padded, radius, e, box, out):  # pragma: no cover - compiled
     for i in range(1, nz):
         s += box[i + length - 1] - box[i - 1]
         out[i] = s / length
-
-
-@njit(cache=True)
-def _smooth_polar(matrix, radius, padded, box):  # pragma: no cover - compiled
-    """smoothPolarMatrix on the whole matrix (in place)."""
-    _smooth_columns(matrix, radius, padded, box)
-    row = np.empty(matrix.shape[1])
-    for e in range(matrix.shape[0]):
-        _smooth_row(padded, radius, e, box, row)
-        matrix[e, :] = row
 
 
 @njit(cache=True)

@@ -23,7 +23,6 @@ from ..mission import Command
 from ..trajectory import Trajectory
 from .config import SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
-from .avoidance import LocalPlanner
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
 from .vehicle import preset
@@ -190,7 +189,10 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
 
 
 def _avoidance(test, cfg: SimConfig, params):
-    """The depth sensor and a factory of planners for the configured avoidance model."""
+    """The depth sensor and a factory of per-run planning steps for the configured avoidance model.
+
+    A planning step is ``step(t, position, velocity, yaw, navigator, hits) -> planner output`` (world frame, z up),
+    so the run loop does not care which planner flies."""
     from .config import AvoidanceModel
     from .sensor import DepthSensor, DepthSensorConfig
 
@@ -200,13 +202,20 @@ def _avoidance(test, cfg: SimConfig, params):
 
         sensor = DepthSensor(test.obstacles, cfg.sensor_config or SITL_IRIS.sensor_config())
         plan_cfg = cfg.avoidance_config or Px4AvoidanceConfig()
-        return sensor, lambda: Px4LocalPlanner(plan_cfg, params["MPC_XY_CRUISE"], params["MPC_ACC_HOR"],
-                                               params.get("MPC_JERK_MAX", 8.0))
+
+        def px4_step():
+            planner = Px4LocalPlanner(plan_cfg, params["MPC_XY_CRUISE"], params["MPC_ACC_HOR"], params["MPC_JERK_MAX"])
+            return lambda t, pos, vel, yaw, nav, hits: planner.update(t, pos, vel, yaw, nav.goal(), nav.prev, hits)
+        return sensor, px4_step
     from .avoidance import AvoidanceConfig, LocalPlanner
 
     sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig())
     plan_cfg = cfg.avoidance_config or AvoidanceConfig()
-    return sensor, lambda: LocalPlanner(plan_cfg)
+
+    def simple_step():
+        planner = LocalPlanner(plan_cfg)
+        return lambda t, pos, vel, yaw, nav, hits: planner.update(t, pos, vel, nav.goal(), hits, max_speed=nav.cruise)
+    return sensor, simple_step
 
 
 def _initial_yaw(mission) -> float:
@@ -307,10 +316,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
             hits = sensor.scan((pos[0], pos[1], -pos[2]), yaw, r.noise.rng)
             if len(hits):
                 hits = hits + np.array([pe[0], pe[1], -(pe[2])])
-            if isinstance(r.planner, LocalPlanner):
-                r.plan_out = r.planner.update(t, pos_up, vel_up, nav.goal(), hits, max_speed=nav.cruise)
-            else:
-                r.plan_out = r.planner.update(t, pos_up, vel_up, yaw, nav.goal(), nav.prev, hits)
+            r.plan_out = r.planner(t, pos_up, vel_up, yaw, nav, hits)
         plan = r.plan_out
     pos_sp, vel_ff, acc_ff, yaw_sp = nav.update(t, pos_up, vel_up, yaw, outer_dt, r.ground, plan)
     r.ground = False  # collects the contacts of the next outer period

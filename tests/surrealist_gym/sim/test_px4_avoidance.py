@@ -8,7 +8,7 @@ import pytest
 
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
 from surrealist_gym.sim.px4_avoidance import (N_E, N_Z, Px4AvoidanceConfig, Px4LocalPlanner, _atan2_deg,
-                                              _smooth_polar)
+                                              _smooth_columns, _smooth_row)
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.sensor import DepthSensor, DepthSensorConfig
 from surrealist_gym.sim.profiles import SITL_IRIS
@@ -47,7 +47,10 @@ def test_running_sum_smoothing_equals_the_conic_kernel():
     matrix[0, 5] = matrix[N_E - 1, 40] = 9000.0  # cells at the poles exercise the padding
     expected = _direct_smoothing(matrix, 7)
     got = matrix.copy()
-    _smooth_polar(got, 7, np.empty((N_E + 14, N_Z + 14)), np.empty(N_Z + 14))
+    padded, box = np.empty((N_E + 14, N_Z + 14)), np.empty(N_Z + 14)
+    _smooth_columns(got, 7, padded, box)  # the planner smooths the columns, then each row it visits
+    for e in range(N_E):
+        _smooth_row(padded, 7, e, box, got[e])
     assert np.abs(got - expected).max() < 1e-6 * expected.max()
 
 
