@@ -28,7 +28,9 @@ One :meth:`Px4LocalPlanner.update` is one planner cycle (~10 Hz):
    cruise speed times a field-of-view factor (``1 - 2 |bearing error| / fov_h_deg``, 0 outside the camera's
    horizontal field of view: ``scaleToFOV`` with one camera), low-passed (0.9 s), at most the distance to the
    goal; the setpoint lies that far ahead and is smoothed by a critically damped filter (gains
-   ``smoothing_speed_xy`` / ``_z``). The yaw setpoint turns toward the direction flown.
+   ``smoothing_speed_xy`` / ``_z``). The yaw setpoint turns toward the direction flown, plus
+   ``heading_offset_deg`` (0 in the code; the SITL Iris profile's measured 16 deg, which through the field-of-view
+   factor also sets the pace).
 
 The output is PX4's ``vehicle_trajectory_waypoint`` point: a position setpoint (no velocity) and a yaw.
 """
@@ -72,8 +74,8 @@ class Px4AvoidanceConfig:
         speed_filter_tau_s: Time constant of the speed low-pass [s] (waypoint_generator.cpp, 0.9).
         max_speed_sensor: Whether the cruise speed is capped by the sensor-limited speed (the positive root of
             ``u^2 + 2 a (a / j) u - 2 a R = 0`` with MPC_ACC_HOR, MPC_JERK_MAX and max_sensor_range).
-        cruise_speed_max: Cap on the planner's cruise speed [m/s]; the setpoint lies at most that many metres
-            ahead (the code as read has none beyond MPC_XY_CRUISE). A measured correction: see the SITL Iris profile.
+        heading_offset_deg: The vehicle's heading relative to the yaw the planner asks for [deg, clockwise]; 0 in the
+            code as read. A measurement: see the SITL Iris profile.
     """
 
     max_sensor_range: float = 15.0
@@ -94,12 +96,9 @@ class Px4AvoidanceConfig:
     fov_v_deg: float = 46.0
     speed_filter_tau_s: float = 0.9
     max_speed_sensor: bool = True
-    cruise_speed_max: float = math.inf
+    heading_offset_deg: float = 0.0
 
     def __post_init__(self):
-        if not (isinstance(self.cruise_speed_max, (int, float)) and self.cruise_speed_max > 0):
-            raise ValueError(f"Px4AvoidanceConfig.cruise_speed_max: expected a positive number, got "
-                             f"{self.cruise_speed_max!r}")
         for name in ("max_sensor_range", "tree_node_distance", "fov_h_deg", "fov_v_deg", "speed_filter_tau_s",
                      "smoothing_speed_xy", "smoothing_speed_z", "max_point_age_s"):
             value = getattr(self, name)
@@ -116,6 +115,9 @@ class Px4AvoidanceConfig:
                 raise ValueError(f"Px4AvoidanceConfig.{name}: expected an int in [1, 64], got {value!r}")
         if self.min_sensor_range >= self.max_sensor_range:
             raise ValueError("Px4AvoidanceConfig: min_sensor_range must be below max_sensor_range")
+        if not (isinstance(self.heading_offset_deg, (int, float)) and -90.0 <= self.heading_offset_deg <= 90.0):
+            raise ValueError(f"Px4AvoidanceConfig.heading_offset_deg: expected a number in [-90, 90], got "
+                             f"{self.heading_offset_deg!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -158,7 +160,7 @@ class Px4LocalPlanner:
                  acc_hor: float = 3.0, jerk_max: float = 8.0):
         c = self.config = config
         limit = sensor_limited_speed(acc_hor, jerk_max, c.max_sensor_range) if c.max_speed_sensor else math.inf
-        self.cruise = min(float(cruise_speed), limit, c.cruise_speed_max)
+        self.cruise = min(float(cruise_speed), limit)
         self._line_band = float(cruise_speed)  # determineStrategy compares the line distance with MPC_XY_CRUISE
         self._params = np.array([
             c.min_sensor_range, c.max_sensor_range, c.pitch_cost_param, c.yaw_cost_param, c.velocity_cost_param,
@@ -166,6 +168,7 @@ class Px4LocalPlanner:
             float(int(math.ceil(c.smoothing_margin_degrees / ALPHA_RES))),
             float(c.children_per_node), float(c.n_expanded_nodes), c.tree_node_distance, c.max_point_age_s,
             c.fov_h_deg, c.fov_v_deg], dtype=np.float64)
+        self._heading_offset = math.radians(c.heading_offset_deg)
         self.reset()
 
     def reset(self) -> None:
@@ -274,7 +277,8 @@ class Px4LocalPlanner:
         kyaw = c.smoothing_speed_xy
         self._yaw_rate += (kyaw * err - 2.0 * math.sqrt(kyaw) * self._yaw_rate) * dt
         self._yaw = math.remainder(self._yaw + self._yaw_rate * dt, 2.0 * math.pi)
-        return Px4PlannerOutput(position=self._sp, yaw=self._yaw, state=state, speed=speed,
+        yaw_sp = math.remainder(self._yaw + self._heading_offset, 2.0 * math.pi)
+        return Px4PlannerOutput(position=self._sp, yaw=yaw_sp, state=state, speed=speed,
                                 path=self._path if built else np.empty((0, 3)), points=n)
 
 

@@ -85,6 +85,24 @@ def test_goal_outside_the_field_of_view_stops_the_advance():
     assert out.speed == 0.0 and math.dist(out.position, (0.0, 0.0, 10.0)) < 1e-9
 
 
+def test_heading_offset_turns_the_yaw_setpoint_and_slows_the_advance():
+    """The yaw setpoint is the course plus heading_offset_deg; a vehicle that holds it sees its course 16 deg off the
+    camera axis, and scaleToFOV scales the speed by 1 - 2 * 16 / 59."""
+    east, goal = math.pi / 2, (0.0, 50.0, 10.0)
+    straight = Px4LocalPlanner(Px4AvoidanceConfig())
+    crabbed = Px4LocalPlanner(Px4AvoidanceConfig(heading_offset_deg=-16.0))
+    for k in range(1, 101):
+        a = straight.update(0.1 * k, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), east, goal, (0.0, 0.0, 10.0), np.empty((0, 3)))
+        b = crabbed.update(0.1 * k, (0.0, 0.0, 10.0), (0.0, 0.0, 0.0), east - math.radians(16.0), goal,
+                           (0.0, 0.0, 10.0), np.empty((0, 3)))
+    assert abs(a.yaw - east) < 1e-6
+    assert math.degrees(b.yaw - east) == pytest.approx(-16.0, abs=1e-6)
+    assert a.speed == pytest.approx(5.0, rel=1e-3)
+    assert b.speed == pytest.approx(5.0 * (1.0 - 32.0 / 59.0), rel=1e-3)
+    with pytest.raises(ValueError, match="heading_offset_deg"):
+        Px4AvoidanceConfig(heading_offset_deg=120.0)
+
+
 def test_a_wall_ahead_builds_a_tree_that_goes_around_it():
     wall = Obstacle(l=4.0, w=10.0, h=20.0, x=12.0, y=1.0)  # across the path 10-14 m north, from y -4 to 6
     sensor = DepthSensor([wall], CAMERA)
