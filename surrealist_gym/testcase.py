@@ -168,8 +168,9 @@ class TestCase:
     """One simulation-based test: mission, obstacles, UAV parameters, wind, runtime commands, reference log.
 
     File references are kept as absolute paths (``mission_file``, ``params_file``, ``commands_file``,
-    ``reference_log``); ``mission`` and ``params`` hold their loaded contents. A mutation makes a new value
-    (``dataclasses.replace`` or :meth:`with_obstacles`).
+    ``reference_log``); ``mission`` and ``params`` hold their loaded contents. ``assertion_log`` is the real flight
+    the YAML's assertion names, as written, even where the file is not at hand (``reference_log`` is then None).
+    A mutation makes a new value (``dataclasses.replace`` or :meth:`with_obstacles`).
     """
 
     __test__ = False  # not a pytest class
@@ -184,6 +185,7 @@ class TestCase:
     commands_file: str | None = None
     reference_log: str | None = None
     home: tuple[float, float, float] | None = None
+    assertion_log: str | None = None
 
     def __post_init__(self):
         obstacles = tuple(self.obstacles)
@@ -311,7 +313,8 @@ def load_test(path) -> TestCase:
     try:
         return TestCase(mission=mission, obstacles=obstacles, params=params, wind=wind, commands=commands,
                         mission_file=mission_file, params_file=params_file, commands_file=commands_file,
-                        reference_log=reference_log, home=home)
+                        reference_log=reference_log, home=home,
+                        assertion_log=log if isinstance(log, str) and log else None)
     except InvalidTestCase as err:
         raise InvalidTestCase(f"{name}: {err}") from err
 
@@ -348,6 +351,8 @@ def save_test(test: TestCase, path, legacy: bool = False) -> None:
     doc = {"drone" if legacy else "robot": robot, "simulation": sim, "test" if legacy else "mission": mission}
     if test.reference_log:
         doc["assertion"] = {"log_file": _relative(test.reference_log, base), "variable": "trajectory"}
+    elif test.assertion_log:
+        doc["assertion"] = {"log_file": test.assertion_log, "variable": "trajectory"}
     with open(path, "w", encoding="utf-8") as f:
         yaml.safe_dump(doc, f, sort_keys=False)
 

@@ -30,7 +30,8 @@ def add_search_arguments(parser, budget: int, runs: int) -> None:
     parser.add_argument("--random-seed", type=int, default=0, help="base seed of the simulation noise")
     parser.add_argument("--uav", default=None, metavar="NAME_OR_YAML",
                         help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
-                             "px4-vision-case0, or a profile YAML (default: the simulator's defaults, the case0 UAV)")
+                             "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a seed test with a "
+                             "reference log, as the paper's, else px4-v1.12-sitl-iris)")
     parser.add_argument("--common-noise", action="store_true",
                         help="common random numbers: run i of every test flies with the same noise, so tests "
                              "differ only by what they change (default: each test draws its own)")

@@ -23,6 +23,10 @@ def run(args) -> int:
     from ..mutators import AUTHORS_ORDER, default_mutators
     from ..testcase import load_test
 
+    if args.uav is None and not getattr(args, "resume", None):  # the seed test's default UAV, recorded in run.json
+        from .. import data_path
+        from ..sim.profiles import default_profile
+        args.uav = default_profile(load_test(args.test or data_path("rq2-seed.yaml"))).name
     with new_search_folder(args, "generate", KEYS) as (out, options):
         mutators = None
         if options["all_mutators"]:

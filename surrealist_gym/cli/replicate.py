@@ -21,6 +21,9 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..envs.replicate import ReplicateEnv
 
+    if args.uav is None and not getattr(args, "resume", None):  # a real flight: the real PX4 Vision (run.json)
+        from ..sim.profiles import VISION_CASE0
+        args.uav = VISION_CASE0.name
     with new_search_folder(args, "replicate", KEYS) as (out, options):
         env = ReplicateEnv(reference_log=options["log"], seed_test=options["seed"], runs=options["runs"],
                            budget=options["budget"], averaging=options["averaging"], executor=executor_of(options),

@@ -28,10 +28,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-reference", action="store_true", help="do not compare with the test's assertion log")
     parser.add_argument("--out", metavar="DIR", default="sim_out", help="output folder (default ./sim_out)")
     parser.add_argument("--vehicle", choices=["px4_vision", "iris"], default=None,
-                        help="vehicle preset (default px4_vision; a --uav profile sets its own)")
+                        help="fly this vehicle preset with the simulator's default planner instead of a UAV profile")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
                         help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
-                             "px4-vision-case0, or a profile YAML (default: the simulator's defaults)")
+                             "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a test with a reference "
+                             "log, else px4-v1.12-sitl-iris)")
     avoid = parser.add_mutually_exclusive_group()
     avoid.add_argument("--avoidance", dest="avoidance", action="store_true", default=None,
                        help="fly with the avoidance planner (default: the parameter COM_OBS_AVOID)")
@@ -76,14 +77,14 @@ def run(args: argparse.Namespace) -> int:
         if args.reference:
             test = replace(test, reference_log=str(Path(args.reference).resolve()))
     config = SimConfig(avoidance=args.avoidance, params=_params(args.param))
-    if args.uav is not None:
-        from ..sim.profiles import load_profile
-        if args.vehicle is not None:
-            from ..errors import SimulationError
-            raise SimulationError("--vehicle: give either --vehicle or --uav (the profile names its vehicle)")
-        config = load_profile(args.uav).sim_config(config)
-    elif args.vehicle is not None:
+    if args.uav is not None and args.vehicle is not None:
+        from ..errors import SimulationError
+        raise SimulationError("--vehicle: give either --vehicle or --uav (the profile names its vehicle)")
+    if args.vehicle is not None:
         config = replace(config, vehicle=args.vehicle)
+    else:
+        from ..sim.profiles import default_profile, load_profile
+        config = (load_profile(args.uav) if args.uav is not None else default_profile(test)).sim_config(config)
     start = time.perf_counter()
     results = simulate(test, runs=args.runs, seed=args.seed, config=config)
     wall = time.perf_counter() - start

@@ -56,6 +56,9 @@ class SurrealistEnv(gym.Env):
             from ..sim.config import SimConfig
             from ..sim.profiles import load_profile
             sim_config = load_profile(uav).sim_config(SimConfig.coerce(sim_config))
+        elif sim_config is None:  # neither: the seed test's default UAV
+            from ..sim.profiles import default_profile
+            sim_config = default_profile(seed_test).sim_config()
         self.evaluator = Evaluator(self._objective(), runs=runs, seed=random_seed, sim_config=sim_config,
                                    executor=executor, store=store)
         n = len(self._mutators)

@@ -8,6 +8,7 @@ from gymnasium.utils.env_checker import check_env
 
 import surrealist_gym as sg
 from surrealist_gym.store import EvaluationStore
+from tests.conftest import SHARED_DATA
 
 ENV_IDS = ["Surrealist-Replicate-v0", "Surrealist-Generate-v0"]
 
@@ -153,4 +154,15 @@ def test_envs_take_a_uav_profile():
     env = GenerateEnv(runs=1, budget=2, uav="px4-v1.12-sitl-iris", sim_config={"common_noise": True})
     cfg = env.evaluator.sim_config
     assert cfg.profile == "px4-v1.12-sitl-iris" and cfg.avoidance_model == AvoidanceModel.PX4 and cfg.common_noise
-    assert GenerateEnv(runs=1, budget=2).evaluator.sim_config.profile is None
+    # without one: the paper's seed names a real flight (the PX4 Vision), a competition test flies the SITL Iris
+    assert GenerateEnv(runs=1, budget=2).evaluator.sim_config.profile == "px4-vision-case0"
+    assert GenerateEnv(runs=1, budget=2, sim_config={}).evaluator.sim_config.profile is None
+
+
+def test_a_competition_seed_flies_the_sitl_iris_by_default(shared_data):
+    from surrealist_gym.envs.generate import GenerateEnv
+    from surrealist_gym.sim.config import AvoidanceModel
+
+    mission1 = SHARED_DATA / "competition" / "case_studies" / "mission1.yaml"
+    cfg = GenerateEnv(seed_test=str(mission1), runs=1, budget=2).evaluator.sim_config
+    assert cfg.profile == "px4-v1.12-sitl-iris" and cfg.avoidance_model == AvoidanceModel.PX4

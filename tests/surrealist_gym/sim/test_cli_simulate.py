@@ -25,3 +25,18 @@ def test_simulate_bad_param_is_a_clean_error(tmp_path, capsys):
     code = main(["simulate", str(EXPERIMENTS / "rq1-seed2.yaml"), "--param", "MPC_XY_P", "--out", str(tmp_path)])
     assert code == 2
     assert "NAME=number" in capsys.readouterr().err
+
+
+def test_simulate_picks_the_uav_from_the_test(tmp_path, capsys, shared_data):
+    """A test naming a real flight flies the PX4 Vision of case0; a competition test the PX4 SITL Iris."""
+    assert main(["simulate", str(EXPERIMENTS / "rq1-seed2.yaml"), "--runs", "1", "--out", str(tmp_path),
+                 "--no-ulog", "--no-plot", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["uav"] == "px4-vision-case0"
+    mission1 = EXPERIMENTS.parent.parent / "competition" / "case_studies" / "mission1.yaml"
+    assert main(["simulate", str(mission1), "--runs", "1", "--out", str(tmp_path), "--no-ulog", "--no-plot",
+                 "--json"]) == 0
+    run = json.loads(capsys.readouterr().out)
+    assert run["uav"] == "px4-v1.12-sitl-iris" and run["runs"][0]["status"] == "success"
+    assert main(["simulate", str(mission1), "--vehicle", "iris", "--runs", "1", "--out", str(tmp_path),
+                 "--no-ulog", "--no-plot", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["uav"] is None

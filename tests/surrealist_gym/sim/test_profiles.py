@@ -14,7 +14,7 @@ from surrealist_gym.errors import InvalidProfile
 from surrealist_gym.geometry import competition_distance
 from surrealist_gym.sim import RunStatus, simulate
 from surrealist_gym.sim.config import AvoidanceModel, VehicleModel, resolve_params
-from surrealist_gym.sim.profiles import PRESETS, default_profile_name, load_profile, save_profile
+from surrealist_gym.sim.profiles import PRESETS, default_profile, load_profile, save_profile
 from surrealist_gym.testcase import Obstacle
 from tests.conftest import SHARED_DATA
 
@@ -39,8 +39,8 @@ def test_airframe_params_sit_between_the_defaults_and_the_test(shared_data):
 
 
 def test_default_profile_follows_the_test(shared_data):
-    assert default_profile_name(load_test(MISSION1)) == "px4-v1.12-sitl-iris"
-    assert default_profile_name(load_test(SHARED_DATA / "surrealist" / "experiments" / "rq1-seed1.yaml")) == \
+    assert default_profile(load_test(MISSION1)).name == "px4-v1.12-sitl-iris"
+    assert default_profile(load_test(SHARED_DATA / "surrealist" / "experiments" / "rq1-seed1.yaml")).name == \
         "px4-vision-case0"
 
 
