@@ -12,6 +12,7 @@ the same as in one go.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Protocol, Sequence
@@ -19,7 +20,7 @@ from typing import Protocol, Sequence
 import numpy as np
 
 from .errors import SurrealistError
-from .fitness import MIN_DIST_WEIGHT, Aggregate, average_runs, generation_fitness, is_unsafe
+from .fitness import MIN_DIST_WEIGHT, Aggregate, average_runs, generation_fitness, is_unsafe, judged_distance
 from .metrics import dtw, frechet
 from .store import EvaluationStore, StoredEvaluation
 from .testcase import TestCase
@@ -36,16 +37,19 @@ class RunSummary:
     min_distance: float      # 3-D, over all obstacles [m]
     min_distance_2d: float   # footprint distance, as the paper [m]
     duration: float          # simulated seconds
+    competition_distance: float = math.nan  # footprint to the trajectory's polyline, as Aerialist [m] (nan: not kept)
 
     @classmethod
     def of(cls, run) -> "RunSummary":
         status = getattr(run.status, "value", run.status)
         return cls(int(run.seed), int(run.index), str(status), float(run.min_distance),
-                   float(run.min_distance_2d), float(run.duration))
+                   float(run.min_distance_2d), float(run.duration),
+                   float(getattr(run, "competition_distance", math.nan)))
 
     def to_dict(self) -> dict:
         return {"seed": self.seed, "index": self.index, "status": self.status, "min_distance": self.min_distance,
-                "min_distance_2d": self.min_distance_2d, "duration": self.duration}
+                "min_distance_2d": self.min_distance_2d, "duration": self.duration,
+                "competition_distance": self.competition_distance}
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,17 +109,20 @@ class ReplicationObjective:
 
 @dataclass(frozen=True)
 class GenerationObjective:
-    """Paper RQ2, eq. 2: ``-(sum_dist + 2 min_dist)`` of the riskiest run (or the mean over runs)."""
+    """Paper RQ2, eq. 2: ``-(sum_dist + 2 min_dist)`` of the riskiest run (or the mean over runs); ``measure``
+    chooses the distance of ``min_dist`` and of the unsafe count (:class:`~surrealist_gym.fitness.Measure`)."""
 
     aggregate: str = "riskiest"
+    measure: str = "paper"
 
     def __call__(self, test, runs):
         flown = [r for r in runs if len(r.trajectory) > 0]
         if not flown or not test.obstacles:
             return -np.inf, {}, None, ()
-        result = generation_fitness([r.trajectory for r in flown], test.obstacles, self.aggregate)
+        result = generation_fitness([r.trajectory for r in flown], test.obstacles, self.aggregate,
+                                    measure=self.measure)
         terms = {"sum_dist": list(result.sum_dist), "min_dist": list(result.min_dist), "riskiest": result.riskiest,
-                 "unsafe": sum(is_unsafe(r.min_distance_2d) for r in flown),
+                 "unsafe": sum(is_unsafe(judged_distance(r, self.measure)) for r in flown),
                  "crash": sum(str(getattr(r.status, "value", r.status)) == "collision" for r in flown),
                  "first_runs_fitness": _first_runs_fitness(result)}
         return result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz), ()

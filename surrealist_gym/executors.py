@@ -36,6 +36,7 @@ class FailedRun:
     status: str = "error"
     min_distance: float = float("inf")
     min_distance_2d: float = float("inf")
+    competition_distance: float = float("inf")
     duration: float = 0.0
     trajectory: Trajectory = field(default_factory=lambda: Trajectory(np.zeros(0), np.zeros((0, 3))))
 

@@ -5,7 +5,9 @@
   trajectory points of the summed distances to all obstacles and ``min_dist`` the minimum over points and
   obstacles; a test scores as its riskiest run (smallest score), or, as an option, the mean; fitness = -score.
 
-Distances to obstacles are the paper's 2-D footprint distances by default (``dims=3`` accounts for height).
+Distances to obstacles are the paper's 2-D footprint distances by default (``dims=3`` accounts for height). With
+``measure="competition"`` a run's ``min_dist`` is the UAV Testing Competition's (Aerialist's) distance instead: box
+footprint to the polyline of the trajectory (:func:`~surrealist_gym.geometry.competition_distance`).
 
 Example:
     >>> import numpy as np
@@ -23,7 +25,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .geometry import obstacle_distances
+from .geometry import competition_distance, obstacle_distances
 from .metrics import TrajectoryLike, dba, dtw, soft_dtw_barycenter
 from .testcase import Obstacle
 from .trajectory import as_points
@@ -37,6 +39,27 @@ class Averaging(str, Enum):
 
     DBA = "dba"  #: DTW Barycenter Averaging, as the paper states
     SOFT_DTW = "soft_dtw"  #: soft-DTW barycenter (gamma 20), as the paper's code did
+
+
+class Measure(str, Enum):
+    """Which distance judges a run against the 1.5 m safety distance."""
+
+    PAPER = "paper"  #: the vehicle's 2-D clearance to the box footprints (the paper's min_dist)
+    COMPETITION = "competition"  #: footprint to the 0.5 s trajectory's polyline (Aerialist, the UAV Testing
+    #: Competition)
+
+
+def measure_for(test) -> "Measure":
+    """The paper's measure for a test around a real flight (its assertion names a log), the competition's for any
+    other Aerialist test."""
+    return Measure.PAPER if getattr(test, "replicates_flight", False) else Measure.COMPETITION
+
+
+def judged_distance(run, measure: "Measure | str") -> float:
+    """The distance a run (a RunResult, a RunSummary or a stored run's dict) is judged by [m]."""
+    key = "competition_distance" if Measure(measure) is Measure.COMPETITION else "min_distance_2d"
+    value = run[key] if isinstance(run, dict) else getattr(run, key)
+    return float(value) if value is not None else float("nan")
 
 
 class Aggregate(str, Enum):
@@ -126,7 +149,8 @@ def run_distances(run: TrajectoryLike, obstacles: Sequence[Obstacle], dims: int 
 
 
 def generation_fitness(runs: Sequence[TrajectoryLike], obstacles: Sequence[Obstacle],
-                       aggregate: Aggregate | str = Aggregate.RISKIEST, dims: int = 2) -> GenerationFitness:
+                       aggregate: Aggregate | str = Aggregate.RISKIEST, dims: int = 2,
+                       measure: Measure | str = Measure.PAPER) -> GenerationFitness:
     """Fitness of a generation test (paper eq. 2): ``-(sum_dist + 2 * min_dist)`` of its riskiest run.
 
     Args:
@@ -134,6 +158,8 @@ def generation_fitness(runs: Sequence[TrajectoryLike], obstacles: Sequence[Obsta
         obstacles: all obstacles of the test, including the generated one.
         aggregate: ``"riskiest"`` (default: the run with the smallest score, as the paper) or ``"mean"``.
         dims: 2 for the paper's footprint distance, 3 to account for obstacle base and top.
+        measure: ``"paper"`` (default) or ``"competition"``: the run's ``min_dist`` is then the competition's
+            distance (footprint to the trajectory's polyline).
 
     Returns:
         A :class:`GenerationFitness`.
@@ -144,7 +170,10 @@ def generation_fitness(runs: Sequence[TrajectoryLike], obstacles: Sequence[Obsta
         raise ValueError("runs: expected at least one run, got none")
     per_run = [run_distances(r, obstacles, dims) for r in runs]
     sums = tuple(s for s, _ in per_run)
-    mins = tuple(m for _, m in per_run)
+    if Measure(measure) is Measure.COMPETITION:
+        mins = tuple(competition_distance(r, obstacles) for r in runs)
+    else:
+        mins = tuple(m for _, m in per_run)
     scores = np.array(sums) + MIN_DIST_WEIGHT * np.array(mins)
     riskiest = int(np.argmin(scores))
     score = float(scores[riskiest]) if how is Aggregate.RISKIEST else float(scores.mean())
@@ -156,5 +185,6 @@ def is_unsafe(min_dist: float, threshold: float = UNSAFE_DISTANCE_M) -> bool:
     return bool(min_dist < threshold)
 
 
-__all__ = ["Aggregate", "Averaging", "GenerationFitness", "MIN_DIST_WEIGHT", "UNSAFE_DISTANCE_M", "average_runs",
-           "generation_fitness", "is_unsafe", "replication_fitness", "run_distances"]
+__all__ = ["Aggregate", "Averaging", "GenerationFitness", "MIN_DIST_WEIGHT", "Measure", "UNSAFE_DISTANCE_M",
+           "average_runs", "generation_fitness", "is_unsafe", "judged_distance", "measure_for", "replication_fitness",
+           "run_distances"]

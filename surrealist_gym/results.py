@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .fitness import UNSAFE_DISTANCE_M
+from .fitness import UNSAFE_DISTANCE_M, Measure, judged_distance
 from .mission import write_plan
 from .store import EvaluationStore
 from .testcase import save_test
@@ -28,10 +28,12 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         write_plan(best_test.mission, out / "best-mission.plan")
         best_test = replace(best_test, mission_file=str((out / "best-mission.plan").resolve()), params_file=None)
     save_test(best_test, out / "best.yaml")
-    rows = write_evaluations_csv(env.evaluator.store, out / "evaluations.csv")
+    measure = Measure(getattr(env, "distance_measure", Measure.PAPER))
+    rows = write_evaluations_csv(env.evaluator.store, out / "evaluations.csv", measure)
     summary = {
         "problem": problem,
         "uav": env.evaluator.sim_config.profile,
+        "distance": measure.value,
         "seed_fitness": seed_eval.fitness, "best_fitness": best_eval.fitness,
         "seed_terms": seed_eval.terms, "best_terms": best_eval.terms,
         "evaluations": result.evaluations, "evaluations_to_best": result.evaluations_to_best,
@@ -44,13 +46,13 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         "best_obstacles": [o.to_dict() for o in best_eval.test.obstacles],
         "best_mutation": {m.name: float(v) for m, v in zip(env.mutators, env.values_for(result.best_action))},
         "seed_runs": [r.to_dict() for r in seed_eval.runs], "best_runs": [r.to_dict() for r in best_eval.runs],
-        "best_unsafe_rate": _rate(best_eval, lambda r: r.min_distance_2d < UNSAFE_DISTANCE_M),
+        "best_unsafe_rate": _rate(best_eval, lambda r: judged_distance(r, measure) < UNSAFE_DISTANCE_M),
         "best_crash_rate": _rate(best_eval, lambda r: r.status == "collision"),
         "best_stuck_rate": _rate(best_eval, lambda r: r.status in ("stuck", "timeout")),
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
     reference = getattr(env, "reference", None)
-    plot_search(out, seed_eval, best_eval, result.history, reference)
+    plot_search(out, seed_eval, best_eval, result.history, reference, measure)
     return summary
 
 
@@ -66,8 +68,9 @@ def _jsonable(value):
     return str(value)
 
 
-def write_evaluations_csv(store: EvaluationStore | None, path: Path) -> int:
-    """One row per stored evaluation, in order; returns the number of rows."""
+def write_evaluations_csv(store: EvaluationStore | None, path: Path, measure: Measure | str = Measure.PAPER) -> int:
+    """One row per stored evaluation, in order; ``unsafe`` and ``min_distance`` by ``measure``; returns the number
+    of rows."""
     rows = list(store) if store is not None else []
     n_obstacles = max((len(r.test.get("obstacles", [])) for r in rows), default=0)
     header = ["evaluation", "fitness", "runs", "collisions", "unsafe", "min_distance", "sim_seconds"]
@@ -77,7 +80,7 @@ def write_evaluations_csv(store: EvaluationStore | None, path: Path) -> int:
         writer = csv.writer(f)
         writer.writerow(header)
         for n, row in enumerate(rows, start=1):
-            dists = [r["min_distance_2d"] for r in row.runs]
+            dists = [judged_distance(r, measure) for r in row.runs]
             line = [n, row.fitness, len(row.runs), sum(r["status"] == "collision" for r in row.runs),
                     sum(d < UNSAFE_DISTANCE_M for d in dists), min(dists, default=""), round(row.sim_seconds, 4)]
             for o in row.test.get("obstacles", []):
@@ -87,7 +90,8 @@ def write_evaluations_csv(store: EvaluationStore | None, path: Path) -> int:
     return len(rows)
 
 
-def plot_search(out: Path, seed_eval, best_eval, history, reference=None) -> None:
+def plot_search(out: Path, seed_eval, best_eval, history, reference=None,
+                measure: Measure | str = Measure.PAPER) -> None:
     """figure1.png (trajectories and obstacles), fitness.png and min_distances.png."""
     import matplotlib
     matplotlib.use("Agg")
@@ -135,13 +139,14 @@ def plot_search(out: Path, seed_eval, best_eval, history, reference=None) -> Non
     plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(5, 4))
-    data = [[r.min_distance_2d for r in seed_eval.runs], [r.min_distance_2d for r in best_eval.runs]]
+    data = [[judged_distance(r, measure) for r in e.runs] for e in (seed_eval, best_eval)]
     ax.boxplot(data)
     ax.set_xticks([1, 2], ["seed", "best"])
     for i, d in enumerate(data, start=1):
         ax.plot(np.full(len(d), i), d, "o", alpha=0.6)
     ax.axhline(UNSAFE_DISTANCE_M, color="tab:red", ls="--", label="unsafe (1.5 m)")
-    ax.set_ylabel("minimum distance to obstacles per run [m]")
+    ax.set_ylabel("competition distance per run [m]" if Measure(measure) is Measure.COMPETITION
+                  else "minimum 2-D distance to obstacles per run [m]")
     ax.legend()
     fig.tight_layout()
     fig.savefig(out / "min_distances.png", dpi=110)

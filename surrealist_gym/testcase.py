@@ -214,6 +214,11 @@ class TestCase:
         """A new test case with other obstacles (checked for validity)."""
         return replace(self, obstacles=tuple(obstacles))
 
+    @property
+    def replicates_flight(self) -> bool:
+        """Whether the test stands for a real flight (its assertion names a log, as the paper's seeds do)."""
+        return bool(self.reference_log or self.assertion_log)
+
     def key(self) -> str:
         """A canonical JSON string of what the simulation depends on (memo and store key)."""
         return json.dumps({

@@ -126,6 +126,7 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
 
     from search import AdaptiveGreedy
 
+    from ..fitness import judged_distance
     from ..results import write_results
 
     name = options.get("agent") or "greedy"
@@ -184,9 +185,11 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     for label in ("seed", "best"):
         runs = summary[f"{label}_runs"]
         statuses = Counter(r["status"] for r in runs)
-        closest = min((r["min_distance_2d"] for r in runs), default=float("nan"))
+        measure = summary.get("distance", "paper")
+        closest = min((judged_distance(r, measure) for r in runs), default=float("nan"))
         print(f"  {label} runs: " + ", ".join(f"{n} {s}" for s, n in statuses.most_common())
-              + f"; closest approach {closest:.2f} m")
+              + f"; closest approach {closest:.2f} m ("
+              + ("competition distance" if measure == "competition" else "2-D clearance") + ")")
     print(f"results in {out}/: best.yaml, evaluations.csv, summary.json, figure1.png, fitness.png, "
           f"min_distances.png")
     return 0

@@ -218,7 +218,8 @@ class SurrealistEnv(gym.Env):
         info.update(fitness=evaluation.fitness, memo=memo,
                     test=evaluation.test, statuses=evaluation.statuses,
                     min_distances=tuple(r.min_distance for r in runs),
-                    min_distances_2d=tuple(r.min_distance_2d for r in runs), terms=copy.deepcopy(evaluation.terms),
+                    min_distances_2d=tuple(r.min_distance_2d for r in runs),
+                    competition_distances=tuple(r.competition_distance for r in runs), terms=copy.deepcopy(evaluation.terms),
                     trajectory=None if evaluation.trajectory is None else evaluation.trajectory.copy())
         if evaluation.first_runs_trajectories:
             info["first_runs_trajectories"] = evaluation.first_runs_trajectories  # read-only arrays, not copied

@@ -1,12 +1,15 @@
 """Surrealist-Generate-v0: find nearby test cases that make the UAV unsafe or crash (paper RQ2).
 
-Reward: paper eq. 2, ``-(sum_dist + 2 min_dist)`` of the riskiest of the n runs (or their mean). Defaults are the
-paper's RQ2: the ``auto1.plan`` mission with the ``rq2-seed.yaml`` obstacles, 10 runs, budget 50, move mutators
-on the first obstacle only.
+Reward: paper eq. 2, ``-(sum_dist + 2 min_dist)`` of the riskiest of the n runs (or their mean). ``min_dist`` and
+"unsafe" follow the paper for a seed around a real flight, the UAV Testing Competition's distance for any other
+Aerialist test (``distance=`` chooses; :class:`~surrealist_gym.fitness.Measure`). Defaults are the paper's RQ2: the
+``auto1.plan`` mission with the ``rq2-seed.yaml`` obstacles, 10 runs, budget 50, move mutators on the first
+obstacle only.
 """
 from __future__ import annotations
 
 from ..evaluation import GenerationObjective
+from ..fitness import Measure, measure_for
 from ..mutators import MOVE_KINDS, default_mutators
 from ..testcase import TestCase, load_test
 from .base import SurrealistEnv
@@ -17,7 +20,7 @@ class GenerateEnv(SurrealistEnv):
 
     def __init__(self, seed_test=None, runs: int = 10, budget: int = 50, mutators=None,
                  aggregate: str = "riskiest", executor=None, store=None, random_seed: int = 0, sim_config=None,
-                 workers: int | None = None, uav=None):
+                 workers: int | None = None, uav=None, distance: str | None = None):
         from .. import data_path
 
         if seed_test is None:
@@ -25,8 +28,9 @@ class GenerateEnv(SurrealistEnv):
         if not isinstance(seed_test, TestCase):
             seed_test = load_test(seed_test)
         self.aggregate = aggregate
+        self.distance_measure = Measure(distance) if distance is not None else measure_for(seed_test)
         mutators = mutators or default_mutators(seed_test, MOVE_KINDS, obstacles=[0])
         super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers, uav)
 
     def _objective(self):
-        return GenerationObjective(self.aggregate)
+        return GenerationObjective(self.aggregate, self.distance_measure.value)

@@ -18,7 +18,7 @@ import numpy as np
 from .pybullet_quiet import pb
 
 from ..errors import SimulationError
-from ..geometry import obstacle_distances
+from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
 from ..trajectory import Trajectory
 from .config import SimConfig, auto_timeout, resolve_params
@@ -79,6 +79,8 @@ class RunResult:
         status: how the run ended. message: a one-line description of the end.
         min_distance / min_distance_2d: smallest 3-D / 2-D distance from the vehicle's centre to any obstacle
             [m] (inf without obstacles), from ``true_xyz`` with :func:`~surrealist_gym.geometry.obstacle_distances`.
+        competition_distance: the competition's (Aerialist's) distance of ``trajectory`` [m]
+            (:func:`~surrealist_gym.geometry.competition_distance`; inf without obstacles).
         clearances: per-obstacle closest approach.
         duration: simulated time from arming to the end of the run [s].
         seed, index: base seed and run index (the run's seed derives from them and the test's key).
@@ -91,6 +93,7 @@ class RunResult:
     status: RunStatus
     min_distance: float
     min_distance_2d: float
+    competition_distance: float
     clearances: tuple[Clearance, ...]
     duration: float
     seed: int
@@ -381,7 +384,8 @@ def _result(r: _Run, test, cfg: SimConfig, params, seed: int) -> RunResult:
     true_t.setflags(write=False)
     true_xyz = np.ascontiguousarray(true_xyz)
     true_xyz.setflags(write=False)
+    compet = competition_distance(traj, test.obstacles) if test.obstacles and len(traj) else math.inf
     return RunResult(trajectory=traj, status=r.status, min_distance=min3, min_distance_2d=min2,
-                     clearances=tuple(clearances), duration=float(r.end_t), seed=int(seed), index=r.index,
+                     competition_distance=compet, clearances=tuple(clearances), duration=float(r.end_t), seed=int(seed), index=r.index,
                      local_position=lp, true_t=true_t, true_xyz=true_xyz, message=r.message,
                      params=FrozenDict(dict(params)))

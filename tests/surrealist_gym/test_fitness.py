@@ -96,6 +96,29 @@ def test_generation_fitness_bad_input():
         generation_fitness([RUN_CLOSE], [])
 
 
+def test_competition_measure_uses_the_polyline_between_points():
+    """Two samples either side of a box: the paper's point distance sees 3 m, the competition's polyline crosses
+    the footprint (0 m); sum_dist stays the paper's."""
+    box = Obstacle(l=2, w=2, h=20, x=0, y=5)
+    run = np.array([[-4.0, 5.0, 10.0], [4.0, 5.0, 10.0]])
+    paper = generation_fitness([run], [box])
+    competition = generation_fitness([run], [box], measure="competition")
+    assert paper.min_dist == (3.0,) and competition.min_dist == (0.0,)
+    assert competition.sum_dist == paper.sum_dist
+    assert competition.fitness == pytest.approx(-3.0)
+
+
+def test_measure_follows_the_test(shared_data):
+    from surrealist_gym import load_test
+    from surrealist_gym.fitness import Measure, judged_distance, measure_for
+    from tests.conftest import EXPERIMENTS, SHARED_DATA
+
+    assert measure_for(load_test(EXPERIMENTS / "rq2-seed.yaml")) is Measure.PAPER
+    assert measure_for(load_test(SHARED_DATA / "competition" / "case_studies" / "mission1.yaml")) is Measure.COMPETITION
+    run = {"min_distance_2d": 2.0, "competition_distance": 1.2}
+    assert judged_distance(run, "paper") == 2.0 and judged_distance(run, Measure.COMPETITION) == 1.2
+
+
 def test_is_unsafe_threshold():
     assert is_unsafe(0.0) and is_unsafe(1.49)
     assert not is_unsafe(1.5) and not is_unsafe(3.36)

@@ -34,6 +34,23 @@ def test_generate_writes_the_results_folder(tmp_path, capsys):
     assert main(["simulate", str(out / "best.yaml"), "--runs", "1", "--out", str(tmp_path / "sim")]) == 0
 
 
+def test_generate_on_a_competition_test_flies_the_sitl_iris_and_judges_by_the_competition_distance(
+        tmp_path, capsys, shared_data):
+    from tests.conftest import SHARED_DATA
+
+    seed = sorted((SHARED_DATA / "competition" / "camba-collection").glob("*.yaml"))[0]
+    out = tmp_path / "gen"
+    assert main(["generate", str(seed), "--budget", "2", "--runs", "1", "--workers", "1", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["uav"] == "px4-v1.12-sitl-iris" and summary["distance"] == "competition"
+    assert json.loads((out / "run.json").read_text())["uav"] == "px4-v1.12-sitl-iris"
+    best = summary["best_runs"][0]
+    assert summary["best_terms"]["min_dist"] == [pytest.approx(best["competition_distance"])]
+    rows = _rows(out / "evaluations.csv")
+    assert float(rows[0]["min_distance"]) == pytest.approx(summary["seed_runs"][0]["competition_distance"])
+    assert "(competition distance)" in capsys.readouterr().out
+
+
 def test_generate_flies_and_records_a_uav_profile(tmp_path, capsys):
     out = tmp_path / "gen-sitl"
     assert main(["generate", "--uav", "px4-v1.12-sitl-iris", "--budget", "2", "--runs", "1", "--workers", "1",
