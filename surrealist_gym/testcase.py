@@ -169,7 +169,7 @@ class TestCase:
 
     File references are kept as absolute paths (``mission_file``, ``params_file``, ``commands_file``,
     ``reference_log``); ``mission`` and ``params`` hold their loaded contents. ``assertion_log`` is the real flight
-    the YAML's assertion names, as written, even where the file is not at hand (``reference_log`` is then None).
+    the YAML's assertion names, as written, when the file is not at hand (else ``reference_log`` holds it).
     A mutation makes a new value (``dataclasses.replace`` or :meth:`with_obstacles`).
     """
 
@@ -319,7 +319,7 @@ def load_test(path) -> TestCase:
         return TestCase(mission=mission, obstacles=obstacles, params=params, wind=wind, commands=commands,
                         mission_file=mission_file, params_file=params_file, commands_file=commands_file,
                         reference_log=reference_log, home=home,
-                        assertion_log=log if isinstance(log, str) and log else None)
+                        assertion_log=log if isinstance(log, str) and log and reference_log is None else None)
     except InvalidTestCase as err:
         raise InvalidTestCase(f"{name}: {err}") from err
 

@@ -35,6 +35,13 @@ def run(args) -> int:
 
     from search.compare import compare
 
+    from gymnasium.envs.registration import registry
+
+    from ..errors import SurrealistError
+
+    surrealist_envs = sorted(k for k in registry if k.startswith("Surrealist-"))
+    if args.env not in surrealist_envs:  # checked before any folder or worker exists
+        raise SurrealistError(f"--env {args.env!r}: not a Surrealist env (one of {', '.join(surrealist_envs)})")
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     out = Path(args.out or f"results/compare-{datetime.now():%Y%m%d-%H%M%S}")
     env_kwargs = {}

@@ -184,3 +184,9 @@ def test_a_results_folder_keeps_its_noise_mode(tmp_path, capsys):
     assert main(["generate", "--budget", "1", "--runs", "1", "--workers", "1", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "evaluations.sqlite" in err[0] and "common noise" in err[0]
+
+
+def test_compare_refuses_an_unknown_env_before_writing(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", "--env", "Typo", "--agents", "greedy", "--out", str(out)]) == 2
+    assert "--env 'Typo'" in capsys.readouterr().err and not out.exists()

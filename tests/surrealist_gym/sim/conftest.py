@@ -13,7 +13,7 @@ LAND_XY = (-16.645876487856597, 6.859186808331832)
 
 
 @pytest.fixture(scope="session")
-def seed1():
+def seed1(shared_data):
     return load_test(EXPERIMENTS / "rq1-seed1.yaml")
 
 
