@@ -22,6 +22,7 @@ import surrealist_gym as sg
 from search import AdaptiveGreedy
 from surrealist_gym.envs.generate import GenerateEnv
 from surrealist_gym.envs.replicate import ReplicateEnv
+from surrealist_gym.outcomes import UNSAFE_DISTANCE_M, outcomes
 from surrealist_gym.sim import SimConfig
 from surrealist_gym.statistics import cohens_d, compare, reduction, vargha_delaney_a12
 
@@ -53,11 +54,10 @@ def run_one(problem: str, rep: int, out: Path, workers: int, common_noise: bool 
         env = GenerateEnv(budget=50, runs=10, store=store, random_seed=rep, workers=workers, sim_config=sim_config)
         result = AdaptiveGreedy("paper").run(env, seed=rep)
         seed, best = env.seed_evaluation, env.best
-        row = {"seed_min": min(r.min_distance_2d for r in seed.runs),
-               "best_min": min(r.min_distance_2d for r in best.runs),
+        best_o = outcomes(best.runs)
+        row = {"seed_min": outcomes(seed.runs).closest, "best_min": best_o.closest,
                "seed_fitness": seed.fitness, "best_fitness": best.fitness,
-               "crash": sum(r.status == "collision" for r in best.runs) / len(best.runs),
-               "unsafe": sum(r.min_distance_2d < 1.5 for r in best.runs) / len(best.runs)}
+               "crash": best_o.crash_rate, "unsafe": best_o.unsafe_rate}
     wall = time.perf_counter() - start
     row.update(budget=result.evaluations_to_best, evaluations=result.evaluations, wall_s=wall,
                eval_s=wall / max(1, result.evaluations), simulations=env.evaluator.simulations)
@@ -108,7 +108,8 @@ def table_rq2(rows: list[dict]) -> str:
              f"{min(r['best_min'] for r in rows):.2f} - {max(r['best_min'] for r in rows):.2f} |",
              f"| crash rate (runs of the best test) | {paper['crash']:.0%} | {_mean(rows, 'crash'):.0%} | |",
              f"| unsafe rate (< 1.5 m) | {paper['unsafe']:.0%} | {_mean(rows, 'unsafe'):.0%} | |",
-             f"| repetitions with an unsafe run | - | {sum(r['best_min'] < 1.5 for r in rows)} / {len(rows)} | |",
+             f"| repetitions with an unsafe run | - | "
+             f"{sum(r['best_min'] < UNSAFE_DISTANCE_M for r in rows)} / {len(rows)} | |",
              f"| p-value seed vs best fitness ({test}) | - | {p:.2g} | |",
              f"| effect size A12 (best vs seed fitness) | - | {vargha_delaney_a12(best_fit, seed_fit):.2f} | |",
              f"| needed budget | {paper['budget']} | {_mean(rows, 'budget'):.1f} | |",

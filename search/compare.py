@@ -202,7 +202,7 @@ def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, prog
 
 def _metrics(env, result, trace, wall: float) -> dict:
     """Table 2 metrics of one search."""
-    from surrealist_gym.fitness import UNSAFE_DISTANCE_M
+    from surrealist_gym.outcomes import outcomes
 
     seed, best = env.seed_evaluation, env.best
     sims_to_best = next(s for e, s, f in trace if f >= best.fitness)
@@ -214,12 +214,11 @@ def _metrics(env, result, trace, wall: float) -> dict:
             metrics[f"best_{key}"], metrics[f"seed_{key}"] = best.terms[key], seed.terms[key]
             metrics[f"{key}_reduction"] = _reduction(best.terms[key], seed.terms[key])
     if "min_dist" in best.terms or "sum_dist" in best.terms:
-        best_min = min(r.min_distance_2d for r in best.runs)
-        seed_min = min(r.min_distance_2d for r in seed.runs)
-        metrics.update(best_min_distance=best_min, seed_min_distance=seed_min,
-                       min_distance_reduction=_reduction(best_min, seed_min),
-                       crash_rate=sum(r.status == "collision" for r in best.runs) / len(best.runs),
-                       unsafe_rate=sum(r.min_distance_2d < UNSAFE_DISTANCE_M for r in best.runs) / len(best.runs))
+        measure = getattr(env, "distance_measure", "paper")
+        best_o, seed_o = outcomes(best.runs, measure), outcomes(seed.runs, measure)
+        metrics.update(best_min_distance=best_o.closest, seed_min_distance=seed_o.closest,
+                       min_distance_reduction=_reduction(best_o.closest, seed_o.closest),
+                       crash_rate=best_o.crash_rate, unsafe_rate=best_o.unsafe_rate)
     return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in metrics.items()}
 
 

@@ -20,8 +20,9 @@ from typing import Protocol, Sequence
 import numpy as np
 
 from .errors import SurrealistError
-from .fitness import MIN_DIST_WEIGHT, Aggregate, average_runs, generation_fitness, is_unsafe, judged_distance
+from .fitness import MIN_DIST_WEIGHT, Aggregate, average_runs, generation_fitness
 from .metrics import dtw, frechet
+from .outcomes import outcomes
 from .store import EvaluationStore, StoredEvaluation
 from .testcase import TestCase
 from .trajectory import Trajectory
@@ -121,9 +122,9 @@ class GenerationObjective:
             return -np.inf, {}, None, ()
         result = generation_fitness([r.trajectory for r in flown], test.obstacles, self.aggregate,
                                     measure=self.measure)
+        judged = outcomes(flown, self.measure)
         terms = {"sum_dist": list(result.sum_dist), "min_dist": list(result.min_dist), "riskiest": result.riskiest,
-                 "unsafe": sum(is_unsafe(judged_distance(r, self.measure)) for r in flown),
-                 "crash": sum(str(getattr(r.status, "value", r.status)) == "collision" for r in flown),
+                 "unsafe": judged.unsafe, "crash": judged.crashes,
                  "first_runs_fitness": _first_runs_fitness(result)}
         return result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz), ()
 

@@ -30,7 +30,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .errors import SurrealistError
-from .fitness import UNSAFE_DISTANCE_M
+from .outcomes import BLOCKED as _BLOCKED
+from .outcomes import UNSAFE_DISTANCE_M, RunStatus
 from .frozendict import FrozenDict
 from .geometry import competition_distance
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
@@ -46,9 +47,10 @@ AIRBORNE_Z_M = 0.3        # [m] above the ground: airborne
 TARGET_PRECISION = 0.6    # the best recall is sought at this precision or above
 # their (normalised) result -> our status that means the same
 SAME_STATUS = {"flown": "success", "timeout": "timeout", "collision": "collision"}
-BLOCKED = ("timeout", "stuck")
-NO_DISTANCE = ("timeout", "error")
-STATUS_ORDER = ("success", "timeout", "stuck", "collision", "error")
+BLOCKED = tuple(s.value for s in _BLOCKED)
+NO_DISTANCE = (RunStatus.TIMEOUT.value, RunStatus.ERROR.value)
+STATUS_ORDER = tuple(s.value for s in (RunStatus.SUCCESS, RunStatus.TIMEOUT, RunStatus.STUCK, RunStatus.COLLISION,
+                                       RunStatus.ERROR))
 
 
 # --- flying ------------------------------------------------------------------------------------------------------

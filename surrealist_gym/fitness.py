@@ -27,10 +27,10 @@ import numpy as np
 
 from .geometry import competition_distance, obstacle_distances
 from .metrics import TrajectoryLike, dba, dtw, soft_dtw_barycenter
+from .outcomes import UNSAFE_DISTANCE_M, Measure
 from .testcase import Obstacle
 from .trajectory import as_points
 
-UNSAFE_DISTANCE_M = 1.5
 MIN_DIST_WEIGHT = 2.0
 
 
@@ -39,27 +39,6 @@ class Averaging(str, Enum):
 
     DBA = "dba"  #: DTW Barycenter Averaging, as the paper states
     SOFT_DTW = "soft_dtw"  #: soft-DTW barycenter (gamma 20), as the paper's code did
-
-
-class Measure(str, Enum):
-    """Which distance judges a run against the 1.5 m safety distance."""
-
-    PAPER = "paper"  #: the vehicle's 2-D clearance to the box footprints (the paper's min_dist)
-    COMPETITION = "competition"  #: footprint to the 0.5 s trajectory's polyline (Aerialist, the UAV Testing
-    #: Competition)
-
-
-def measure_for(test) -> "Measure":
-    """The paper's measure for a test around a real flight (its assertion names a log), the competition's for any
-    other Aerialist test."""
-    return Measure.PAPER if getattr(test, "replicates_flight", False) else Measure.COMPETITION
-
-
-def judged_distance(run, measure: "Measure | str") -> float:
-    """The distance a run (a RunResult, a RunSummary or a stored run's dict) is judged by [m]."""
-    key = "competition_distance" if Measure(measure) is Measure.COMPETITION else "min_distance_2d"
-    value = run[key] if isinstance(run, dict) else getattr(run, key)
-    return float(value) if value is not None else float("nan")
 
 
 class Aggregate(str, Enum):
@@ -180,11 +159,6 @@ def generation_fitness(runs: Sequence[TrajectoryLike], obstacles: Sequence[Obsta
     return GenerationFitness(-score, sums, mins, riskiest, how)
 
 
-def is_unsafe(min_dist: float, threshold: float = UNSAFE_DISTANCE_M) -> bool:
-    """True when a run came closer than ``threshold`` [m] (default 1.5 m, the paper's safety distance)."""
-    return bool(min_dist < threshold)
 
-
-__all__ = ["Aggregate", "Averaging", "GenerationFitness", "MIN_DIST_WEIGHT", "Measure", "UNSAFE_DISTANCE_M",
-           "average_runs", "generation_fitness", "is_unsafe", "judged_distance", "measure_for", "replication_fitness",
-           "run_distances"]
+__all__ = ["Aggregate", "Averaging", "GenerationFitness", "MIN_DIST_WEIGHT", "average_runs", "generation_fitness",
+           "replication_fitness", "run_distances"]

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .fitness import UNSAFE_DISTANCE_M, Measure, judged_distance
+from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
 from .mission import write_plan
 from .store import EvaluationStore
 from .testcase import save_test
@@ -30,6 +30,7 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
     save_test(best_test, out / "best.yaml")
     measure = Measure(getattr(env, "distance_measure", Measure.PAPER))
     rows = write_evaluations_csv(env.evaluator.store, out / "evaluations.csv", measure)
+    best_outcomes = outcomes(best_eval.runs, measure)
     summary = {
         "problem": problem,
         "uav": env.evaluator.sim_config.profile,
@@ -46,18 +47,13 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         "best_obstacles": [o.to_dict() for o in best_eval.test.obstacles],
         "best_mutation": {m.name: float(v) for m, v in zip(env.mutators, env.values_for(result.best_action))},
         "seed_runs": [r.to_dict() for r in seed_eval.runs], "best_runs": [r.to_dict() for r in best_eval.runs],
-        "best_unsafe_rate": _rate(best_eval, lambda r: judged_distance(r, measure) < UNSAFE_DISTANCE_M),
-        "best_crash_rate": _rate(best_eval, lambda r: r.status == "collision"),
-        "best_stuck_rate": _rate(best_eval, lambda r: r.status in ("stuck", "timeout")),
+        "best_unsafe_rate": best_outcomes.unsafe_rate, "best_crash_rate": best_outcomes.crash_rate,
+        "best_stuck_rate": best_outcomes.blocked_rate,
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
     reference = getattr(env, "reference", None)
     plot_search(out, seed_eval, best_eval, result.history, reference, measure)
     return summary
-
-
-def _rate(evaluation, predicate) -> float:
-    return sum(1 for r in evaluation.runs if predicate(r)) / max(1, len(evaluation.runs))
 
 
 def _jsonable(value):
@@ -80,9 +76,9 @@ def write_evaluations_csv(store: EvaluationStore | None, path: Path, measure: Me
         writer = csv.writer(f)
         writer.writerow(header)
         for n, row in enumerate(rows, start=1):
-            dists = [judged_distance(r, measure) for r in row.runs]
-            line = [n, row.fitness, len(row.runs), sum(r["status"] == "collision" for r in row.runs),
-                    sum(d < UNSAFE_DISTANCE_M for d in dists), min(dists, default=""), round(row.sim_seconds, 4)]
+            judged = outcomes(row.runs, measure)
+            line = [n, row.fitness, len(row.runs), judged.crashes, judged.unsafe,
+                    judged.closest if row.runs else "", round(row.sim_seconds, 4)]
             for o in row.test.get("obstacles", []):
                 line += [o["size"]["l"], o["size"]["w"], o["size"]["h"], o["position"]["x"], o["position"]["y"],
                          o["position"]["z"], o["position"]["r"]]

@@ -34,6 +34,7 @@ import numpy as np
 from surrealist_gym.errors import SurrealistError
 from surrealist_gym.evaluation import flown_with_common_noise
 from surrealist_gym.geometry import obstacle_distances
+from surrealist_gym.outcomes import outcomes
 from surrealist_gym.store import EvaluationStore
 from surrealist_gym.testcase import Obstacle, TestCase, _parse_obstacles
 
@@ -45,7 +46,6 @@ PER_OBSTACLE = ("present", "l", "w", "h", "x", "y", "z", "sin_r", "cos_r", "sin_
                 "along_min", "along_max", "lateral_min", "lateral_max", "ref_lateral")
 POOLED = ("n_obstacles", "min_gap", "min_dist_path", "min_dist_reference", "sum_near_reference")
 TARGETS = ("fitness", "min_distance", "unsafe", "crash")
-UNSAFE_DISTANCE = 1.5  # [m], the paper's threshold
 NEAR = 3.0             # [m], radius of the "reference points near the obstacle" count
 TRAJECTORY_POINTS = 32  # resampled length of the trajectory target
 
@@ -301,10 +301,10 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
                     raise DatasetError(f"{store.path}: evaluation {ev.id}: {err}") from err
                 runs = ev.runs or ()
                 fit.append(np.nan if ev.fitness is None else float(ev.fitness))
-                mind.append(min((float(r["min_distance_2d"]) for r in runs), default=np.nan))
-                n = max(len(runs), 1)
-                unsafe.append(sum(float(r["min_distance_2d"]) < UNSAFE_DISTANCE for r in runs) / n)
-                crash.append(sum(r.get("status") == "collision" for r in runs) / n)
+                judged, n = outcomes(runs), max(len(runs), 1)
+                mind.append(judged.closest if runs else np.nan)
+                unsafe.append(judged.unsafe / n)
+                crash.append(judged.crashes / n)
                 trajs.append(_resample((ev.info or {}).get("trajectory")))
                 first.append(((ev.info or {}).get("terms") or {}).get("first_runs_fitness") or [])
                 groups.append(g)

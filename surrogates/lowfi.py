@@ -26,6 +26,7 @@ import numpy as np
 
 from surrealist_gym.fitness import generation_fitness
 from surrealist_gym.metrics import dtw, frechet
+from surrealist_gym.outcomes import RunStatus, run_status
 from surrealist_gym.sim import NoiseConfig, SimConfig
 from surrealist_gym.sim.config import resolve_params
 from surrealist_gym.testcase import TestCase
@@ -77,10 +78,9 @@ class LowFidelity:
                 fitness = -d
             else:
                 fitness = generation_fitness([xyz], test.obstacles).fitness
-            status = str(getattr(run.status, "value", run.status))
             top = (xyz[:, 2].max(), xyz[:, 1].min(), xyz[:, 1].max()) if len(xyz) else (0.0, 0.0, 0.0)
             self._cache[key] = np.array([fitness, d, f, np.log1p(d), np.log1p(f), min(run.min_distance_2d, 50.0),
-                                         min(run.min_distance, 50.0), float(status == "collision"), run.duration,
+                                         min(run.min_distance, 50.0), float(run_status(run) is RunStatus.COLLISION), run.duration,
                                          *top])
         return self._cache[key]
 

@@ -126,7 +126,7 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
 
     from search import AdaptiveGreedy
 
-    from ..fitness import judged_distance
+    from ..outcomes import judged_distance
     from ..results import write_results
 
     name = options.get("agent") or "greedy"

@@ -135,6 +135,10 @@ class SurrealistEnv(gym.Env):
 
     # --- gymnasium API ----------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode from the seed test (evaluated, or answered from the store).
+
+        ``seed`` seeds Gymnasium's ``np_random`` only; the env draws nothing from it. The runs' noise comes from the
+        constructor's ``random_seed`` and each test's key, so an episode's evaluations do not depend on ``seed``."""
         super().reset(seed=seed)
         self._evaluations = 0
         self._simulations = 0
@@ -219,8 +223,9 @@ class SurrealistEnv(gym.Env):
                     test=evaluation.test, statuses=evaluation.statuses,
                     min_distances=tuple(r.min_distance for r in runs),
                     min_distances_2d=tuple(r.min_distance_2d for r in runs),
-                    competition_distances=tuple(r.competition_distance for r in runs), terms=copy.deepcopy(evaluation.terms),
+                    competition_distances=tuple(r.competition_distance for r in runs),
+                    terms=copy.deepcopy(evaluation.terms),
                     trajectory=None if evaluation.trajectory is None else evaluation.trajectory.copy())
         if evaluation.first_runs_trajectories:
-            info["first_runs_trajectories"] = evaluation.first_runs_trajectories  # read-only arrays, not copied
+            info["first_runs_trajectories"] = tuple(t.copy() for t in evaluation.first_runs_trajectories)
         return info

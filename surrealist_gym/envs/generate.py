@@ -9,7 +9,7 @@ obstacle only.
 from __future__ import annotations
 
 from ..evaluation import GenerationObjective
-from ..fitness import Measure, measure_for
+from ..outcomes import Measure, measure_for
 from ..mutators import MOVE_KINDS, default_mutators
 from ..testcase import TestCase, load_test
 from .base import SurrealistEnv

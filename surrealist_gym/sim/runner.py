@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from enum import Enum
 from ..frozendict import FrozenDict
 from typing import Mapping
 
@@ -20,6 +19,7 @@ from .pybullet_quiet import pb
 from ..errors import SimulationError
 from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
+from ..outcomes import RunStatus
 from ..trajectory import Trajectory
 from .config import SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
@@ -27,16 +27,6 @@ from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
 from .vehicle import preset
 from .world import World
-
-
-class RunStatus(str, Enum):
-    """How a run ended."""
-
-    SUCCESS = "success"      # mission completed (landed and disarmed, or last item reached in the air)
-    COLLISION = "collision"  # PyBullet contact between the vehicle and an obstacle
-    TIMEOUT = "timeout"      # simulated-time limit reached
-    STUCK = "stuck"          # no progress for SimConfig.stuck_window_s (early stopping, only when asked for)
-    ERROR = "error"          # the vehicle flipped or its state became invalid
 
 
 @dataclass(frozen=True, slots=True)

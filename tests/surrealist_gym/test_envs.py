@@ -26,9 +26,11 @@ def make(env_id, **kwargs):
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
-def test_gymnasium_check_env(env_id):
-    env = make(env_id)
-    check_env(env.unwrapped)
+@pytest.mark.parametrize("runs", [1, 2])
+def test_gymnasium_check_env(env_id, runs):
+    """The current Gymnasium's checker, through gym.make's wrappers; two runs give the first-run infos too."""
+    env = make(env_id, runs=runs)
+    check_env(env)
     env.close()
 
 

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from surrealist_gym.fitness import (Aggregate, Averaging, GenerationFitness, average_runs, generation_fitness,
-                                    is_unsafe, replication_fitness, run_distances)
+                                    replication_fitness, run_distances)
+from surrealist_gym.outcomes import Measure, RunStatus, judged_distance, measure_for, outcomes
 from surrealist_gym.metrics import dtw, soft_dtw_barycenter
 from surrealist_gym.testcase import Obstacle, Shape
 from surrealist_gym.trajectory import Trajectory
@@ -110,7 +111,6 @@ def test_competition_measure_uses_the_polyline_between_points():
 
 def test_measure_follows_the_test(shared_data):
     from surrealist_gym import load_test
-    from surrealist_gym.fitness import Measure, judged_distance, measure_for
     from tests.conftest import EXPERIMENTS, SHARED_DATA
 
     assert measure_for(load_test(EXPERIMENTS / "rq2-seed.yaml")) is Measure.PAPER
@@ -119,10 +119,16 @@ def test_measure_follows_the_test(shared_data):
     assert judged_distance(run, "paper") == 2.0 and judged_distance(run, Measure.COMPETITION) == 1.2
 
 
-def test_is_unsafe_threshold():
-    assert is_unsafe(0.0) and is_unsafe(1.49)
-    assert not is_unsafe(1.5) and not is_unsafe(3.36)
-    assert is_unsafe(2.0, threshold=2.5)
+def test_outcomes_judge_runs_once_by_status_and_measure():
+    runs = [{"status": "collision", "min_distance_2d": 0.0, "competition_distance": 0.0},
+            {"status": RunStatus.TIMEOUT, "min_distance_2d": 1.49, "competition_distance": 1.6},
+            {"status": "success", "min_distance_2d": 1.5, "competition_distance": 1.2}]
+    paper, competition = outcomes(runs), outcomes(runs, Measure.COMPETITION)
+    assert (paper.runs, paper.crashes, paper.unsafe, paper.blocked, paper.closest) == (3, 1, 2, 1, 0.0)
+    assert competition.unsafe == 2 and competition.unsafe_rate == pytest.approx(2 / 3)
+    assert outcomes([]).runs == 0 and math.isnan(outcomes([]).crash_rate)
+    with pytest.raises(ValueError):
+        outcomes([{"status": "exploded", "min_distance_2d": 1.0}])
 
 
 # --- replication -----------------------------------------------------------------------------------------------
