@@ -113,11 +113,9 @@ class ProceduralEnv(gym.Env):
 
     def _mutated(self, action: np.ndarray):
         """The seed mutated by an action in [-1, 1] (raises InvalidTestCase)."""
-        test = self.seed_test
-        for mutator, a in zip(self.mutators, action):
-            value = (mutator.high + mutator.low) / 2 + a * (mutator.high - mutator.low) / 2
-            test = mutator.apply(test, float(np.round(value, 9)))
-        return test
+        from surrealist_gym.mutators import apply_action
+
+        return apply_action(self.seed_test, self.mutators, action)
 
     def _draw(self, seed: int):
         """A new inner env: a problem drawn from ``self.np_random`` (a few tries until the draw is valid)."""

@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from enum import Enum
 
+import numpy as np
+
 from .errors import InvalidTestCase
 from .testcase import TestCase
 
@@ -101,3 +103,13 @@ def default_mutators(test: TestCase, kinds=AUTHORS_ORDER, obstacles=None) -> tup
     """Mutators of the given kinds for each obstacle (all by default), obstacle by obstacle, kinds in order."""
     indices = range(len(test.obstacles)) if obstacles is None else obstacles
     return tuple(Mutator(i, k) for i in indices for k in kinds)
+
+
+def apply_action(test: TestCase, mutators, action) -> TestCase:
+    """The test that an action stands for: one value in [-1, 1] per mutator, scaled to the mutator's range
+    (centre + value x half range) and applied in order (values rounded to 1e-9, so equal actions give equal keys).
+    Raises InvalidTestCase for an invalid result."""
+    for mutator, a in zip(mutators, np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)):
+        centre, half_range = (mutator.high + mutator.low) / 2, (mutator.high - mutator.low) / 2
+        test = mutator.apply(test, float(np.round(centre + a * half_range, 9)))
+    return test

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import InvalidTestCase
 from ..evaluation import Evaluation, Evaluator
+from ..mutators import apply_action
 from ..store import EvaluationStore
 from ..testcase import TestCase
 
@@ -128,10 +129,7 @@ class SurrealistEnv(gym.Env):
 
     def test_for(self, action) -> TestCase:
         """The test case an action stands for (raises InvalidTestCase if it is invalid)."""
-        test = self._seed_test
-        for mutator, value in zip(self._mutators, self.values_for(action)):
-            test = mutator.apply(test, float(np.round(value, 9)))
-        return test
+        return apply_action(self._seed_test, self._mutators, np.asarray(action, dtype=np.float64).reshape(-1))
 
     # --- gymnasium API ----------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
