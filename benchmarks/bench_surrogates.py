@@ -63,7 +63,9 @@ from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
 from surrogates.dataset import Featurizer, load_dataset, stack_rows
 from surrogates.models import evaluate_model, train_model
-from surrogates.prescreen import RULES, PrescreenConfig, Prescreened, race_verdict
+from surrogates.config import RULES
+from surrogates.prescreen import PrescreenConfig, Prescreened
+from surrogates.racing import race_verdict
 
 PAPER = Path("results/paper")  # greedy alone's stores (--common-noise: results/paper-crn)
 SIM_CONFIG = SimConfig()
@@ -428,7 +430,7 @@ def transfer(args) -> None:
     real improvements of greedy alone on repetitions R..2R-1 whose shortfall exceeds it (in-sample on 0..R-1 for
     comparison), with the largest shortfall seen."""
     from surrogates.lowfi import FITNESS
-    from surrogates.prescreen import improvement_shortfalls, replay_margin
+    from surrogates.replay import improvement_shortfalls, replay_margin
 
     reps = args.repetitions
     featurizer = _featurizer(args.problem, lowfi=True)
@@ -458,7 +460,8 @@ def _replay_racing(searches, stages, miss_rate: float, common_noise: bool):
     (greedy's simulations to its final, racing's simulations to that final, whether racing missed none of its
     improvements; a search that missed one is counted at greedy's whole search, as if it never came back to greedy's
     path: the replay cannot follow it)."""
-    from surrogates.prescreen import replay_margin, tie_improvements
+    from surrogates.racing import tie_improvements
+    from surrogates.replay import replay_margin
 
     saved = total = missed = improvements = ties = 0
     margins, reach = [], []

@@ -1,39 +1,19 @@
-"""Pre-screening: a wrapper around any agent that simulates only the candidates worth a simulation.
+"""Pre-screening: a wrapper around any agent that simulates only the candidates worth a simulation
+(docs/surrogates.md).
 
-:class:`Prescreened` asks the inner agent for candidates and screens each against the incumbent (the test with the
-best real fitness so far) with one of these rules:
+:class:`Prescreened` asks the inner agent for candidates, most promising first, and screens each against the
+incumbent (the test with the best real fitness so far) by one rule (:class:`PrescreenConfig`):
 
-* ``lowfi`` (multi-fidelity): fly the candidate once in the low-fidelity simulator (:mod:`surrogates.lowfi`) and
-  skip it when its low-fidelity fitness falls short of the incumbent's by more than a ``margin``. The margin is
-  calibrated on the model's training stores: each search is replayed in the order it was evaluated, and the margin
-  is the shortfall that only ``miss_rate`` of its real improvements exceeded (:func:`lowfi_margin`).
-* ``ei`` / ``pi``: the surrogate's mean and standard deviation of the fitness (model scale) give the expected
-  improvement over the best (skip when EI < ``threshold`` x the spread of the training targets) or the probability
-  of improvement (skip when P < ``threshold``).
-* ``none``: skip nothing; candidates are only raced (``first_runs``), most promising first by the model.
-* ``auto`` (default): ``lowfi`` when a margin is known (a model trained with low-fidelity features on stores with
-  enough improvements, or a margin given), else ``ei``.
+* ``lowfi``: skip when the candidate's low-fidelity fitness (:mod:`surrogates.lowfi`) falls short of the
+  incumbent's by more than a margin calibrated on past searches (:mod:`surrogates.replay`);
+* ``ei`` / ``pi``: skip on the surrogate's expected improvement or probability of improvement;
+* ``none``: skip nothing, only race; ``auto``: ``lowfi`` when a margin is known, else ``ei``.
 
-A skipped candidate is not simulated and costs no budget: the inner agent is told an estimate below the best
-(``lowfi``: the best minus the low-fidelity shortfall; ``ei``/``pi``: the prediction minus ``pessimism``
-standard deviations, never above the best) with ``info["skipped"] = True`` and ``info["memo"]`` False (the
-agent plans its own budgets as if it had been evaluated; ``agent_counts_skips=False``: True, so budget-aware
-agents do not count it), and it is logged in :attr:`Prescreened.skipped`; asked again, it is told the same as a
-memo answer (free), as the env answers a test it simulated. A candidate dropped by racing also carries the
-averaged trajectory of the runs it flew (the authors' greedy compares trajectories in its plateau test). Promising
-candidates go
-through ``env.step`` as usual, the most promising of one ``ask`` first (by predicted mean), each screened against
-the best so far including the earlier results of the same ``ask`` (the inner agent is told the results in the
-order it asked). In online mode (no model to start from) or with ``retrain_every`` set, the model is
-retrained on its training data plus the real evaluations of the episode every ``retrain_every`` evaluations once
-``min_points`` exist (and the margin recalibrated). ``max_skips`` consecutive skips force the next candidate to
-be simulated, so an agent that never stops on its own (random search) still spends its budget. Racing
-(``first_runs``) flies a candidate that passes the screen run by run: its first runs, then the rest only if they
-keep up with the incumbent's first runs; with common random numbers a candidate whose first runs score exactly
-as the incumbent's did not change those flights and is dropped as a tie (``drop_ties``). An agent that counts
-skips may give up because of them (the greedy ends when a whole round of mutators finds nothing better): with
-``verify_stop`` the inner agent is then started again from the best test, unscreened, so the budget left checks
-that stop by simulation.
+A skipped candidate is not simulated: the inner agent is told an estimate below the best (``info["skipped"]``).
+A candidate that passes may be raced (:mod:`surrogates.racing`): its first runs fly first, the rest only if they
+keep up with the incumbent's. An online model (or ``retrain_every``) retrains on the episode's real evaluations;
+``max_skips`` consecutive skips force a simulation; ``verify_stop`` restarts the inner agent, unscreened, from the
+best test when it stops with budget left.
 
 Example:
     >>> import gymnasium as gym, surrealist_gym
@@ -49,7 +29,7 @@ import itertools
 import logging
 import math
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -58,183 +38,13 @@ from search.base import Agent, SearchResult
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
 from surrealist_gym.evaluation import describe_noise
 
+from .config import PrescreenConfig
 from .dataset import Featurizer, stack_rows
-from .lowfi import FITNESS as LOWFI_FITNESS
 from .models import SurrogateModel
+from .racing import race_margin, race_verdict, tie_improvements
+from .replay import model_margin
 
 log = logging.getLogger(__name__)
-RULES = ("auto", "lowfi", "ei", "pi", "none")
-MIN_IMPROVEMENTS = 10  # improvements needed in the training data to calibrate the low-fidelity margin
-TIE_TOLERANCE = 1e-9  # relative: first runs whose fitness differs by less score as a tie (identical flights)
-
-
-def is_tie(incumbent: float, candidate: float) -> bool:
-    """Whether two first-runs fitness values are equal (finite, within :data:`TIE_TOLERANCE`)."""
-    return abs(incumbent - candidate) <= TIE_TOLERANCE * max(1.0, abs(candidate))
-
-
-def race_verdict(incumbent: float, candidate: float, margin: float | None, drop_ties: bool) -> str | None:
-    """Racing's rule on the fitness of the same first runs: ``"tie"`` (scored exactly as the incumbent's, with
-    ``drop_ties``), ``"behind"`` (short of it by more than ``margin``) or None (fly on)."""
-    if drop_ties and is_tie(incumbent, candidate):
-        return "tie"
-    return "behind" if margin is not None and incumbent - candidate > margin else None
-
-
-def replayed_improvements(values, fitness, groups, known=None):
-    """Past searches replayed (rows of one group, in the order evaluated, those with ``known`` True): for every real
-    improvement (a fitness above the best so far), its incumbent's value and its own (rows of ``values``)."""
-    values, fitness, groups = np.asarray(values), np.asarray(fitness), np.asarray(groups)
-    for group in np.unique(groups):
-        rows = groups == group if known is None else (groups == group) & known
-        best, incumbent = -np.inf, None
-        for value, real in zip(values[rows], fitness[rows]):
-            if real > best:
-                if incumbent is not None:
-                    yield incumbent, value
-                best, incumbent = real, value
-
-
-def improvement_shortfalls(proxy, fitness, groups) -> list[float]:
-    """For every real improvement of past searches (:func:`replayed_improvements`), the incumbent's proxy minus its
-    own. Rows whose proxy is unknown (NaN) are skipped."""
-    proxy = np.asarray(proxy)
-    return [float(theirs - ours) for theirs, ours in replayed_improvements(proxy, fitness, groups, np.isfinite(proxy))]
-
-
-def tie_improvements(first_runs, fitness, groups) -> int:
-    """How many real improvements of past searches (:func:`replayed_improvements`) scored exactly as their incumbent
-    on their first k runs at some stage (``first_runs``: (rows, k) fitness of the first 1..k runs, NaN where
-    unknown); racing with ``drop_ties`` would have dropped them."""
-    first_runs = np.asarray(first_runs, dtype=np.float64).reshape(len(fitness), -1)
-    return sum(any(np.isfinite(a) and np.isfinite(b) and is_tie(a, b) for a, b in zip(theirs, ours))
-               for theirs, ours in replayed_improvements(first_runs, fitness, groups))
-
-
-def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | None:
-    """The shortfall in a cheap proxy of the fitness (the low-fidelity fitness, or the fitness of the first runs)
-    that only ``miss_rate`` of the real improvements of past searches exceeded (:func:`improvement_shortfalls`).
-    None with fewer than ``MIN_IMPROVEMENTS`` improvements.
-    """
-    shortfalls = improvement_shortfalls(proxy, fitness, groups)
-    if len(shortfalls) < MIN_IMPROVEMENTS:
-        return None
-    return float(np.quantile(shortfalls, 1.0 - miss_rate))
-
-
-def model_margin(model: SurrogateModel, miss_rate: float = 0.02) -> float | None:
-    """:func:`replay_margin` of the low-fidelity fitness on a model's training data; None for a model without
-    low-fidelity features."""
-    names = model.featurizer.names
-    if LOWFI_FITNESS not in names:
-        return None
-    return replay_margin(model.train_X[:, names.index(LOWFI_FITNESS)], model.train_y, model.train_groups, miss_rate)
-
-
-def race_margin(model: SurrogateModel, first_runs: int, miss_rate: float = 0.02) -> float | None:
-    """:func:`replay_margin` of the fitness of the first ``first_runs`` runs on a model's training data; None when
-    its stores hold no such fitness."""
-    first = model.train_first_runs
-    if first is None or first.shape[1] < first_runs:
-        return None
-    return replay_margin(first[:, first_runs - 1], model.train_y, model.train_groups, miss_rate)
-
-
-@dataclass(frozen=True, slots=True)
-class PrescreenConfig:
-    """How candidates are screened and the model retrained.
-
-    Attributes:
-        rule: ``auto``, ``lowfi`` (low-fidelity shortfall), ``ei`` (expected improvement), ``pi``
-            (probability of improvement) or ``none`` (skip nothing: only race, with ``first_runs``); see the
-            module docstring.
-        margin: ``lowfi``: skip when the low-fidelity fitness is below the incumbent's by more than this (in
-            fitness units); None calibrates it on the model's training data (see ``miss_rate``).
-        miss_rate: share of the past real improvements whose low-fidelity shortfall may exceed the calibrated
-            margin.
-        threshold: EI below ``threshold`` x std of the training targets (``ei``), or P(improvement) below it
-            (``pi``), skips a candidate.
-        pessimism: a skipped candidate is told ``mean - pessimism x std`` (capped below the best).
-        min_points: real evaluations needed before an online model is first trained.
-        retrain_every: retrain after this many new real evaluations (0: never retrain a pre-trained model;
-            an online model always retrains).
-        max_skips: consecutive skips after which the next candidate is simulated anyway.
-        kind: model kind of an online model (``ensemble`` or ``knn``).
-        agent_counts_skips: tell the inner agent a skip as a (non-memo) evaluation, so it plans its own budgets
-            (the greedy's local budgets) as without screening (default; False tells skips as memo answers, which
-            the greedy does not charge); the env's budget counts real simulations either way.
-        lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
-            candidate screened; see :mod:`surrogates.lowfi`).
-        first_runs: racing: a candidate that passes the screen first flies only this many of its runs, and the
-            rest only if the fitness of those runs falls short of the incumbent's first runs by no more than
-            ``race_margin`` (0: off; must be below the env's runs). A tuple races in stages: after each of its
-            run counts (increasing, e.g. ``(1, 2, 3, 4)``) the candidate is compared again and dropped at the
-            first stage it falls behind; later stages fly only the runs not flown yet.
-        race_margin: racing's margin (fitness units, every stage); None calibrates one per stage like the
-            ``lowfi`` margin, on the model's training stores and the episode's evaluations, each stage at an equal
-            share of ``miss_rate`` (so the stages together miss about ``miss_rate`` of the improvements).
-        drop_ties: racing also drops a candidate whose first runs score exactly as the incumbent's (told just
-            below the best). With common random numbers (``SimConfig.common_noise``) that means the mutation left
-            those flights unchanged (an obstacle slid along the path): in the 10 RQ2 stores of greedy alone under
-            common noise 113 of 440 candidates tied on their first run, none improved the best and 105 tied over
-            all ten runs. It is not a proof: in 50 case0 seed-1 stores 7 candidates tied the incumbent at some
-            stage and 2 of them (a lower box) improved over all five runs. None (default): on when the env flies
-            common noise (without it no two tests fly the same runs, so nothing ties) and no real improvement in the
-            model's training stores tied its incumbent (:func:`tie_improvements`; checked again at each retrain).
-        skips_spend_budget: the inner agent sees a budget from which every skipped or dropped candidate was spent
-            as a whole evaluation (``budget_left`` as without screening; needs ``agent_counts_skips``), so it also
-            plans its round budgets and stops as without screening: with a screen that drops no improvement it
-            walks the unscreened search's path and ends where that would, having simulated less (up to the
-            authors' plateau test, which compares trajectories: a skipped candidate has none, a dropped one the
-            average of the runs it flew, not of all). The real budget
-            left is then unused, or goes to the verify pass (``verify_stop``). Off by default: the inner agent
-            sees the env's own budget, spends what screening saved on longer line searches and may walk
-            elsewhere.
-        verify_stop: when the inner agent stops with budget left, start it again from the best test with
-            screening and racing off, so that a stop the skips may have caused is checked by simulation (tests
-            already simulated are memo hits and cost nothing); the search then ends as the agent alone would.
-            Off by default: on case0 it spent 10-44 more evaluations per search and found nothing better.
-    """
-
-    rule: str = "auto"
-    margin: float | None = None
-    miss_rate: float = 0.02
-    threshold: float = 0.01
-    pessimism: float = 1.0
-    min_points: int = 10
-    retrain_every: int = 5
-    max_skips: int = 20
-    kind: str = "ensemble"
-    agent_counts_skips: bool = True
-    lowfi: bool = True
-    first_runs: int | tuple[int, ...] = 0
-    race_margin: float | None = None
-    drop_ties: bool | None = None
-    skips_spend_budget: bool = False
-    verify_stop: bool = False
-
-    def __post_init__(self):
-        if isinstance(self.first_runs, (list, tuple)):
-            object.__setattr__(self, "first_runs", tuple(int(k) for k in self.first_runs))  # hashable, frozen
-        if self.rule not in RULES:
-            raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
-        if not 0.0 <= self.miss_rate < 1.0:
-            raise ValueError(f"prescreen miss_rate: expected a share in [0, 1), got {self.miss_rate!r}")
-        if self.skips_spend_budget and not self.agent_counts_skips:
-            raise ValueError("prescreen skips_spend_budget: needs agent_counts_skips (a skip told as a memo answer "
-                             "spends no budget)")
-        stages = self.race_stages
-        if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
-            raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
-                             f"runs, got {self.first_runs!r}")
-
-    @property
-    def race_stages(self) -> tuple[int, ...]:
-        """The run counts after which racing compares a candidate with the incumbent (empty: racing off)."""
-        if isinstance(self.first_runs, tuple):  # __post_init__ turns any sequence into a tuple
-            return self.first_runs
-        return (int(self.first_runs),) if self.first_runs else ()
-
 
 class Prescreened(Agent):
     """Wrap ``agent`` so that only candidates with a real chance of improving are simulated.

@@ -97,7 +97,8 @@ def run(args) -> int:
     print(f"model ({args.kind}, {args.target}, {len(model.train_y)} evaluations flown with "
           f"{describe_noise(data.common_noise)}, {data.X.shape[1]} features) in {out}/: weights.pt, meta.json")
     if args.lowfi and args.target == "fitness":
-        from surrogates.prescreen import PrescreenConfig, model_margin
+        from surrogates.prescreen import PrescreenConfig
+        from surrogates.replay import model_margin
 
         rate = PrescreenConfig().miss_rate
         margin = model_margin(model, rate)

@@ -10,7 +10,9 @@ from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import SurrogateModel, train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened, race_margin, replay_margin, tie_improvements, wrap
+from surrogates.prescreen import PrescreenConfig, Prescreened, wrap
+from surrogates.racing import race_margin, tie_improvements
+from surrogates.replay import replay_margin
 
 BUDGET = 4
 
