@@ -56,7 +56,7 @@ import numpy as np
 import surrealist_gym as sg
 from search import AdaptiveGreedy
 from surrealist_gym.envs.generate import GenerateEnv
-from surrealist_gym.cli._search import race_stages
+from surrealist_gym.cli.options import race_stages
 from surrealist_gym.envs.replicate import ReplicateEnv
 from surrealist_gym.sim import SimConfig
 from surrealist_gym.statistics import compare, vargha_delaney_a12

@@ -1,83 +1,26 @@
 """What `surrealist replicate` and `surrealist generate` share: options, progress bar, results folder, resume."""
 from __future__ import annotations
 
-import argparse
+import dataclasses
 import json
 import shutil
-from collections import Counter
 import sys
 import time
+from collections import Counter
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
 
 from ..errors import SurrealistError
-
-RUN_FILE = "run.json"
-
-
-def add_search_arguments(parser, budget: int, runs: int) -> None:
-    parser.add_argument("--budget", type=int, default=budget, help=f"evaluations allowed (default {budget})")
-    parser.add_argument("--runs", type=int, default=runs, help=f"simulations per evaluation (default {runs})")
-    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
-    parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
-                        help="run the simulations on a Dask cluster (tcp://host:port)")
-    parser.add_argument("--preset", default="authors", choices=["paper", "authors"],
-                        help="greedy hyper-parameters: paper Table 1, or the authors' own run (default)")
-    parser.add_argument("--agent", default="greedy",
-                        help="search agent: greedy (default), greedy-paper, random, cmaes, ppo:POLICY.zip, "
-                             "module:Class")
-    parser.add_argument("--random-seed", type=int, default=0, help="base seed of the simulation noise")
-    parser.add_argument("--uav", default=None, metavar="NAME_OR_YAML",
-                        help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
-                             "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a seed test with a "
-                             "reference log, as the paper's, else px4-v1.12-sitl-iris)")
-    parser.add_argument("--common-noise", action="store_true",
-                        help="common random numbers: run i of every test flies with the same noise, so tests "
-                             "differ only by what they change (default: each test draws its own)")
-    parser.add_argument("--surrogate", default=None, metavar="MODEL|online",
-                        help="pre-screen mutations with a surrogate model folder (surrealist surrogate train) "
-                             "or one trained online; skipped candidates cost no simulations")
-    parser.add_argument("--first-runs", type=race_stages, default=[], metavar="K[,K2...]",
-                        help="racing (with a surrogate; default online): fly K runs of a candidate first and the "
-                             "rest only if they do not fall clearly short of the best test's first K runs; "
-                             "K1,K2,... compares again after each (e.g. 1,2,3,4)")
-    parser.add_argument("--screen", default="auto", choices=SCREEN_RULES,
-                        help="pre-screening rule (with a surrogate): auto (default: lowfi with a --lowfi model, "
-                             "else ei), lowfi, ei, pi, or none (skip nothing: race only, with --first-runs)")
-    parser.add_argument("--skips-spend-budget", action="store_true",
-                        help="pre-screening: the search's budget counts skipped and dropped candidates as "
-                             "evaluations, so it walks and stops as without screening, having simulated less")
-    parser.add_argument("--verify-stop", action="store_true",
-                        help="pre-screening: when the search stops with budget left, restart it unscreened from "
-                             "the best test")
-    parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
-    parser.add_argument("--resume", default=None, metavar="DIR",
-                        help="resume an interrupted search from its results folder (same options)")
-
-
-SCREEN_RULES = ("auto", "lowfi", "ei", "pi", "none")  # surrogates.prescreen.RULES, without importing torch here
-
-
-def race_stages(value) -> list[int]:
-    """``--first-runs``: the run counts after which racing compares a candidate (``"1"``, ``"1,2,3,4"``; a number or
-    a list from a run.json); empty when racing is off. Raises ArgumentTypeError for anything else."""
-    try:
-        stages = ([int(value)] if isinstance(value, int) else [int(k) for k in value] if isinstance(value, list)
-                  else [int(k) for k in str(value).split(",")])
-    except ValueError:
-        stages = None
-    if stages is None or any(k < 0 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
-        raise argparse.ArgumentTypeError(f"expected increasing numbers of runs such as 1 or 1,2,3,4, got {value!r}")
-    return [k for k in stages if k]
+from .options import RUN_FILE, SearchOptions
 
 
 @contextmanager
-def new_search_folder(args, command: str, keys: tuple[str, ...]):
+def new_search_folder(args, options_type: type[SearchOptions]):
     """Yield (folder, options) from :func:`prepare`; a folder made here is removed again if setting up fails
     (a bad log or test case leaves no empty results folder behind)."""
     fresh = not args.resume and not (args.out and Path(args.out).exists())
-    out, options = prepare(args, command, keys)
+    out, options = prepare(args, options_type)
     try:
         yield out, options
     except BaseException:
@@ -86,41 +29,40 @@ def new_search_folder(args, command: str, keys: tuple[str, ...]):
         raise
 
 
-def prepare(args, command: str, keys: tuple[str, ...]) -> tuple[Path, dict]:
+def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOptions]:
     """The results folder and the options of this search (read back from run.json when resuming)."""
     if args.resume:
         out = Path(args.resume)
         saved = out / RUN_FILE
         if not saved.is_file():
             raise SurrealistError(f"{out}: not a results folder to resume (no {RUN_FILE})")
-        options = json.loads(saved.read_text())
-        if options.get("command") != command:
-            raise SurrealistError(f"{saved}: a '{options.get('command')}' search, not '{command}'")
-        return out, options
-    if getattr(args, "agent", "greedy") not in (None, "greedy"):
+        return out, options_type.from_json(saved)
+    options = options_type.from_args(args)
+    if options.agent not in (None, "greedy"):
         from search.registry import make_agent
 
-        make_agent(args.agent)  # an unknown agent fails here, before any folder or worker exists
-    if max(getattr(args, "first_runs", None) or [0]) >= args.runs:
-        raise SurrealistError(f"--first-runs: expected numbers of runs below --runs ({args.runs}), "
-                              f"got {','.join(map(str, args.first_runs))}")
-    if getattr(args, "uav", None) is not None:
+        make_agent(options.agent)  # an unknown agent fails here, before any folder or worker exists
+    if max(options.first_runs or (0,)) >= options.runs:
+        raise SurrealistError(f"--first-runs: expected numbers of runs below --runs ({options.runs}), "
+                              f"got {','.join(map(str, options.first_runs))}")
+    changes = {}
+    if options.uav is not None:
         from ..sim.profiles import PRESETS, load_profile
 
-        load_profile(args.uav)  # a bad profile fails here, before any folder exists
-        if args.uav not in PRESETS:
-            args.uav = str(Path(args.uav).resolve())
-    out = Path(args.out or f"results/{command}-{datetime.now():%Y%m%d-%H%M%S}")
-    options = {"command": command, **{k: getattr(args, k) for k in keys}}
+        load_profile(options.uav)  # a bad profile fails here, before any folder exists
+        if options.uav not in PRESETS:
+            changes["uav"] = str(Path(options.uav).resolve())
     for key in ("log", "test", "seed"):
-        if options.get(key):
-            options[key] = str(Path(options[key]).resolve())
+        if getattr(options, key, None):
+            changes[key] = str(Path(getattr(options, key)).resolve())
+    options = dataclasses.replace(options, **changes)
+    out = Path(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}")
     out.mkdir(parents=True, exist_ok=True)
-    (out / RUN_FILE).write_text(json.dumps(options, indent=2) + "\n")
+    (out / RUN_FILE).write_text(json.dumps(options.to_json(), indent=2) + "\n")
     return out, options
 
 
-def run_search(env, options: dict, out: Path, problem: str) -> int:
+def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
     """Run the greedy on env with a live progress bar, then write the results folder and print where."""
     from tqdm import tqdm
 
@@ -129,26 +71,21 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     from ..outcomes import judged_distance
     from ..results import write_results
 
-    name = options.get("agent") or "greedy"
+    name = options.agent or "greedy"
     if name == "greedy":
-        agent = AdaptiveGreedy(options["preset"])
+        agent = AdaptiveGreedy(options.preset)
     else:
         from search.registry import make_agent
 
-        agent = make_agent(name, seed=options["random_seed"])
-    try:
-        stages = tuple(race_stages(options.get("first_runs") or 0))
-    except argparse.ArgumentTypeError as error:
-        raise SurrealistError(f"{out / RUN_FILE}: first_runs: {error}") from None
-    if (options.get("surrogate") or stages or options.get("skips_spend_budget") or options.get("verify_stop")
-            or options.get("screen", "auto") != "auto"):
+        agent = make_agent(name, seed=options.random_seed)
+    stages = options.first_runs
+    if options.prescreened:
         from surrogates.prescreen import PrescreenConfig, wrap
 
-        config = PrescreenConfig(rule=options.get("screen") or "auto", first_runs=stages,
-                                 skips_spend_budget=bool(options.get("skips_spend_budget")),
-                                 verify_stop=bool(options.get("verify_stop")))
-        agent = wrap(agent, options.get("surrogate") or "online", env, config)
-    bar = tqdm(total=options["budget"], unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
+        config = PrescreenConfig(rule=options.screen or "auto", first_runs=stages,
+                                 skips_spend_budget=options.skips_spend_budget, verify_stop=options.verify_stop)
+        agent = wrap(agent, options.surrogate or "online", env, config)
+    bar = tqdm(total=options.budget, unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)
     start = time.perf_counter()
 
@@ -158,7 +95,7 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
         bar.refresh()
 
     try:
-        result = agent.run(env, seed=options["random_seed"], callback=progress)
+        result = agent.run(env, seed=options.random_seed, callback=progress)
     except KeyboardInterrupt:
         bar.close()
         print(f"interrupted: every finished evaluation is stored; resume with --resume {out}", file=sys.stderr)
@@ -195,17 +132,13 @@ def run_search(env, options: dict, out: Path, problem: str) -> int:
     return 0
 
 
-def executor_of(options: dict):
-    return options.get("dask_scheduler") or None
-
-
-def sim_config_of(options: dict):
+def sim_config_of(options: SearchOptions):
     """The search's SimConfig: its noise mode, flown by its UAV profile when it names one."""
     from ..sim import SimConfig
 
-    config = SimConfig(common_noise=bool(options.get("common_noise")))
-    if options.get("uav") is not None:
+    config = SimConfig(common_noise=options.common_noise)
+    if options.uav is not None:
         from ..sim.profiles import load_profile
 
-        config = load_profile(options["uav"]).sim_config(config)
+        config = load_profile(options.uav).sim_config(config)
     return config

@@ -159,10 +159,10 @@ def test_generate_races_candidates_in_stages(tmp_path, capsys):
 def test_race_stages_reads_the_command_line_and_older_run_files():
     import argparse
 
-    from surrealist_gym.cli._search import race_stages
+    from surrealist_gym.cli.options import race_stages
 
-    assert race_stages("1,2,3,4") == [1, 2, 3, 4] and race_stages("2") == [2] and race_stages("0") == []
-    assert race_stages(0) == [] and race_stages(1) == [1] and race_stages([1, 2]) == [1, 2]  # from a run.json
+    assert race_stages("1,2,3,4") == (1, 2, 3, 4) and race_stages("2") == (2,) and race_stages("0") == ()
+    assert race_stages(0) == () and race_stages(1) == (1,) and race_stages([1, 2]) == (1, 2)  # from a run.json
     for bad in ("2,1", "a", [3, 3], "-1"):
         with pytest.raises(argparse.ArgumentTypeError, match="increasing numbers of runs"):
             race_stages(bad)
@@ -190,3 +190,30 @@ def test_compare_refuses_an_unknown_env_before_writing(tmp_path, capsys):
     out = tmp_path / "cmp"
     assert main(["compare", "--env", "Typo", "--agents", "greedy", "--out", str(out)]) == 2
     assert "--env 'Typo'" in capsys.readouterr().err and not out.exists()
+
+
+def test_search_options_are_typed_once_for_arguments_run_json_and_resume(tmp_path):
+    import argparse
+
+    from surrealist_gym.cli.options import GenerateOptions, ReplicateOptions
+    from surrealist_gym.errors import SurrealistError
+
+    parser = argparse.ArgumentParser()
+    GenerateOptions.add_arguments(parser)
+    args = parser.parse_args(["seed.yaml", "--budget", "7", "--first-runs", "1,2", "--common-noise"])
+    options = GenerateOptions.from_args(args)
+    assert (options.test, options.budget, options.runs, options.first_runs, options.common_noise) == \
+        ("seed.yaml", 7, 10, (1, 2), True)
+    assert options.prescreened and not GenerateOptions().prescreened
+    path = tmp_path / "run.json"
+    path.write_text(json.dumps(options.to_json()))
+    assert GenerateOptions.from_json(path) == options
+    with pytest.raises(SurrealistError, match="not a 'replicate' search"):
+        ReplicateOptions.from_json(path)
+    old = {k: v for k, v in options.to_json().items() if k not in ("uav", "screen")}  # an older run file
+    path.write_text(json.dumps(old))
+    assert GenerateOptions.from_json(path).uav is None
+    path.write_text(json.dumps({**options.to_json(), "speed": 3}))
+    with pytest.raises(SurrealistError, match="unknown option 'speed'"):
+        GenerateOptions.from_json(path)
+    assert ReplicateOptions().budget == 100 and ReplicateOptions().runs == 5

@@ -1,0 +1,161 @@
+"""The options of a search, typed once: ``surrealist replicate`` / ``generate`` build their arguments from them,
+``run.json`` records them, and ``--resume`` reads them back.
+
+Each field's ``metadata`` holds its command-line help (and flags where they are not ``--field-name``); a field
+without help is not an option of the command line.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+from ..errors import SurrealistError
+
+RUN_FILE = "run.json"
+SCREEN_RULES = ("auto", "lowfi", "ei", "pi", "none")  # surrogates.config.RULES, without importing torch here
+
+
+def race_stages(value) -> tuple[int, ...]:
+    """``--first-runs``: the run counts after which racing compares a candidate (``"1"``, ``"1,2,3,4"``; a number or
+    a list from a run.json); empty when racing is off. Raises ArgumentTypeError for anything else."""
+    try:
+        stages = ([int(value)] if isinstance(value, int) else [int(k) for k in value]
+                  if isinstance(value, (list, tuple)) else [int(k) for k in str(value).split(",")])
+    except ValueError:
+        stages = None
+    if stages is None or any(k < 0 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
+        raise argparse.ArgumentTypeError(f"expected increasing numbers of runs such as 1 or 1,2,3,4, got {value!r}")
+    return tuple(k for k in stages if k)
+
+
+def _opt(default, help: str, **argparse_kwargs):
+    return field(default=default, metadata={"help": help, **argparse_kwargs})
+
+
+@dataclass(frozen=True)
+class SearchOptions:
+    """What steers one search (the fields both commands share)."""
+
+    command: ClassVar[str] = ""
+
+    budget: int = _opt(100, "evaluations allowed (default {default})", type=int)
+    runs: int = _opt(5, "simulations per evaluation (default {default})", type=int)
+    workers: int | None = _opt(None, "local worker processes (default: all cores)", type=int)
+    dask_scheduler: str | None = _opt(None, "run the simulations on a Dask cluster (tcp://host:port)",
+                                      metavar="ADDRESS")
+    preset: str = _opt("authors", "greedy hyper-parameters: paper Table 1, or the authors' own run (default)",
+                       choices=["paper", "authors"])
+    agent: str = _opt("greedy", "search agent: greedy (default), greedy-paper, random, cmaes, ppo:POLICY.zip, "
+                                "module:Class")
+    random_seed: int = _opt(0, "base seed of the simulation noise", type=int)
+    uav: str | None = _opt(None, "UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
+                                 "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a seed test "
+                                 "with a reference log, as the paper's, else px4-v1.12-sitl-iris)",
+                           metavar="NAME_OR_YAML")
+    common_noise: bool = _opt(False, "common random numbers: run i of every test flies with the same noise, so "
+                                     "tests differ only by what they change (default: each test draws its own)",
+                              action="store_true")
+    surrogate: str | None = _opt(None, "pre-screen mutations with a surrogate model folder (surrealist surrogate "
+                                       "train) or one trained online; skipped candidates cost no simulations",
+                                 metavar="MODEL|online")
+    first_runs: tuple[int, ...] = _opt((), "racing (with a surrogate; default online): fly K runs of a candidate "
+                                           "first and the rest only if they do not fall clearly short of the best "
+                                           "test's first K runs; K1,K2,... compares again after each "
+                                           "(e.g. 1,2,3,4)", type=race_stages, metavar="K[,K2...]")
+    screen: str = _opt("auto", "pre-screening rule (with a surrogate): auto (default: lowfi with a --lowfi model, "
+                               "else ei), lowfi, ei, pi, or none (skip nothing: race only, with --first-runs)",
+                       choices=SCREEN_RULES)
+    skips_spend_budget: bool = _opt(False, "pre-screening: the search's budget counts skipped and dropped "
+                                           "candidates as evaluations, so it walks and stops as without screening, "
+                                           "having simulated less", action="store_true")
+    verify_stop: bool = _opt(False, "pre-screening: when the search stops with budget left, restart it "
+                                    "unscreened from the best test", action="store_true")
+
+    @property
+    def prescreened(self) -> bool:
+        """Whether the search runs behind pre-screening (any of its options given)."""
+        return bool(self.surrogate or self.first_runs or self.skips_spend_budget or self.verify_stop
+                    or self.screen != "auto")
+
+    def to_json(self) -> dict:
+        """The options as run.json holds them."""
+        values = dataclasses.asdict(self)
+        values["first_runs"] = list(self.first_runs)
+        return {"command": self.command, **values}
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace) -> "SearchOptions":
+        return cls(**{f.name: getattr(args, f.name) for f in dataclasses.fields(cls)})
+
+    @classmethod
+    def from_json(cls, path: Path) -> "SearchOptions":
+        """The options of the search a results folder's run.json records (one-line errors for a file that is not
+        this command's)."""
+        try:
+            values = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+            raise SurrealistError(f"{path}: not a readable run file ({type(err).__name__})") from None
+        if not isinstance(values, dict):
+            raise SurrealistError(f"{path}: not a run file (expected a mapping)")
+        if values.pop("command", None) != cls.command:
+            raise SurrealistError(f"{path}: not a '{cls.command}' search")
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - names)
+        if unknown:
+            raise SurrealistError(f"{path}: unknown option {unknown[0]!r}")
+        try:
+            values["first_runs"] = race_stages(values.get("first_runs") or 0)
+        except argparse.ArgumentTypeError as err:
+            raise SurrealistError(f"{path}: first_runs: {err}") from None
+        return cls(**values)
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        """The command line's arguments: positional fields first, then ``--field-name`` options."""
+        for f in dataclasses.fields(cls):
+            meta = dict(f.metadata)
+            help_text = meta.pop("help").format(default=f.default)
+            if meta.pop("positional", False):
+                parser.add_argument(f.name, nargs="?", default=f.default, help=help_text)
+                continue
+            flag = meta.pop("flag", "--" + f.name.replace("_", "-"))
+            parser.add_argument(flag, dest=f.name, default=f.default, help=help_text, **meta)
+        parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
+        parser.add_argument("--resume", default=None, metavar="DIR",
+                            help="resume an interrupted search from its results folder (same options)")
+
+
+@dataclass(frozen=True)
+class ReplicateOptions(SearchOptions):
+    """``surrealist replicate``: the real flight, the seed test and how runs are averaged."""
+
+    command: ClassVar[str] = "replicate"
+
+    log: str | None = _opt(None, "real flight log (.ulg); default: the bundled case0.ulg of the paper",
+                           positional=True)
+    seed: str | None = _opt(None, "seed test case (default: the paper's seed 1 for case0, else a 3x3x3 m box near "
+                                  "the middle of the straight path, turned along it)", metavar="TEST.yaml")
+    averaging: str = _opt("dba", "how the runs of a test are averaged before the DTW (default dba)",
+                          choices=["dba", "soft_dtw"])
+
+
+@dataclass(frozen=True)
+class GenerateOptions(SearchOptions):
+    """``surrealist generate``: the seed test, how runs are scored and which obstacles move."""
+
+    command: ClassVar[str] = "generate"
+
+    budget: int = _opt(50, "evaluations allowed (default {default})", type=int)
+    runs: int = _opt(10, "simulations per evaluation (default {default})", type=int)
+    test: str | None = _opt(None, "seed test case (Aerialist YAML); default: the paper's RQ2 seed", positional=True)
+    aggregate: str = _opt("riskiest", "how the runs of a test are scored: the riskiest run (paper) or the mean",
+                          choices=["riskiest", "mean"])
+    all_mutators: bool = _opt(False, "move, resize and rotate every obstacle (default: move the first obstacle "
+                                     "only)", action="store_true")
+
+
+__all__ = ["GenerateOptions", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "race_stages"]
