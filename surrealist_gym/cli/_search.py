@@ -42,9 +42,6 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         from search.registry import make_agent
 
         make_agent(options.agent)  # an unknown agent fails here, before any folder or worker exists
-    if max(options.first_runs or (0,)) >= options.runs:
-        raise SurrealistError(f"--first-runs: expected numbers of runs below --runs ({options.runs}), "
-                              f"got {','.join(map(str, options.first_runs))}")
     changes = {}
     if options.uav is not None:
         from ..sim.profiles import PRESETS, load_profile
@@ -57,6 +54,8 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
             changes[key] = str(Path(getattr(options, key)).resolve())
     options = dataclasses.replace(options, **changes)
     out = Path(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}")
+    if out.exists() and not out.is_dir():
+        raise SurrealistError(f"--out {out}: exists and is not a folder")
     out.mkdir(parents=True, exist_ok=True)
     (out / RUN_FILE).write_text(json.dumps(options.to_json(), indent=2) + "\n")
     return out, options

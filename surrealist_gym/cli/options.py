@@ -75,6 +75,21 @@ class SearchOptions:
     verify_stop: bool = _opt(False, "pre-screening: when the search stops with budget left, restart it "
                                     "unscreened from the best test", action="store_true")
 
+    def check(self, where=lambda name: "--" + name.replace("_", "-")) -> "SearchOptions":
+        """The options if every value is in range, else a one-line SurrealistError naming the option (``where``
+        turns a field name into what the message calls it: the flag, or run.json's key)."""
+        minimum = {"budget": 1, "runs": 1, "workers": 1, "random_seed": 0}
+        for name, low in minimum.items():
+            value = getattr(self, name)
+            if value is None and name == "workers":
+                continue
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise SurrealistError(f"{where(name)}: expected a whole number >= {low}, got {value!r}")
+        if max(self.first_runs or (0,)) >= self.runs:
+            raise SurrealistError(f"{where('first_runs')}: expected numbers of runs below the runs per evaluation "
+                                  f"({self.runs}), got {','.join(map(str, self.first_runs))}")
+        return self
+
     @property
     def prescreened(self) -> bool:
         """Whether the search runs behind pre-screening (any of its options given)."""
@@ -89,7 +104,7 @@ class SearchOptions:
 
     @classmethod
     def from_args(cls, args: argparse.Namespace) -> "SearchOptions":
-        return cls(**{f.name: getattr(args, f.name) for f in dataclasses.fields(cls)})
+        return cls(**{f.name: getattr(args, f.name) for f in dataclasses.fields(cls)}).check()
 
     @classmethod
     def from_json(cls, path: Path) -> "SearchOptions":
@@ -111,7 +126,7 @@ class SearchOptions:
             values["first_runs"] = race_stages(values.get("first_runs") or 0)
         except argparse.ArgumentTypeError as err:
             raise SurrealistError(f"{path}: first_runs: {err}") from None
-        return cls(**values)
+        return cls(**values).check(lambda name: f"{path}: {name}")
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:

@@ -217,3 +217,22 @@ def test_search_options_are_typed_once_for_arguments_run_json_and_resume(tmp_pat
     with pytest.raises(SurrealistError, match="unknown option 'speed'"):
         GenerateOptions.from_json(path)
     assert ReplicateOptions().budget == 100 and ReplicateOptions().runs == 5
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--budget", "0"], "--budget: expected a whole number >= 1, got 0"),
+    (["--runs", "0"], "--runs: expected a whole number >= 1, got 0"),
+    (["--workers", "-1"], "--workers: expected a whole number >= 1, got -1"),
+    (["--random-seed", "-1"], "--random-seed: expected a whole number >= 0, got -1")])
+def test_bad_search_values_are_one_line_errors(tmp_path, capsys, argv, message):
+    out = tmp_path / "gen"
+    assert main(["generate", *argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err and not out.exists()
+
+
+def test_out_that_is_a_file_is_refused(tmp_path, capsys):
+    afile = tmp_path / "results.txt"
+    afile.write_text("not a folder")
+    assert main(["generate", "--out", str(afile)]) == 2
+    assert "exists and is not a folder" in capsys.readouterr().err
