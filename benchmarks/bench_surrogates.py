@@ -61,9 +61,9 @@ from surrealist_gym.envs.replicate import ReplicateEnv
 from surrealist_gym.sim import SimConfig
 from surrealist_gym.statistics import compare, vargha_delaney_a12
 from surrealist_gym.store import EvaluationStore
+from surrogates.config import RULES, SkipAccounting
 from surrogates.dataset import Featurizer, load_dataset, stack_rows
 from surrogates.models import evaluate_model, train_model
-from surrogates.config import RULES
 from surrogates.prescreen import PrescreenConfig, Prescreened
 from surrogates.racing import race_verdict
 
@@ -143,8 +143,8 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
         return json.loads(cached.read_text())
     store = out / f"{problem}-{label}-rep{rep}.sqlite"
     config = PrescreenConfig(rule=rule, threshold=threshold, miss_rate=miss_rate, min_points=10, retrain_every=10,
-                             lowfi=lowfi, agent_counts_skips=counted, first_runs=first_runs,
-                             verify_stop=verify_stop, skips_spend_budget=spend)
+                             lowfi=lowfi, skips=_skips(counted, spend), first_runs=first_runs,
+                             verify_stop=verify_stop)
     env, agent, featurizer = _screened_search(problem, rep, mode, store, reps, config, also)
     curve: list[float] = []
     lowfi_before = _lowfi_runs(featurizer)  # an online model featurizes with a featurizer of its own
@@ -154,7 +154,7 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     row = {"final": result.best_fitness, "evaluations": result.evaluations,
            "to_best": result.evaluations_to_best, "skipped": len(agent.skipped), "retrains": agent.retrains,
            "curve": curve, "new_simulations": env.unwrapped.evaluator.simulations,
-           "simulations": env.unwrapped._simulations, "raced": agent.dropped,
+           "simulations": env.unwrapped.simulations, "raced": agent.dropped,
            "wall_s": time.perf_counter() - start, "stop": result.stop_reason,
            "lowfi_runs": _lowfi_runs(agent._featurizer) - (lowfi_before if agent._featurizer is featurizer else 0),
            "rule": agent.rule, "margin": agent.margin, "race_margin": agent.race_margin,
@@ -164,6 +164,13 @@ def prescreened(problem: str, rep: int, mode: str, out: Path, reps: int, lowfi: 
     env.close()
     cached.write_text(json.dumps(row))
     return row
+
+
+def _skips(counted: bool, spend: bool) -> SkipAccounting:
+    """The skip accounting of the benchmark's flags (--skips-as-memo, --skips-spend-budget)."""
+    if spend and not counted:
+        raise SystemExit("--skips-spend-budget needs skips told as evaluations (not --skips-as-memo)")
+    return SkipAccounting.BUDGET if spend else SkipAccounting.EVALUATION if counted else SkipAccounting.MEMO
 
 
 def _screened_search(problem: str, rep: int, mode: str, store: Path, reps: int, config: PrescreenConfig,
@@ -191,9 +198,9 @@ def path(args) -> None:
     import tempfile
 
     config = PrescreenConfig(rule=args.rule, threshold=args.threshold, miss_rate=args.miss_rate, min_points=10,
-                             retrain_every=10, lowfi=args.lowfi, agent_counts_skips=not args.skips_as_memo,
-                             first_runs=args.first_runs, verify_stop=args.verify_stop,
-                             skips_spend_budget=args.skips_spend_budget)
+                             retrain_every=10, lowfi=args.lowfi,
+                             skips=_skips(not args.skips_as_memo, args.skips_spend_budget),
+                             first_runs=args.first_runs, verify_stop=args.verify_stop)
     for rep in range(args.from_rep, args.from_rep + args.repetitions):
         with EvaluationStore(PAPER / f"{args.problem}-rep{rep}.sqlite") as store:
             seed, *alone = [(e.test_key, -np.inf if e.fitness is None else e.fitness) for e in store]
@@ -559,10 +566,10 @@ def main() -> None:
                         help="lowfi: share of past improvements the calibrated margin may miss (default 0.02)")
     parser.add_argument("--skips-as-memo", action="store_true",
                         help="tell skips to the greedy as memo answers (not charged to its local budgets; "
-                             "agent_counts_skips=False)")
+                             "SkipAccounting.MEMO)")
     parser.add_argument("--skips-spend-budget", action="store_true",
                         help="the greedy's budget counts skipped and dropped candidates as whole evaluations, so it "
-                             "plans and stops as greedy alone (PrescreenConfig.skips_spend_budget)")
+                             "plans and stops as greedy alone (SkipAccounting.BUDGET)")
     parser.add_argument("--verify-stop", action="store_true",
                         help="when the inner greedy stops with budget left, restart it unscreened from the best")
     parser.add_argument("--first-runs", type=lambda text: tuple(race_stages(text)), default=(),

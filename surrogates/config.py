@@ -3,8 +3,19 @@ retraining, and how skips are told to the inner agent (:mod:`surrogates.prescree
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 
 RULES = ("auto", "lowfi", "ei", "pi", "none")
+
+
+class SkipAccounting(str, Enum):
+    """How a skipped (or raced-out) candidate is told to the inner agent; the env's budget counts real simulations
+    in every case."""
+
+    MEMO = "memo"  #: as a free memo answer: the greedy does not charge it to its local budgets
+    EVALUATION = "evaluation"  #: as an evaluation: the inner agent plans its own budgets as without screening
+    BUDGET = "budget"  #: as an evaluation spent from the budget the inner agent sees, so it walks and stops as
+    #: without screening, having simulated less; the real budget left is unused or goes to ``verify_stop``
 
 
 @dataclass(frozen=True, slots=True)
@@ -27,9 +38,7 @@ class PrescreenConfig:
             an online model always retrains).
         max_skips: consecutive skips after which the next candidate is simulated anyway.
         kind: model kind of an online model (``ensemble`` or ``knn``).
-        agent_counts_skips: tell the inner agent a skip as a (non-memo) evaluation, so it plans its own budgets
-            (the greedy's local budgets) as without screening (default; False tells skips as memo answers, which
-            the greedy does not charge); the env's budget counts real simulations either way.
+        skips: how a skip is told to the inner agent (:class:`SkipAccounting`; default ``EVALUATION``).
         lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
             candidate screened; see :mod:`surrogates.lowfi`).
         first_runs: racing: a candidate that passes the screen first flies only this many of its runs, and the
@@ -44,10 +53,6 @@ class PrescreenConfig:
             below the best): with common random numbers the mutation left those flights unchanged. None (default):
             on when the env flies common noise and no real improvement in the model's training stores tied its
             incumbent (:func:`~surrogates.racing.tie_improvements`; checked again at each retrain).
-        skips_spend_budget: the inner agent sees a budget from which every skipped or dropped candidate was spent
-            as a whole evaluation (needs ``agent_counts_skips``), so it plans its rounds and stops as without
-            screening, having simulated less; the real budget left is unused or goes to ``verify_stop``. Off by
-            default: the inner agent sees the env's own budget and spends what screening saved.
         verify_stop: when the inner agent stops with budget left, start it again from the best test with
             screening and racing off, so that a stop the skips may have caused is checked by simulation (tests
             already simulated are memo hits and cost nothing).
@@ -62,12 +67,11 @@ class PrescreenConfig:
     retrain_every: int = 5
     max_skips: int = 20
     kind: str = "ensemble"
-    agent_counts_skips: bool = True
+    skips: SkipAccounting = SkipAccounting.EVALUATION
     lowfi: bool = True
     first_runs: int | tuple[int, ...] = 0
     race_margin: float | None = None
     drop_ties: bool | None = None
-    skips_spend_budget: bool = False
     verify_stop: bool = False
 
     def __post_init__(self):
@@ -77,9 +81,11 @@ class PrescreenConfig:
             raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
         if not 0.0 <= self.miss_rate < 1.0:
             raise ValueError(f"prescreen miss_rate: expected a share in [0, 1), got {self.miss_rate!r}")
-        if self.skips_spend_budget and not self.agent_counts_skips:
-            raise ValueError("prescreen skips_spend_budget: needs agent_counts_skips (a skip told as a memo answer "
-                             "spends no budget)")
+        try:
+            object.__setattr__(self, "skips", SkipAccounting(self.skips))
+        except ValueError:
+            raise ValueError(f"prescreen skips: expected one of {[s.value for s in SkipAccounting]}, got "
+                             f"{self.skips!r}") from None
         stages = self.race_stages
         if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
             raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
@@ -93,4 +99,4 @@ class PrescreenConfig:
         return (int(self.first_runs),) if self.first_runs else ()
 
 
-__all__ = ["RULES", "PrescreenConfig"]
+__all__ = ["RULES", "PrescreenConfig", "SkipAccounting"]

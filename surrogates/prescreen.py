@@ -38,7 +38,7 @@ from search.base import Agent, SearchResult
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
 from surrealist_gym.evaluation import describe_noise
 
-from .config import PrescreenConfig
+from .config import PrescreenConfig, SkipAccounting
 from .dataset import Featurizer, stack_rows
 from .models import SurrogateModel
 from .racing import race_margin, race_verdict, tie_improvements
@@ -80,8 +80,8 @@ class Prescreened(Agent):
     @property
     def inner_budget_left(self) -> int:
         """The budget left with every skipped or dropped candidate spent as a whole evaluation (what the inner
-        agent sees with ``skips_spend_budget``): the env's budget less its real evaluations and the skips."""
-        return self._env.budget - self._env._evaluations - len(self.skipped)
+        agent sees with ``SkipAccounting.BUDGET``): the env's budget less its real evaluations and the skips."""
+        return self._env.budget - self._env.evaluations - len(self.skipped)
 
     @property
     def unspent(self) -> int:
@@ -108,7 +108,8 @@ class Prescreened(Agent):
         seed = seed if seed is not None else self.seed
         _, info = env.reset(seed=seed)
         self.setup(env, info)
-        self.inner.setup(_SkipsSpendBudget(env.unwrapped, self) if self.config.skips_spend_budget else env, info)
+        spends = self.config.skips is SkipAccounting.BUDGET
+        self.inner.setup(_SkipsSpendBudget(env.unwrapped, self) if spends else env, info)
         done = False
         while not done and (not self.stop() or self._verify_stop(env, info)):
             self._candidates = candidates = self.inner.ask()
@@ -123,7 +124,7 @@ class Prescreened(Agent):
             for i in order:  # a better first result raises the bar for the rest
                 if done or self._inner_budget_spent:
                     break
-                if tests[i] is not None and tests[i].key() in self._env._episode_keys:
+                if tests[i] is not None and self._env.evaluated(tests[i]):
                     tests[i] = None  # the same test earlier in this ask was simulated: now a free memo answer
                 again = None if tests[i] is None else self._told.get(tests[i].key())
                 if again is not None:  # skipped before: told the same again, free, as the env's memo would
@@ -156,9 +157,10 @@ class Prescreened(Agent):
 
     @property
     def _inner_budget_spent(self) -> bool:
-        """With ``skips_spend_budget``, before the verify pass: the inner agent's budget (skips counted) is spent,
+        """With ``SkipAccounting.BUDGET``, before the verify pass: the inner agent's budget (skips counted) is spent,
         where the env would have ended the search without screening."""
-        return self.config.skips_spend_budget and self.verified_at is None and self.inner_budget_left <= 0
+        return (self.config.skips is SkipAccounting.BUDGET and self.verified_at is None
+                and self.inner_budget_left <= 0)
 
     def _verify_stop(self, env, info: dict) -> bool:
         """Begin the verify pass (see ``PrescreenConfig.verify_stop``) if due; True when it began."""
@@ -220,7 +222,7 @@ class Prescreened(Agent):
             test = self._env.test_for(action)
         except InvalidTestCase:
             return None  # the env rejects it for free
-        return None if test.key() in self._env._episode_keys else test  # a memo hit costs nothing
+        return None if self._env.evaluated(test) else test  # a memo hit costs nothing
 
     def _most_promising_first(self, candidates) -> tuple[list[int], list, list]:
         """Candidate indices, free ones first, then by predicted fitness (the order asked without a model); the
@@ -267,11 +269,11 @@ class Prescreened(Agent):
         env = self._env
         entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
                       "obstacles": [o.to_list() for o in test.obstacles], "rule": rule, "told_fitness": told,
-                      "after_evaluations": env.budget - env.budget_left, "simulations": env._simulations})
-        info = {"fitness": told, "memo": not self.config.agent_counts_skips, "skipped": True, "invalid": None,
+                      "after_evaluations": env.budget - env.budget_left, "simulations": env.simulations})
+        info = {"fitness": told, "memo": self.config.skips is SkipAccounting.MEMO, "skipped": True, "invalid": None,
                 "test": test,
                 "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
-                "simulations": env._simulations, "best_fitness": None if env.best is None else env.best.fitness,
+                "simulations": env.simulations, "best_fitness": None if env.best is None else env.best.fitness,
                 "predicted": prediction}
         if trajectory is not None:
             info.update(trajectory=trajectory, first_runs=first_runs)
@@ -403,7 +405,7 @@ class Prescreened(Agent):
 
 
 class _SkipsSpendBudget:
-    """The env as the inner agent sees it with ``PrescreenConfig.skips_spend_budget``: the same env, whose
+    """The env as the inner agent sees it with ``SkipAccounting.BUDGET``: the same env, whose
     ``budget_left`` is :attr:`Prescreened.inner_budget_left`."""
 
     def __init__(self, env, prescreened: Prescreened):

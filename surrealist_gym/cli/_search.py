@@ -79,10 +79,12 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
         agent = make_agent(name, seed=options.random_seed)
     stages = options.first_runs
     if options.prescreened:
+        from surrogates.config import SkipAccounting
         from surrogates.prescreen import PrescreenConfig, wrap
 
-        config = PrescreenConfig(rule=options.screen or "auto", first_runs=stages,
-                                 skips_spend_budget=options.skips_spend_budget, verify_stop=options.verify_stop)
+        skips = SkipAccounting.BUDGET if options.skips_spend_budget else SkipAccounting.EVALUATION
+        config = PrescreenConfig(rule=options.screen or "auto", first_runs=stages, skips=skips,
+                                 verify_stop=options.verify_stop)
         agent = wrap(agent, options.surrogate or "online", env, config)
     bar = tqdm(total=options.budget, unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)

@@ -105,6 +105,20 @@ class SurrealistEnv(gym.Env):
         return self._budget - self._evaluations - sum(self._probed.values()) // self.evaluator.runs
 
     @property
+    def evaluations(self) -> int:
+        """Evaluations charged to the budget in this episode (memo answers and invalid actions are free)."""
+        return self._evaluations
+
+    @property
+    def simulations(self) -> int:
+        """Runs simulated in this episode."""
+        return self._simulations
+
+    def evaluated(self, test: TestCase) -> bool:
+        """Whether ``test`` was evaluated in this episode (asking for it again is a free memo answer)."""
+        return test.key() in self._episode_keys
+
+    @property
     def seed_evaluation(self) -> Evaluation | None:
         """The evaluation of the seed test (made by reset)."""
         return self._seed_evaluation

@@ -10,6 +10,7 @@ from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import SurrogateModel, train_model
+from surrogates.config import SkipAccounting
 from surrogates.prescreen import PrescreenConfig, Prescreened, wrap
 from surrogates.racing import race_margin, tie_improvements
 from surrogates.replay import replay_margin
@@ -160,24 +161,25 @@ def test_racing_stages_must_increase():
 
 
 def test_skips_spend_the_inner_agents_budget(model):
-    # a screen that skips every candidate: with skips_spend_budget the greedy runs out of (its) budget after as many
+    # a screen that skips every candidate: with SkipAccounting.BUDGET the greedy runs out of (its) budget after as many
     # candidates as the budget allows, having simulated only the seed test; the env's budget is left unspent
     env = gym.make("Surrealist-Generate-v0", budget=5, runs=1, executor="inline")
-    config = PrescreenConfig(rule="pi", threshold=1.0, max_skips=10**6, skips_spend_budget=True)
+    config = PrescreenConfig(rule="pi", threshold=1.0, max_skips=10**6, skips=SkipAccounting.BUDGET)
     agent = Prescreened(AdaptiveGreedy("paper"), model, config, seed=0)
     result = agent.run(env, seed=0)
     assert len(agent.skipped) == 4 and agent.unspent == pytest.approx(4.0)
     assert result.stop_reason.startswith("budget spent") and env.unwrapped.budget_left == 4
     assert env.unwrapped.evaluator.simulations == 1
-    with pytest.raises(ValueError, match="agent_counts_skips"):
-        PrescreenConfig(skips_spend_budget=True, agent_counts_skips=False)
+    assert PrescreenConfig(skips="budget").skips is SkipAccounting.BUDGET
+    with pytest.raises(ValueError, match="prescreen skips: expected one of"):
+        PrescreenConfig(skips="sometimes")
 
 
 def test_the_inner_agent_stops_where_its_budget_with_skips_counted_ends():
     # every candidate is dropped after its first run (a margin below any shortfall): the greedy is told exactly as
     # many candidates as the budget holds after the seed test, as the env would cut it off without screening
     env = gym.make("Surrealist-Generate-v0", budget=4, runs=2, executor="inline")
-    config = PrescreenConfig(rule="none", first_runs=1, race_margin=-1e9, lowfi=False, skips_spend_budget=True)
+    config = PrescreenConfig(rule="none", first_runs=1, race_margin=-1e9, lowfi=False, skips=SkipAccounting.BUDGET)
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
     assert len(agent.skipped) == 3 and result.stop_reason.startswith("budget spent")
