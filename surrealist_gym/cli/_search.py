@@ -52,13 +52,44 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
     for key in ("log", "test", "seed"):
         if getattr(options, key, None):
             changes[key] = str(Path(getattr(options, key)).resolve())
-    options = dataclasses.replace(options, **changes)
+    options = measured_prescreen(dataclasses.replace(options, **changes))
     out = Path(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}")
     if out.exists() and not out.is_dir():
         raise SurrealistError(f"--out {out}: exists and is not a folder")
     out.mkdir(parents=True, exist_ok=True)
     (out / RUN_FILE).write_text(json.dumps(options.to_json(), indent=2) + "\n")
     return out, options
+
+
+# The pre-screening settings whose savings docs/results.md reports, by the model's noise mode and the command; what
+# `--surrogate MODEL` alone runs (racing stages at or above --runs are left out).
+MEASURED_PRESCREEN = {
+    (True, "generate"): {"first_runs": (1, 2, 3, 4), "skips_spend_budget": True, "verify_stop": True},
+    (True, "replicate"): {"screen": "none", "first_runs": (1, 2, 3, 4), "skips_spend_budget": True,
+                          "verify_stop": True},
+    (False, "replicate"): {"first_runs": (1,)},
+    (False, "generate"): {"first_runs": (3,)},
+}
+
+
+def measured_prescreen(options: SearchOptions) -> SearchOptions:
+    """``--surrogate MODEL`` with none of the expert pre-screening flags: the measured settings for the noise mode
+    the model was trained in (MEASURED_PRESCREEN; none for an online model or a model whose mode is unknown)."""
+    expert = options.first_runs or options.screen != "auto" or options.skips_spend_budget or options.verify_stop
+    if not options.surrogate or options.surrogate == "online" or expert:
+        return options
+    try:
+        common = json.loads((Path(options.surrogate) / "meta.json").read_text()).get("common_noise")
+    except (OSError, ValueError, AttributeError):
+        return options  # the model's own loading reports what is wrong with it
+    settings = dict(MEASURED_PRESCREEN.get((common, options.command), {}))
+    if not settings:
+        return options
+    settings["first_runs"] = tuple(k for k in settings["first_runs"] if k < options.runs)
+    mode = "common noise" if common else "each test's own noise"
+    print(f"--surrogate {options.surrogate}: a model trained with {mode}; pre-screening as measured: "
+          + ", ".join(f"{k}={v}" for k, v in settings.items()), file=sys.stderr)
+    return dataclasses.replace(options, **settings)
 
 
 def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:

@@ -1,4 +1,5 @@
 """Pre-screening around the greedy on a tiny Generate env: real simulations only, skips logged, seeded."""
+import json
 import warnings
 
 import gymnasium as gym
@@ -326,3 +327,20 @@ def test_ties_are_raced_only_where_no_tie_improved_in_the_training_stores():
         return agent._drop_ties
 
     assert drops_ties([3, 4, 5]) and not drops_ties([0, 1, 2, 3, 4, 5])
+
+
+def test_surrogate_alone_runs_the_measured_settings_for_its_noise_mode(model, tmp_path, capsys):
+    """`--surrogate MODEL` without expert flags: an own-noise model races a generation on its first 3 runs (the
+    setting measured for it); the settings are recorded in run.json. An expert flag keeps the user's settings."""
+    from surrealist_gym.cli import main
+
+    folder = model.save(tmp_path / "m")
+    out = tmp_path / "gen"
+    assert main(["generate", "--budget", "2", "--runs", "4", "--workers", "1", "--surrogate", str(folder),
+                 "--out", str(out)]) == 0
+    options = json.loads((out / "run.json").read_text())
+    assert options["first_runs"] == [3] and "pre-screening as measured" in capsys.readouterr().err
+    out2 = tmp_path / "gen2"
+    assert main(["generate", "--budget", "2", "--runs", "4", "--workers", "1", "--surrogate", str(folder),
+                 "--first-runs", "1", "--out", str(out2)]) == 0
+    assert json.loads((out2 / "run.json").read_text())["first_runs"] == [1]
