@@ -26,6 +26,7 @@ class Shape(str, Enum):
 
 
 _SHAPE_NAMES = {"box": Shape.BOX, "apartment": Shape.BOX, "cylinder": Shape.CYLINDER, "tree": Shape.CYLINDER}
+MAX_EXTENT_M = 10_000.0  # [m] obstacles beyond this size or distance are a typo, not a test
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,6 +51,10 @@ class Obstacle:
         for name in ("l", "w", "h"):
             if getattr(self, name) <= 0:
                 raise InvalidTestCase(f"obstacle size {name!r} must be positive, got {getattr(self, name):g}")
+        for name in ("l", "w", "h", "x", "y", "z"):
+            if abs(getattr(self, name)) > MAX_EXTENT_M:
+                raise InvalidTestCase(f"obstacle field {name!r}: expected at most {MAX_EXTENT_M:g} m in size, got "
+                                      f"{getattr(self, name):g}")
         if self.z < 0:
             raise InvalidTestCase(f"obstacle position 'z' (base height) must be >= 0, got {self.z:g}")
         object.__setattr__(self, "shape", _parse_shape(self.shape))
@@ -152,11 +157,11 @@ class Wind:
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name.endswith("direction"):
-                if not (isinstance(v, (list, tuple)) and len(v) == 3):
-                    raise InvalidTestCase(f"wind field {f.name!r}: expected 3 numbers, got {v!r}")
+                if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(_finite(c) for c in v)):
+                    raise InvalidTestCase(f"wind field {f.name!r}: expected 3 finite numbers, got {v!r}")
                 object.__setattr__(self, f.name, tuple(float(c) for c in v))
-            elif isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0:
-                raise InvalidTestCase(f"wind field {f.name!r}: expected a non-negative number, got {v!r}")
+            elif not _finite(v) or v < 0:
+                raise InvalidTestCase(f"wind field {f.name!r}: expected a finite number >= 0, got {v!r}")
 
     def to_dict(self) -> dict:
         return {f.name: (list(getattr(self, f.name)) if f.name.endswith("direction") else getattr(self, f.name))
@@ -246,20 +251,15 @@ def load_test(path) -> TestCase:
     Relative file paths are resolved against the YAML's folder, then its parents (the paper's seeds name paths
     relative to their repository root), then by file name in the YAML's folder.
     """
-    import yaml
-
     path = Path(path)
     name = os.fspath(path)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as err:
         raise InvalidTestCase(f"{name}: cannot read test case ({err.strerror})") from err
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark else ""
-        raise InvalidTestCase(f"{name}: invalid YAML{where}") from err
+    except UnicodeDecodeError as err:
+        raise InvalidTestCase(f"{name}: not UTF-8 text (byte {err.start})") from None
+    doc = _safe_yaml(text, name)
     if not isinstance(doc, dict):
         raise InvalidTestCase(f"{name}: expected a mapping with sections {sorted(_SECTIONS)}")
     unknown = set(doc) - _SECTIONS
@@ -312,6 +312,9 @@ def load_test(path) -> TestCase:
     if home is not None:
         if not (isinstance(home, list) and len(home) == 3):
             raise InvalidTestCase(f"{name}: field 'home_position': expected [lat, lon, alt], got {home!r}")
+        if not all(_finite(v) for v in home) or not (-90 <= home[0] <= 90 and -180 <= home[1] <= 180):
+            raise InvalidTestCase(f"{name}: field 'home_position': expected [lat, lon, alt] as numbers (lat in "
+                                  f"[-90, 90], lon in [-180, 180]), got {home!r}")
         home = tuple(float(v) for v in home)
     log = assertion.get("log_file")
     reference_log = _resolve_path(log, base) if isinstance(log, str) else None
@@ -401,6 +404,27 @@ def _relative(file: str, base: Path) -> str:
     return str(path.relative_to(base)) if path.is_relative_to(base) else str(path)
 
 
+def _finite(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+
+
+def _safe_yaml(text: str, name: str):
+    """``yaml.safe_load`` for files from anywhere: no aliases (an alias bomb expands to gigabytes; Aerialist files
+    have none), and nesting too deep for the parser is an error, not a crash."""
+    import yaml
+
+    try:
+        if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)):
+            raise InvalidTestCase(f"{name}: YAML aliases (*name) are not supported in test cases")
+        return yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        raise InvalidTestCase(f"{name}: invalid YAML{where}") from None
+    except RecursionError:
+        raise InvalidTestCase(f"{name}: YAML nested too deeply") from None
+
+
 def _construct(cls, values: dict, where: str):
     names = {f.name for f in fields(cls)}
     unknown = set(values) - names
@@ -457,23 +481,33 @@ def _parse_obstacles(raw, name) -> tuple[Obstacle, ...]:
 def _read_params(path: str) -> list[tuple[str, float]]:
     """PX4 parameters from ``NAME, value`` lines (no header)."""
     out = []
-    with open(path, encoding="utf-8") as f:
-        for n, row in enumerate(csv.reader(f), start=1):
-            if not row or not row[0].strip() or row[0].strip().startswith("#"):
-                continue
-            if len(row) < 2:
-                raise InvalidTestCase(f"{path}: line {n}: expected 'NAME, value', got {','.join(row)!r}")
-            try:
-                value = float(row[1])
-            except ValueError as err:
-                raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: not a number {row[1]!r}") from err
-            out.append((row[0].strip(), int(value) if value.is_integer() and "." not in row[1] else value))
+    for n, row in enumerate(csv.reader(_text_lines(path)), start=1):
+        if not row or not row[0].strip() or row[0].strip().startswith("#"):
+            continue
+        if len(row) < 2:
+            raise InvalidTestCase(f"{path}: line {n}: expected 'NAME, value', got {','.join(row)!r}")
+        try:
+            value = float(row[1])
+        except ValueError as err:
+            raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: not a number {row[1]!r}") from err
+        if not math.isfinite(value):
+            raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: not a finite number {row[1]!r}")
+        out.append((row[0].strip(), int(value) if value.is_integer() and "." not in row[1] else value))
     return out
 
 
+def _text_lines(path: str) -> list[str]:
+    """The lines of a UTF-8 text file (a one-line error naming the file otherwise)."""
+    try:
+        return Path(path).read_text(encoding="utf-8").splitlines()
+    except UnicodeDecodeError as err:
+        raise InvalidTestCase(f"{path}: not UTF-8 text (byte {err.start})") from None
+    except OSError as err:
+        raise InvalidTestCase(f"{path}: cannot read ({err.strerror})") from None
+
+
 def _read_commands(path: str) -> tuple[RuntimeCommand, ...]:
-    with open(path, encoding="utf-8") as f:
-        rows = [r for r in csv.reader(f) if r and any(c.strip() for c in r)]
+    rows = [r for r in csv.reader(_text_lines(path)) if r and any(c.strip() for c in r)]
     if rows and rows[0][0].strip() == "timestamp":
         rows = rows[1:]
     out = []

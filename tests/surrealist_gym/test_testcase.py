@@ -85,6 +85,12 @@ def test_dict_obstacle_form_with_angle_and_tree(tmp_path):
     ("simulation:\n  wind: {velocity_mean: -1}\n", "wind field 'velocity_mean'"),
     ("simulation: [\n", "invalid YAML"),
     ("- just a list\n", "expected a mapping"),
+    ("simulation:\n  home_position: [a, 8.5, 400]\n", "field 'home_position': expected [lat, lon, alt] as numbers"),
+    ("simulation:\n  wind: {velocity_mean: 3, direction: [north, 0, 0]}\n", "'direction': expected 3 finite numbers"),
+    ("simulation:\n  wind: {velocity_mean: .inf}\n", "'velocity_mean': expected a finite number >= 0"),
+    ("simulation:\n  obstacles: [1.0e+9,3,3, 0,0,0, 0]\n", "'l': expected at most 10000 m"),
+    ("simulation:\n  obstacles: &a [3,3,3, 0,9,0, 0]\n  world: *a\n", "YAML aliases (*name) are not supported"),
+    ("a: " + "[" * 50_000 + "]" * 50_000 + "\n", "YAML nested too deeply"),
 ])
 def test_invalid_yaml_one_line_error(tmp_path, yaml_text, reason):
     path = tmp_path / "bad.yaml"
@@ -93,6 +99,18 @@ def test_invalid_yaml_one_line_error(tmp_path, yaml_text, reason):
         sg.load_test(path)
     message = str(err.value)
     assert reason in message and "bad.yaml" in message and "\n" not in message
+
+
+def test_text_that_is_not_utf8_is_a_one_line_error(tmp_path):
+    bad = tmp_path / "latin.yaml"
+    bad.write_bytes(b"simulation:\n  obstacles: [3,3,3,\xff\xfe,0,0,0]\n")
+    with pytest.raises(sg.InvalidTestCase, match="latin.yaml: not UTF-8 text"):
+        sg.load_test(bad)
+    (tmp_path / "params.csv").write_bytes(b"MPC_XY_CRUISE, 5\n\xffNAV, 3\n")
+    test = tmp_path / "test.yaml"
+    test.write_text("robot:\n  params_file: params.csv\n")
+    with pytest.raises(sg.InvalidTestCase, match="params.csv: not UTF-8 text"):
+        sg.load_test(test)
 
 
 def test_mutation_makes_a_new_value():
