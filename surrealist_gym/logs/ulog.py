@@ -89,9 +89,16 @@ def read_ulog(source) -> FlightLog:
             data[d.name] = d.data
     if ulog.file_corruption:
         warnings.warn(f"{name}: corrupt data in the ULog was skipped (pyulog resynchronised)", stacklevel=2)
-    positions = _positions(name, data.get("vehicle_local_position"))
+    elif not hasattr(source, "read"):
+        cut = _truncated_at(os.fspath(source))
+        if cut is not None:
+            warnings.warn(f"{name}: the file ends inside a message at byte {cut}: truncated, the flight it holds "
+                          f"may be incomplete", stacklevel=2)
+    start_us = int(ulog.start_timestamp)
+    positions = _positions(name, data.get("vehicle_local_position"), start_us)
     params = dict(ulog.initial_parameters)
-    start_us, end_us = int(ulog.start_timestamp), int(ulog.last_timestamp)
+    # the header's last timestamp, unless corrupt data put it beyond the last position sample by more than a minute
+    end_us = min(int(ulog.last_timestamp), int(positions.timestamp_us[-1]) + 60_000_000)
     status = data.get("vehicle_status")
     modes = ()
     if status is not None and "nav_state" in status and len(status["timestamp"]):
@@ -109,13 +116,34 @@ def _name(source) -> str:
     return os.fspath(source)
 
 
-def _positions(name: str, lp) -> LocalPositions:
+def _truncated_at(path: str) -> int | None:
+    """The offset of the last, incomplete message when the file ends inside it (a truncated log), else None.
+    ULog: a 16-byte header, then messages of (uint16 size, uint8 type, size bytes)."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError:
+        return None
+    pos, n = 16, len(data)
+    while pos + 3 <= n:
+        size = data[pos] | data[pos + 1] << 8
+        if pos + 3 + size > n:
+            return pos
+        pos += 3 + size
+    return pos if pos != n else None
+
+
+def _positions(name: str, lp, start_us: int = 0) -> LocalPositions:
     if lp is None:
         raise LogFormatError(f"no valid local position in {name} (no vehicle_local_position topic)")
     missing = [k for k in ("timestamp", "x", "y", "z") if k not in lp]
     if missing:
         raise LogFormatError(f"no valid local position in {name} (vehicle_local_position lacks {', '.join(missing)})")
     ok = np.isfinite(lp["x"]) & np.isfinite(lp["y"]) & np.isfinite(lp["z"])
+    # timestamps a corrupt file scrambled: before the log started, more than a day after it, or going backwards
+    ts = lp["timestamp"].astype(np.int64)
+    ok &= (ts >= start_us) & (ts <= start_us + 86_400_000_000)
+    ok &= ts >= np.maximum.accumulate(np.where(ok, ts, 0))
     if not np.any(ok):
         raise LogFormatError(f"no valid local position in {name} (vehicle_local_position x/y/z never finite)")
     for flag in ("xy_valid", "z_valid"):

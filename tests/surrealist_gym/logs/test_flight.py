@@ -204,3 +204,24 @@ def test_detect_format_by_content_not_extension(tmp_path):
     assert detect_format(path) == "ulog"
     assert detect_format(FORMATS / "tlog" / "ardusub_small.tlog") == "tlog"
     assert detect_format(FORMATS / "dataflash" / "ardusub_small.BIN") == "dataflash"
+
+
+@pytest.mark.parametrize("share", [0.1, 0.5, 0.9])
+def test_a_truncated_ulog_says_so(tmp_path, share):
+    data = CASE0_ULG.read_bytes()
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(data[:int(len(data) * share)])
+    with pytest.warns(UserWarning, match="cut.ulg: the file ends inside a message at byte .*: truncated"):
+        flight = read_ulog(cut)
+    assert flight.end_us <= flight.positions.timestamp_us[-1] + 60_000_000
+
+
+def test_whole_ulogs_are_not_called_truncated():
+    for path in [CASE0_ULG, *sorted((FORMATS / "ulog").glob("*.ulg"))]:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                read_flight(path)
+            except LogFormatError:  # a sample log without a valid local position
+                pass
+        assert not [w for w in caught if "truncated" in str(w.message)], path
