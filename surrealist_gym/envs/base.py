@@ -159,7 +159,14 @@ class SurrealistEnv(gym.Env):
         self._probed = {}
         self._last_action = np.zeros(len(self._mutators))
         evaluation, _ = self._evaluate(self._seed_test)
-        self._seed_fitness = evaluation.fitness if np.isfinite(evaluation.fitness) else -1.0
+        if not np.isfinite(evaluation.fitness):
+            from collections import Counter
+
+            from ..errors import SimulationError
+            statuses = ", ".join(f"{n} {s}" for s, n in Counter(evaluation.statuses).items()) or "no runs"
+            raise SimulationError(f"seed test: none of its runs could be judged ({statuses}); check that its "
+                                  f"mission can be flown (surrealist simulate shows each run's end)")
+        self._seed_fitness = evaluation.fitness
         self._seed_evaluation = evaluation
         self._best = evaluation
         return self._observation(evaluation.fitness), self._info(evaluation, None, False)

@@ -168,3 +168,17 @@ def test_a_competition_seed_flies_the_sitl_iris_by_default(shared_data):
     mission1 = SHARED_DATA / "competition" / "case_studies" / "mission1.yaml"
     cfg = GenerateEnv(seed_test=str(mission1), runs=1, budget=2).evaluator.sim_config
     assert cfg.profile == "px4-v1.12-sitl-iris" and cfg.avoidance_model == AvoidanceModel.PX4
+
+
+def test_a_seed_test_that_cannot_fly_is_a_one_line_error(tmp_path):
+    from surrealist_gym.envs.generate import GenerateEnv
+    from surrealist_gym.errors import SimulationError
+
+    plan = tmp_path / "empty.plan"
+    plan.write_text('{"fileType": "Plan", "version": 1, "mission": {"version": 2, "items": [], '
+                    '"plannedHomePosition": [47.39, 8.54, 488]}}')
+    test = tmp_path / "empty.yaml"
+    test.write_text("robot:\n  mission_file: empty.plan\nsimulation:\n  obstacles: [3,3,3, 0,9,0, 0]\n")
+    env = GenerateEnv(seed_test=str(test), runs=1, budget=2, executor="inline")
+    with pytest.raises(SimulationError, match="seed test: none of its runs could be judged"):
+        env.reset()
