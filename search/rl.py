@@ -208,6 +208,43 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     return out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
 
 
+def load_policy(path, algorithm: Algorithm | str = "ppo"):
+    """The policy network of a policy file written by :func:`train_policy`, read without running code from it:
+    only its weights (``policy.pth``, ``torch.load(weights_only=True)``) go into a freshly built default
+    ``MlpPolicy`` whose spaces follow from the weights (one action per mutator, the env's observation). SB3's own
+    ``load`` would unpickle the file's other entries, which can carry code."""
+    import io
+    import zipfile
+
+    import torch
+
+    algorithm = Algorithm(algorithm)
+    try:
+        with zipfile.ZipFile(path) as archive:
+            state = torch.load(io.BytesIO(archive.read("policy.pth")), weights_only=True, map_location="cpu")
+    except (OSError, KeyError, zipfile.BadZipFile, RuntimeError, ValueError) as err:
+        raise SurrealistError(f"{path}: not a policy file of `surrealist train-ppo` ({type(err).__name__})") from None
+    first, action = (("mlp_extractor.policy_net.0.weight", "action_net.weight") if algorithm is Algorithm.PPO
+                     else ("actor.latent_pi.0.weight", "actor.mu.weight"))
+    if first not in state or action not in state:
+        raise SurrealistError(f"{path}: not a default {algorithm.value.upper()} MlpPolicy (no {first!r} weights)")
+    n_obs, n_act = int(state[first].shape[1]), int(state[action].shape[0])
+    observations = gym.spaces.Box(-np.inf, np.inf, shape=(n_obs,), dtype=np.float32)
+    actions = gym.spaces.Box(-1.0, 1.0, shape=(n_act,), dtype=np.float32)
+    if algorithm is Algorithm.PPO:
+        from stable_baselines3.common.policies import ActorCriticPolicy as policy_class
+    else:
+        from stable_baselines3.sac.policies import SACPolicy as policy_class
+    policy = policy_class(observations, actions, lambda _: 0.0)
+    try:
+        policy.load_state_dict(state)
+    except RuntimeError as err:
+        raise SurrealistError(f"{path}: weights do not fit a default {algorithm.value.upper()} MlpPolicy "
+                              f"({str(err).splitlines()[0]})") from None
+    policy.set_training_mode(False)
+    return policy
+
+
 _TORCH_RNG = threading.Lock()  # searches run in threads (compare --parallel) share torch's global generator
 
 
@@ -224,7 +261,7 @@ class PPOAgent(Agent):
             if not Path(policy).is_file():
                 raise SurrealistError(f"{policy}: no such policy file (train one with `surrealist train-ppo`)")
             self.policy_path = str(policy)
-            policy = _sb3(self.algorithm).load(self.policy_path, device="cpu")
+            policy = load_policy(self.policy_path, self.algorithm)
         self.model = policy
         self._obs = None
         self._explore = False

@@ -126,3 +126,26 @@ def test_ppo_searches_in_parallel_threads_are_reproducible(policy):
     with ThreadPoolExecutor(2) as pool:
         together = list(pool.map(search, (4, 5)))
     assert together == alone
+
+
+def test_a_policy_file_runs_no_code_from_its_data(policy, tmp_path):
+    """SB3's own load unpickles the zip's ``data``; ours reads only the weights, so a crafted entry does nothing."""
+    import base64
+    import pickle
+    import zipfile
+
+    marker = tmp_path / "ran"
+
+    class Payload:
+        def __reduce__(self):
+            return (open, (str(marker), "w"))
+
+    crafted = tmp_path / "crafted.zip"
+    with zipfile.ZipFile(policy) as source, zipfile.ZipFile(crafted, "w") as target:
+        target.writestr("policy.pth", source.read("policy.pth"))
+        blob = base64.b64encode(pickle.dumps(Payload())).decode()
+        target.writestr("data", '{"observation_space": {":serialized:": "%s"}}' % blob)
+    agent = make_agent(f"ppo:{crafted}", seed=0)
+    assert not marker.exists()
+    result = agent.run(_env(3), seed=0)
+    assert result.evaluations >= 1 and not marker.exists()
