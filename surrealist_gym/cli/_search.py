@@ -36,7 +36,21 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         saved = out / RUN_FILE
         if not saved.is_file():
             raise SurrealistError(f"{out}: not a results folder to resume (no {RUN_FILE})")
-        return out, options_type.from_json(saved)
+        options = options_type.from_json(saved)
+        for f in dataclasses.fields(options_type):  # what the command line changes: where it runs, nothing else
+            given = getattr(args, f.name, f.default)
+            if f.name in ("workers", "dask_scheduler"):
+                if given is not None:
+                    options = dataclasses.replace(options, **{f.name: given})
+            elif f.name != "agent" and given != f.default and given != getattr(options, f.name):
+                flag = "--" + f.name.replace("_", "-")
+                raise SurrealistError(f"{flag}: the search in {out} was started with {getattr(options, f.name)!r}; "
+                                      f"--resume keeps its options (only --workers and --dask-scheduler change)")
+        module = options.agent.split(":", 1)[0] if ":" in (options.agent or "") else None
+        if module not in (None, "ppo", "sac") and args.agent != options.agent:
+            raise SurrealistError(f"{saved}: the search's agent {options.agent!r} is code from module {module!r}; "
+                                  f"resuming would import it: give --agent {options.agent} to confirm")
+        return out, options
     options = options_type.from_args(args)
     if options.agent not in (None, "greedy"):
         from search.registry import make_agent

@@ -236,3 +236,26 @@ def test_out_that_is_a_file_is_refused(tmp_path, capsys):
     afile.write_text("not a folder")
     assert main(["generate", "--out", str(afile)]) == 2
     assert "exists and is not a folder" in capsys.readouterr().err
+
+
+def test_resume_does_not_import_an_agent_module_from_a_run_file(tmp_path, capsys):
+    """A run.json can be edited by anyone: its module:Class agent is imported only when the command line names it."""
+    from surrealist_gym.cli.options import GenerateOptions
+
+    out = tmp_path / "gen"
+    out.mkdir()
+    (out / "run.json").write_text(json.dumps(GenerateOptions(agent="evil_module:Agent").to_json()))
+    assert main(["generate", "--resume", str(out)]) == 2
+    assert "resuming would import it: give --agent evil_module:Agent to confirm" in capsys.readouterr().err
+
+
+def test_resume_takes_new_workers_and_refuses_a_new_identity(tmp_path, capsys):
+    from surrealist_gym.cli.options import GenerateOptions
+
+    out = tmp_path / "gen"
+    out.mkdir()
+    (out / "run.json").write_text(json.dumps(GenerateOptions(budget=2, runs=1, workers=1).to_json()))
+    assert main(["generate", "--resume", str(out), "--budget", "9"]) == 2
+    assert "--budget: the search in" in capsys.readouterr().err
+    assert main(["generate", "--resume", str(out), "--workers", "2"]) == 0
+    assert json.loads((out / "summary.json").read_text())["evaluations"] <= 2
