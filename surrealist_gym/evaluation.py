@@ -157,6 +157,7 @@ class Evaluator:
         self.store = store
         if store is not None:
             _check_noise_mode(store, self.sim_config.common_noise)
+            store.claim(search_identity(objective, runs, seed, self.sim_config))
         self._memo: dict[str, Evaluation] = {}
         self._flown: dict[str, list] = {}  # the runs of partial evaluations, by test key
         self._flown_seconds: dict[str, float] = {}
@@ -220,6 +221,29 @@ def _first_runs(evaluation: Evaluation, k: int) -> Evaluation:
     trajectories = evaluation.first_runs_trajectories
     return Evaluation(evaluation.test, float(first[k - 1]), evaluation.runs[:k], {"first_runs_fitness": first[:k - 1]},
                       trajectories[k - 1] if len(trajectories) >= k else None, trajectories[:k - 1], cached=True)
+
+
+def search_identity(objective, runs: int, seed: int, sim_config) -> dict:
+    """What every stored fitness of a search depends on: the problem (objective and its settings, a replication's
+    reference trajectory by digest), the runs per evaluation, the base seed, the simulator settings (digest, with the
+    UAV profile's name) and, recorded but not compared, the package version."""
+    import hashlib
+    from dataclasses import fields, is_dataclass
+
+    from . import __version__
+
+    def digest(value) -> str:
+        return hashlib.sha1(value if isinstance(value, bytes) else repr(value).encode()).hexdigest()[:16]
+
+    problem = {"objective": type(objective).__name__}
+    if is_dataclass(objective):
+        for f in fields(objective):
+            value = getattr(objective, f.name)
+            xyz = getattr(value, "xyz", value)
+            problem[f.name] = (digest(np.round(np.asarray(xyz, dtype=np.float64), 6).tobytes())
+                               if isinstance(xyz, np.ndarray) else getattr(value, "value", value))
+    return {"problem": problem, "runs": int(runs), "seed": int(seed), "uav": sim_config.profile,
+            "common_noise": bool(sim_config.common_noise), "sim": digest(sim_config), "version": __version__}
 
 
 def flown_with_common_noise(stored: StoredEvaluation) -> bool:

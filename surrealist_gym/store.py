@@ -30,7 +30,12 @@ CREATE TABLE IF NOT EXISTS evaluations (
     created     REAL NOT NULL
 );
 CREATE INDEX IF NOT EXISTS evaluations_key ON evaluations (search, test_key);
+CREATE TABLE IF NOT EXISTS meta (
+    key         TEXT PRIMARY KEY,
+    value       TEXT NOT NULL
+);
 """
+SCHEMA_VERSION = 2  # 1: evaluations only; 2: a meta table with the schema version and the search's identity
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,9 +63,43 @@ class EvaluationStore:
         self.search = search
         try:
             self._db = sqlite3.connect(self.path)
-            self._db.executescript(_SCHEMA)
+            tables = {r[0] for r in self._db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+            if "evaluations" not in tables:  # a new store; an existing one is not changed by reading it
+                self._upgrade()
         except sqlite3.DatabaseError as err:
             raise SurrealistError(f"{self.path}: not an evaluation store ({err})") from err
+
+    def _upgrade(self) -> None:
+        """Create the tables (or add the meta table to a store written before it existed)."""
+        self._db.executescript(_SCHEMA)
+        self._db.execute("INSERT OR IGNORE INTO meta (key, value) VALUES ('schema_version', ?)", (str(SCHEMA_VERSION),))
+        self._db.commit()
+
+    @property
+    def identity(self) -> dict | None:
+        """What the stored fitness values depend on (:meth:`claim`), or None for a store that never recorded it."""
+        try:
+            row = self._db.execute("SELECT value FROM meta WHERE key = ?", (f"identity:{self.search}",)).fetchone()
+        except sqlite3.OperationalError:  # no meta table: a store of schema version 1
+            return None
+        return None if row is None else json.loads(row[0])
+
+    def claim(self, identity: dict) -> None:
+        """Record the identity of the search that writes here, or check it against the one recorded: a store holds
+        the evaluations of one search (a mismatch is a one-line error naming the first difference; ``version`` is
+        recorded, not compared)."""
+        held = self.identity
+        if held is None:
+            self._upgrade()
+            self._db.execute("INSERT INTO meta (key, value) VALUES (?, ?)",
+                             (f"identity:{self.search}", json.dumps(identity, sort_keys=True)))
+            self._db.commit()
+            return
+        for key in sorted(set(held) | set(identity)):
+            if key != "version" and held.get(key) != identity.get(key):
+                raise SurrealistError(f"{self.path}: holds the evaluations of another search ({key}: "
+                                      f"{_short(held.get(key))} there, {_short(identity.get(key))} here); use "
+                                      f"--resume with that search's options, or another results folder")
 
     def add(self, evaluation: StoredEvaluation) -> int:
         """Write one evaluation and commit at once; returns its id."""
@@ -105,3 +144,8 @@ class EvaluationStore:
         (id_, search, key, test, seeds, runs, fitness, info, sim_s, wall_s, created) = row
         return StoredEvaluation(key, json.loads(test), tuple(json.loads(seeds)), tuple(json.loads(runs)), fitness,
                                 json.loads(info), sim_s, wall_s, search, id_, created)
+
+
+def _short(value) -> str:
+    text = json.dumps(value, sort_keys=True)
+    return text if len(text) <= 60 else text[:57] + "..."

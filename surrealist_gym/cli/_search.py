@@ -22,11 +22,37 @@ def new_search_folder(args, options_type: type[SearchOptions]):
     fresh = not args.resume and not (args.out and Path(args.out).exists())
     out, options = prepare(args, options_type)
     try:
+        _lock(out)
         yield out, options
     except BaseException:
+        _unlock(out)
         if fresh:
             shutil.rmtree(out, ignore_errors=True)
         raise
+
+
+_LOCKS: dict[Path, object] = {}  # results folders this process writes to, with their open lock files
+
+
+def _lock(out: Path) -> None:
+    """Refuse a second writer: an exclusive lock on ``out/.lock`` held until the search ends (run_search)."""
+    try:
+        import fcntl
+    except ImportError:  # no advisory locks on this platform
+        return
+    handle = open(out / ".lock", "w")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.close()
+        raise SurrealistError(f"{out}: another search is writing to this results folder") from None
+    _LOCKS[out] = handle
+
+
+def _unlock(out: Path) -> None:
+    handle = _LOCKS.pop(out, None)
+    if handle is not None:
+        handle.close()
 
 
 def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOptions]:
@@ -70,6 +96,9 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
     out = Path(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}")
     if out.exists() and not out.is_dir():
         raise SurrealistError(f"--out {out}: exists and is not a folder")
+    if (out / RUN_FILE).exists():
+        raise SurrealistError(f"--out {out}: holds a search already; continue it with --resume {out}, or choose "
+                              f"another folder")
     out.mkdir(parents=True, exist_ok=True)
     (out / RUN_FILE).write_text(json.dumps(options.to_json(), indent=2) + "\n")
     return out, options
@@ -146,7 +175,11 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
         bar.close()
         print(f"interrupted: every finished evaluation is stored; resume with --resume {out}", file=sys.stderr)
         env.close()
+        _unlock(out)
         return 130
+    except BaseException:
+        _unlock(out)
+        raise
     bar.n = min(result.evaluations, bar.total)
     bar.close()
     summary = write_results(out, env, result, time.perf_counter() - start, problem)
@@ -175,6 +208,7 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
               + ("competition distance" if measure == "competition" else "2-D clearance") + ")")
     print(f"results in {out}/: best.yaml, evaluations.csv, summary.json, figure1.png, fitness.png, "
           f"min_distances.png")
+    _unlock(out)
     return 0
 
 

@@ -48,10 +48,11 @@ def test_a_failing_simulation_is_retried_then_recorded(test_case):
     assert "no item with a position" in runs[0].message
 
 
-def test_env_survives_failed_simulations(test_case):
+def test_a_seed_whose_simulations_fail_is_reported_not_searched(test_case):
     from surrealist_gym.envs.generate import GenerateEnv
+    from surrealist_gym.errors import SimulationError
 
     env = GenerateEnv(seed_test=dataclasses.replace(test_case, mission=None), runs=1, budget=2,
                                        executor="inline")
-    _, info = env.reset(seed=0)
-    assert info["statuses"] == ("error",) and info["fitness"] < 0
+    with pytest.raises(SimulationError, match=r"none of its runs could be judged \(1 error\)"):
+        env.reset(seed=0)

@@ -42,3 +42,27 @@ def test_not_a_database(tmp_path):
     with pytest.raises(sg.SurrealistError, match="not an evaluation store"):
         EvaluationStore(bad)
     assert sqlite3.sqlite_version
+
+
+def test_a_store_records_one_search_and_reading_changes_nothing(tmp_path):
+    import shutil
+    from pathlib import Path
+
+    from surrealist_gym.errors import SurrealistError
+    from surrealist_gym.store import SCHEMA_VERSION, EvaluationStore
+
+    with EvaluationStore(tmp_path / "new.sqlite") as store:
+        assert store.identity is None
+        store.claim({"runs": 5, "seed": 0, "version": "0.1.0"})
+        store.claim({"runs": 5, "seed": 0, "version": "0.2.0"})  # the version is recorded, not compared
+        with pytest.raises(SurrealistError, match=r"another search \(runs: 5 there, 2 here\)"):
+            store.claim({"runs": 2, "seed": 0, "version": "0.1.0"})
+        assert store.identity["runs"] == 5
+        version = store._db.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()[0]
+        assert int(version) == SCHEMA_VERSION
+    old = tmp_path / "old.sqlite"  # a store written before the meta table existed
+    shutil.copy(Path(__file__).resolve().parents[1] / "data" / "stores" / "rq2-rep0.sqlite", old)
+    before = old.read_bytes()
+    with EvaluationStore(old) as store:
+        assert store.identity is None and len(store) > 0 and next(iter(store)).fitness is not None
+    assert old.read_bytes() == before

@@ -176,14 +176,40 @@ def test_racing_stages_must_increase_below_the_runs(tmp_path, stages):
     assert failed.value.code == 2
 
 
-def test_a_results_folder_keeps_its_noise_mode(tmp_path, capsys):
-    # evaluations flown with common noise are not read back by a search with each test's own noise (nor the reverse)
+def test_a_results_folder_holds_one_search(tmp_path, capsys):
+    """Another search into a results folder is refused before anything is written; a store holds one search's
+    evaluations (its identity: problem, runs, seed, simulator) even when reached without the command line."""
+    from surrealist_gym.envs.generate import GenerateEnv
+    from surrealist_gym.errors import SurrealistError
+
     out = tmp_path / "crn"
     assert main(["generate", "--budget", "1", "--runs", "1", "--workers", "1", "--common-noise",
                  "--out", str(out)]) == 0
-    assert main(["generate", "--budget", "1", "--runs", "1", "--workers", "1", "--out", str(out)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "evaluations.sqlite" in err[0] and "common noise" in err[0]
+    saved = (out / "run.json").read_text()
+    for other in (["--runs", "2"], ["--random-seed", "5"], []):
+        assert main(["generate", "--budget", "1", *other, "--workers", "1", "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "holds a search already" in err[0] and f"--resume {out}" in err[0]
+    assert (out / "run.json").read_text() == saved
+    store = out / "evaluations.sqlite"
+    with pytest.raises(SurrealistError, match="common noise"):  # each test's own noise: the noise mode differs
+        GenerateEnv(runs=1, budget=1, store=str(store), executor="inline")
+    with pytest.raises(SurrealistError, match="holds the evaluations of another search \\(runs: 1 there, 2 here"):
+        GenerateEnv(runs=2, budget=1, store=str(store), executor="inline", sim_config={"common_noise": True})
+
+
+def test_a_second_writer_is_refused(tmp_path):
+    from surrealist_gym.cli._search import _lock, _unlock
+    from surrealist_gym.errors import SurrealistError
+
+    _lock(tmp_path)
+    try:
+        with pytest.raises(SurrealistError, match="another search is writing"):
+            _lock(tmp_path)
+    finally:
+        _unlock(tmp_path)
+    _lock(tmp_path)
+    _unlock(tmp_path)
 
 
 def test_compare_refuses_an_unknown_env_before_writing(tmp_path, capsys):
