@@ -39,3 +39,8 @@ class UnknownAgent(SurrealistError):
 
 class DependencyNotInstalled(SurrealistError):
     """An optional dependency is missing; the message names the pip command that installs it."""
+
+
+class InfrastructureError(SurrealistError):
+    """The machinery that runs simulations failed (a worker or pool died, a scheduler was lost), not the simulation:
+    never stored as a result; the search stops and ``--resume`` re-flies what is missing."""

@@ -15,7 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .errors import DependencyNotInstalled
+from .errors import DependencyNotInstalled, InfrastructureError, SurrealistError
 from .trajectory import Trajectory
 
 
@@ -53,18 +53,31 @@ def _die_with_parent() -> None:
             pass
 
 
-def _fly_with_retry(submit, test, indices, seed, config) -> list:
-    """Run a chunk via ``submit(test, indices, seed, config) -> future``; retry a failed chunk run by run, once."""
-    try:
-        return submit(test, indices, seed, config).result()
-    except Exception:  # noqa: BLE001 - any worker failure costs a retry, not the search
-        results = []
-        for index in indices:
-            try:
-                results.extend(submit(test, [index], seed, config).result())
-            except Exception as err:  # noqa: BLE001
-                results.append(FailedRun(seed, index, f"{type(err).__name__}: {err}"))
-        return results
+def _fly_with_retry(submit, test, indices, seed, config, renew=lambda: None) -> list:
+    """Run a chunk via ``submit(test, indices, seed, config) -> future``.
+
+    A failure of the test itself (a :class:`SurrealistError` raised by the simulation, e.g. a mission that cannot be
+    flown) is retried run by run, once, and a run that fails again becomes an ``error`` run: a result. Any other
+    failure is the infrastructure's (a dead worker or pool, a lost scheduler): ``renew()`` replaces it and the chunk
+    is flown again; a second such failure raises :class:`InfrastructureError`, so nothing of it is stored."""
+    for attempt in (1, 2):
+        try:
+            return submit(test, indices, seed, config).result()
+        except SurrealistError:
+            break
+        except Exception as err:  # noqa: BLE001 - anything else is the machinery's failure
+            if attempt == 2:
+                raise InfrastructureError(f"the simulations failed twice outside the simulator ({type(err).__name__}: "
+                                          f"{err}); every completed evaluation is stored, --resume re-flies the "
+                                          f"rest") from None
+            renew()
+    results = []
+    for index in indices:
+        try:
+            results.extend(submit(test, [index], seed, config).result())
+        except SurrealistError as err:
+            results.append(FailedRun(seed, index, f"{type(err).__name__}: {err}"))
+    return results
 
 
 def _chunks(indices: Sequence[int], parts: int) -> list[list[int]]:
@@ -106,9 +119,12 @@ class _ChunkedExecutor:
         futures = [(chunk, self._submit(test, chunk, seed, config)) for chunk in _chunks(list(indices), self.workers)]
         results = []
         for chunk, future in futures:
-            results.extend(_fly_with_retry(lambda *a, f=future: _Once(f, self._submit, a), test, chunk, seed,
-                                           config))
+            results.extend(_fly_with_retry(_Once(future, self._submit).submit, test, chunk, seed, config,
+                                           self._renew))
         return results
+
+    def _renew(self) -> None:
+        """Replace what failed before flying a chunk again (a local pool whose worker died is broken for good)."""
 
 
 class LocalPoolExecutor(_ChunkedExecutor):
@@ -128,18 +144,22 @@ class LocalPoolExecutor(_ChunkedExecutor):
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
 
+    def _renew(self) -> None:
+        self.close()
+
 
 class _Once:
-    """The first call returns an already-submitted future; later calls (retries) submit anew."""
+    """A chunk's submission: the first ``submit`` returns its already-submitted future, later ones (retries) submit
+    anew."""
 
-    def __init__(self, future, submit, args):
-        self._future, self._submit, self._args = future, submit, args
+    def __init__(self, future, submit):
+        self._future, self._submit = future, submit
 
-    def result(self):
+    def submit(self, *args):
         if self._future is not None:
             future, self._future = self._future, None
-            return future.result()
-        return self._submit(*self._args).result()
+            return future
+        return self._submit(*args)
 
 
 class DaskExecutor(_ChunkedExecutor):

@@ -56,3 +56,32 @@ def test_a_seed_whose_simulations_fail_is_reported_not_searched(test_case):
                                        executor="inline")
     with pytest.raises(SimulationError, match=r"none of its runs could be judged \(1 error\)"):
         env.reset(seed=0)
+
+
+def test_a_dead_pool_worker_is_replaced_and_costs_nothing(test_case):
+    """A worker killed mid-chunk breaks a local pool: the pool is replaced and the chunk flown again, so the runs
+    are the simulator's own, equal to the inline ones (never an 'error' run)."""
+    import os
+    import signal
+
+    pool = LocalPoolExecutor(workers=1)
+    try:
+        pool.run(test_case, [0], 5, SimConfig())  # start the pool
+        pid = next(iter(pool._pool._processes))
+        os.kill(pid, signal.SIGKILL)
+        runs = pool.run(test_case, [0, 1], 5, SimConfig())
+    finally:
+        pool.close()
+    assert _summary(runs) == _summary(InlineExecutor().run(test_case, [0, 1], 5, SimConfig()))
+
+
+def test_infrastructure_that_fails_twice_stops_with_one_line(test_case):
+    from surrealist_gym.errors import InfrastructureError
+    from surrealist_gym.executors import _fly_with_retry
+
+    class Lost:
+        def result(self):
+            raise ConnectionError("scheduler lost")
+
+    with pytest.raises(InfrastructureError, match="failed twice outside the simulator \\(ConnectionError"):
+        _fly_with_retry(lambda *a: Lost(), test_case, [0, 1], 5, SimConfig())
