@@ -3,8 +3,8 @@ stored in SQLite as it completes.
 
 Run i of a test flies with a seed derived from (test, base seed, i) (or from (base seed, i) alone with
 ``SimConfig.common_noise``; a store holds one noise mode), so the same test always gets the same runs and the memo
-is exact. Objectives turn the runs of a test into a fitness (maximised) and the terms behind it; the
-term ``first_runs_fitness`` holds the fitness of its first k runs alone (k = 1 .. n-1), so a search can judge a
+is exact. Objectives turn the runs of a test into a :class:`Score`: a fitness (maximised), the terms behind it and
+the trajectory judged; the term ``first_runs_fitness`` holds the fitness of its first k runs alone (k = 1 .. n-1), so a search can judge a
 partial evaluation, and (replication) ``Evaluation.first_runs_trajectories`` the first k runs' averaged
 trajectories, so a partial evaluation's trajectory can be compared like for like. ``evaluate(test, runs=k)`` flies
 only the first k runs; evaluating the test in full later flies only the rest, with the same seeds, so the result is
@@ -82,11 +82,32 @@ class Evaluation:
         return tuple(r.status for r in self.runs)
 
 
-class Objective(Protocol):
-    """Turns the simulated runs of a test into ``(fitness, terms, judged trajectory, first runs' trajectories)``
-    (the last: the trajectory judged on the first k runs alone, k = 1 .. n-1, or () when not kept)."""
+@dataclass(frozen=True)
+class Score:
+    """What an objective makes of the runs of a test.
 
-    def __call__(self, test: TestCase, runs: Sequence) -> tuple[float, dict, np.ndarray | None, tuple]: ...
+    Attributes:
+        fitness: maximised; ``-inf`` when no run can be judged.
+        terms: the fitness terms (replication: dtw, frechet; generation: sum_dist, min_dist, riskiest, unsafe, crash;
+            both: ``first_runs_fitness``, the fitness of the first k runs alone, k = 1 .. n-1).
+        trajectory: the trajectory the fitness judged (replication: the average of the runs; generation: the
+            riskiest run), (N, 3) [m].
+        first_runs_trajectories: replication: the trajectory judged on the first k runs alone (k = 1 .. n-1).
+    """
+
+    fitness: float
+    terms: dict = field(default_factory=dict)
+    trajectory: np.ndarray | None = None
+    first_runs_trajectories: tuple[np.ndarray, ...] = ()
+
+
+NO_SCORE = Score(-np.inf)
+
+
+class Objective(Protocol):
+    """Turns the simulated runs of a test into a :class:`Score`."""
+
+    def __call__(self, test: TestCase, runs: Sequence) -> Score: ...
 
 
 @dataclass(frozen=True)
@@ -99,13 +120,14 @@ class ReplicationObjective:
     def __call__(self, test, runs):
         trajectories = [r.trajectory for r in runs if len(r.trajectory) > 0]
         if not trajectories:
-            return -np.inf, {}, None, ()
+            return NO_SCORE
         averaged = np.asarray(average_runs(trajectories, self.averaging))
         first_averaged = tuple(np.asarray(average_runs(trajectories[:k], self.averaging))
                                for k in range(1, len(trajectories)))
-        return (-dtw(self.reference, averaged),
-                {"dtw": dtw(self.reference, averaged), "frechet": frechet(self.reference, averaged),
-                 "first_runs_fitness": [-dtw(self.reference, t) for t in first_averaged]}, averaged, first_averaged)
+        distance = dtw(self.reference, averaged)
+        return Score(-distance, {"dtw": distance, "frechet": frechet(self.reference, averaged),
+                                 "first_runs_fitness": [-dtw(self.reference, t) for t in first_averaged]},
+                     averaged, first_averaged)
 
 
 @dataclass(frozen=True)
@@ -119,14 +141,14 @@ class GenerationObjective:
     def __call__(self, test, runs):
         flown = [r for r in runs if len(r.trajectory) > 0]
         if not flown or not test.obstacles:
-            return -np.inf, {}, None, ()
+            return NO_SCORE
         result = generation_fitness([r.trajectory for r in flown], test.obstacles, self.aggregate,
                                     measure=self.measure)
         judged = outcomes(flown, self.measure)
         terms = {"sum_dist": list(result.sum_dist), "min_dist": list(result.min_dist), "riskiest": result.riskiest,
                  "unsafe": judged.unsafe, "crash": judged.crashes,
                  "first_runs_fitness": _first_runs_fitness(result)}
-        return result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz), ()
+        return Score(result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz))
 
 
 def _first_runs_fitness(result) -> list[float]:
@@ -184,9 +206,10 @@ class Evaluator:
             self.simulations += len(fresh)
             flown = flown + list(fresh)
         sim_seconds = self._flown_seconds.pop(key, 0.0) + time.perf_counter() - start
-        fitness, terms, trajectory, first_trajectories = self.objective(test, flown)
-        evaluation = Evaluation(test, float(fitness), tuple(RunSummary.of(r) for r in flown), terms,
-                                trajectory, tuple(first_trajectories), cached=False, sim_seconds=sim_seconds)
+        score = self.objective(test, flown)
+        evaluation = Evaluation(test, float(score.fitness), tuple(RunSummary.of(r) for r in flown), dict(score.terms),
+                                score.trajectory, tuple(score.first_runs_trajectories), cached=False,
+                                sim_seconds=sim_seconds)
         if n < self.runs:
             self._flown[key], self._flown_seconds[key] = flown, sim_seconds
             return evaluation
