@@ -134,14 +134,13 @@ class AdaptiveGreedy(Agent):
 
     def _same(self, best, fitness: float, info: dict) -> bool:
         """The plateau test: equal fitness within epsilon, or (authors' run) averaged trajectories within same_dtw.
-        A candidate judged on its first k runs alone (``info["first_runs"]``, e.g. dropped by a pre-screen's race)
-        is compared with the best's trajectory over the same first k runs, when the best's info keeps it."""
+        A candidate judged on fewer runs than the best (``info["statuses"]``) is compared with the best's trajectory
+        over the same first runs (scored by the env's evaluator)."""
         if (self.config.same_dtw is not None and info.get("trajectory") is not None
                 and best[2].get("trajectory") is not None):
             from surrealist_gym.metrics import dtw
-            ours = best[2]["trajectory"]
-            k, first = info.get("first_runs"), best[2].get("first_runs_trajectories") or ()
-            if k and len(first) >= k:
-                ours = first[k - 1]
+            ours, k = best[2]["trajectory"], len(info.get("statuses") or ())
+            if 0 < k < len(best[2].get("statuses") or ()) and best[2].get("test") is not None:
+                ours = self._env.evaluator.evaluate(best[2]["test"], runs=k).trajectory
             return dtw(ours, info["trajectory"]) < self.config.same_dtw
         return abs(best[1] - fitness) < self.config.epsilon

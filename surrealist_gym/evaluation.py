@@ -4,23 +4,21 @@ stored in SQLite as it completes.
 Run i of a test flies with a seed derived from (test, base seed, i) (or from (base seed, i) alone with
 ``SimConfig.common_noise``; a store holds one noise mode), so the same test always gets the same runs and the memo
 is exact. Objectives turn the runs of a test into a :class:`Score`: a fitness (maximised), the terms behind it and
-the trajectory judged; the term ``first_runs_fitness`` holds the fitness of its first k runs alone (k = 1 .. n-1), so a search can judge a
-partial evaluation, and (replication) ``Evaluation.first_runs_trajectories`` the first k runs' averaged
-trajectories, so a partial evaluation's trajectory can be compared like for like. ``evaluate(test, runs=k)`` flies
-only the first k runs; evaluating the test in full later flies only the rest, with the same seeds, so the result is
-the same as in one go.
+the trajectory judged. Each run keeps its trajectory, so ``evaluate(test, runs=k)`` scores the first k runs alone on
+demand: from the runs already flown or stored, else by flying only those; evaluating the test in full later flies
+only the rest, with the same seeds, so the result is the same as in one go.
 """
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol, Sequence
 
 import numpy as np
 
 from .errors import SurrealistError
-from .fitness import MIN_DIST_WEIGHT, Aggregate, average_runs, generation_fitness
+from .fitness import average_runs, generation_fitness
 from .metrics import dtw, frechet
 from .outcomes import outcomes
 from .store import EvaluationStore, StoredEvaluation
@@ -39,13 +37,15 @@ class RunSummary:
     min_distance_2d: float   # footprint distance, as the paper [m]
     duration: float          # simulated seconds
     competition_distance: float = math.nan  # footprint to the trajectory's polyline, as Aerialist [m] (nan: not kept)
+    trajectory: np.ndarray | None = field(default=None, compare=False, repr=False)  # (N, 3) [m]; None: not kept
 
     @classmethod
     def of(cls, run) -> "RunSummary":
         status = getattr(run.status, "value", run.status)
+        trajectory = getattr(run.trajectory, "xyz", run.trajectory)
         return cls(int(run.seed), int(run.index), str(status), float(run.min_distance),
                    float(run.min_distance_2d), float(run.duration),
-                   float(getattr(run, "competition_distance", math.nan)))
+                   float(getattr(run, "competition_distance", math.nan)), np.asarray(trajectory, dtype=np.float64))
 
     def to_dict(self) -> dict:
         return {"seed": self.seed, "index": self.index, "status": self.status, "min_distance": self.min_distance,
@@ -60,10 +60,9 @@ class Evaluation:
     Attributes:
         fitness: maximised; ``-inf`` when no run could be simulated.
         terms: the fitness terms (replication: dtw, frechet; generation: sum_dist, min_dist, riskiest, unsafe).
+        runs: what is kept of each run judged (with its trajectory).
         trajectory: the trajectory the fitness judged (replication: the average of the runs; generation: the
             riskiest run), (N, 3) [m].
-        first_runs_trajectories: replication: the averaged trajectory of the first k runs alone (k = 1 .. n-1), to
-            compare a partial evaluation's trajectory with this one's over the same runs; () when not kept.
         cached: True when answered without simulating: from the evaluator's memory or its store (a resumed
             search reads back what the interrupted one simulated). Whether it costs budget is the env's call.
     """
@@ -73,7 +72,6 @@ class Evaluation:
     runs: tuple[RunSummary, ...]
     terms: dict = field(default_factory=dict)
     trajectory: np.ndarray | None = None
-    first_runs_trajectories: tuple[np.ndarray, ...] = ()
     cached: bool = False
     sim_seconds: float = 0.0
 
@@ -88,24 +86,21 @@ class Score:
 
     Attributes:
         fitness: maximised; ``-inf`` when no run can be judged.
-        terms: the fitness terms (replication: dtw, frechet; generation: sum_dist, min_dist, riskiest, unsafe, crash;
-            both: ``first_runs_fitness``, the fitness of the first k runs alone, k = 1 .. n-1).
+        terms: the fitness terms (replication: dtw, frechet; generation: sum_dist, min_dist, riskiest, unsafe, crash).
         trajectory: the trajectory the fitness judged (replication: the average of the runs; generation: the
             riskiest run), (N, 3) [m].
-        first_runs_trajectories: replication: the trajectory judged on the first k runs alone (k = 1 .. n-1).
     """
 
     fitness: float
     terms: dict = field(default_factory=dict)
     trajectory: np.ndarray | None = None
-    first_runs_trajectories: tuple[np.ndarray, ...] = ()
 
 
 NO_SCORE = Score(-np.inf)
 
 
 class Objective(Protocol):
-    """Turns the simulated runs of a test into a :class:`Score`."""
+    """Turns the runs of a test (each with a ``trajectory``: a Trajectory or (N, 3) points) into a :class:`Score`."""
 
     def __call__(self, test: TestCase, runs: Sequence) -> Score: ...
 
@@ -121,13 +116,9 @@ class ReplicationObjective:
         trajectories = [r.trajectory for r in runs if len(r.trajectory) > 0]
         if not trajectories:
             return NO_SCORE
-        averaged = np.asarray(average_runs(trajectories, self.averaging))
-        first_averaged = tuple(np.asarray(average_runs(trajectories[:k], self.averaging))
-                               for k in range(1, len(trajectories)))
+        averaged = np.asarray(getattr(averaged := average_runs(trajectories, self.averaging), "xyz", averaged))
         distance = dtw(self.reference, averaged)
-        return Score(-distance, {"dtw": distance, "frechet": frechet(self.reference, averaged),
-                                 "first_runs_fitness": [-dtw(self.reference, t) for t in first_averaged]},
-                     averaged, first_averaged)
+        return Score(-distance, {"dtw": distance, "frechet": frechet(self.reference, averaged)}, averaged)
 
 
 @dataclass(frozen=True)
@@ -146,19 +137,9 @@ class GenerationObjective:
                                     measure=self.measure)
         judged = outcomes(flown, self.measure)
         terms = {"sum_dist": list(result.sum_dist), "min_dist": list(result.min_dist), "riskiest": result.riskiest,
-                 "unsafe": judged.unsafe, "crash": judged.crashes,
-                 "first_runs_fitness": _first_runs_fitness(result)}
-        return Score(result.fitness, terms, np.asarray(flown[result.riskiest].trajectory.xyz))
-
-
-def _first_runs_fitness(result) -> list[float]:
-    """Generation fitness of the first k runs alone, k = 1 .. n-1, from the per-run distances."""
-    scores = np.asarray(result.sum_dist) + MIN_DIST_WEIGHT * np.asarray(result.min_dist)
-    if result.aggregate is Aggregate.RISKIEST:
-        first = np.minimum.accumulate(scores)
-    else:
-        first = np.cumsum(scores) / np.arange(1, len(scores) + 1)
-    return [float(-v) for v in first[:-1]]
+                 "unsafe": judged.unsafe, "crash": judged.crashes}
+        riskiest = flown[result.riskiest].trajectory
+        return Score(result.fitness, terms, np.asarray(getattr(riskiest, "xyz", riskiest)))
 
 
 class Evaluator:
@@ -181,43 +162,46 @@ class Evaluator:
             _check_noise_mode(store, self.sim_config.common_noise)
             store.claim(search_identity(objective, runs, seed, self.sim_config))
         self._memo: dict[str, Evaluation] = {}
-        self._flown: dict[str, list] = {}  # the runs of partial evaluations, by test key
-        self._flown_seconds: dict[str, float] = {}
+        self._partial: dict[str, tuple[tuple[RunSummary, ...], float]] = {}  # runs flown by partial evaluations
         self.simulations = 0
         self.replayed_seconds = 0.0  # simulation time of the evaluations read back from the store
 
     def evaluate(self, test: TestCase, runs: int | None = None) -> Evaluation:
         """The evaluation of ``test``: from the memo, else the store, else simulated (and stored).
 
-        ``runs=k`` (< n): a partial evaluation judged on the first k runs alone (the fitness of the objective on
-        them; ``len(result.runs) == k``), neither stored nor memoised as the test's evaluation; its runs are kept, so
-        a later full evaluation of the test flies only the remaining ones. A test already evaluated in full is
-        answered from its ``first_runs_fitness`` term without flying (one stored without it flies its first runs).
+        ``runs=k`` (< n): the objective's score of the first k runs alone (``len(result.runs) == k``), neither
+        stored nor memoised as the test's evaluation. Runs already flown or stored are reused; those flown here are
+        kept, so a later full evaluation of the test flies only the rest.
         """
         n = self.runs if runs is None else max(1, min(int(runs), self.runs))
         key = test.key()
         known = self._memo.get(key) or self._from_store(test)
-        if known is not None and (n == self.runs or len(known.terms.get("first_runs_fitness") or ()) >= n):
-            return _as_cached(known) if n == self.runs else _first_runs(known, n)
-        flown = self._flown.get(key, [])
-        start = time.perf_counter()
+        if known is not None and n == self.runs:
+            return replace(known, cached=True)
+        if known is not None and all(r.trajectory is not None for r in known.runs[:n]):
+            return self._judge(test, known.runs[:n], 0.0, cached=True)
+        flown, sim_seconds = self._partial.get(key, ((), 0.0))
         if len(flown) < n:
+            start = time.perf_counter()
             fresh = self.executor.run(test, range(len(flown), n), self.seed, self.sim_config)
             self.simulations += len(fresh)
-            flown = flown + list(fresh)
-        sim_seconds = self._flown_seconds.pop(key, 0.0) + time.perf_counter() - start
-        score = self.objective(test, flown)
-        evaluation = Evaluation(test, float(score.fitness), tuple(RunSummary.of(r) for r in flown), dict(score.terms),
-                                score.trajectory, tuple(score.first_runs_trajectories), cached=False,
-                                sim_seconds=sim_seconds)
+            flown = flown + tuple(RunSummary.of(r) for r in fresh)
+            sim_seconds += time.perf_counter() - start
+        evaluation = self._judge(test, flown[:n], sim_seconds)
         if n < self.runs:
-            self._flown[key], self._flown_seconds[key] = flown, sim_seconds
+            self._partial[key] = flown, sim_seconds
             return evaluation
-        self._flown.pop(key, None)
+        self._partial.pop(key, None)
         self._memo[key] = evaluation
         if self.store is not None:
             self.store.add(_to_stored(evaluation, [self.seed] * self.runs, self.sim_config.common_noise))
         return evaluation
+
+    def _judge(self, test: TestCase, runs: tuple[RunSummary, ...], sim_seconds: float,
+               cached: bool = False) -> Evaluation:
+        score = self.objective(test, runs)
+        return Evaluation(test, float(score.fitness), runs, dict(score.terms), score.trajectory, cached=cached,
+                          sim_seconds=sim_seconds)
 
     def _from_store(self, test: TestCase) -> Evaluation | None:
         stored = None if self.store is None else self.store.get(test.key())
@@ -230,20 +214,6 @@ class Evaluator:
 
     def close(self) -> None:
         self.executor.close()
-
-
-def _as_cached(evaluation: Evaluation) -> Evaluation:
-    return Evaluation(evaluation.test, evaluation.fitness, evaluation.runs, evaluation.terms, evaluation.trajectory,
-                      evaluation.first_runs_trajectories, cached=True)
-
-
-def _first_runs(evaluation: Evaluation, k: int) -> Evaluation:
-    """A full evaluation judged on its first k runs alone (from its ``first_runs_fitness`` term, and its first k
-    runs' trajectory when kept)."""
-    first = evaluation.terms["first_runs_fitness"]
-    trajectories = evaluation.first_runs_trajectories
-    return Evaluation(evaluation.test, float(first[k - 1]), evaluation.runs[:k], {"first_runs_fitness": first[:k - 1]},
-                      trajectories[k - 1] if len(trajectories) >= k else None, trajectories[:k - 1], cached=True)
 
 
 def search_identity(objective, runs: int, seed: int, sim_config) -> dict:
@@ -294,9 +264,8 @@ def _check_noise_mode(store: EvaluationStore, common_noise: bool) -> None:
 def _to_stored(evaluation: Evaluation, seeds, common_noise: bool = False) -> StoredEvaluation:
     test = evaluation.test
     info = {"terms": evaluation.terms,
-            "trajectory": None if evaluation.trajectory is None else np.round(evaluation.trajectory, 6).tolist()}
-    if evaluation.first_runs_trajectories:
-        info["first_runs_trajectories"] = [np.round(t, 6).tolist() for t in evaluation.first_runs_trajectories]
+            "trajectory": None if evaluation.trajectory is None else np.round(evaluation.trajectory, 6).tolist(),
+            "run_trajectories": [None if r.trajectory is None else r.trajectory.tolist() for r in evaluation.runs]}
     if common_noise:
         info["common_noise"] = True
     return StoredEvaluation(test.key(), {"obstacles": [o.to_dict() for o in test.obstacles]}, tuple(seeds),
@@ -306,9 +275,13 @@ def _to_stored(evaluation: Evaluation, seeds, common_noise: bool = False) -> Sto
 
 
 def _from_stored(test: TestCase, stored: StoredEvaluation) -> Evaluation:
+    """A stored evaluation; its runs keep their trajectories when the store has them (stores before they were kept
+    do not)."""
     trajectory = stored.info.get("trajectory")
     fitness = -np.inf if stored.fitness is None else stored.fitness
-    return Evaluation(test, fitness, tuple(RunSummary(**r) for r in stored.runs), stored.info.get("terms", {}),
-                      None if trajectory is None else np.asarray(trajectory),
-                      tuple(np.asarray(t) for t in stored.info.get("first_runs_trajectories", ())), cached=True,
+    kept = stored.info.get("run_trajectories") or [None] * len(stored.runs)
+    runs = tuple(RunSummary(**r, trajectory=None if t is None else np.asarray(t, dtype=np.float64).reshape(-1, 3))
+                 for r, t in zip(stored.runs, kept))
+    return Evaluation(test, fitness, runs, stored.info.get("terms", {}),
+                      None if trajectory is None else np.asarray(trajectory), cached=True,
                       sim_seconds=stored.sim_seconds)

@@ -293,6 +293,7 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
     for g, source in enumerate(stores):
         store = source if isinstance(source, EvaluationStore) else _open(source)
         try:
+            objective = _objective(store, featurizer)
             for ev in store:
                 modes.add(flown_with_common_noise(ev))
                 try:
@@ -306,7 +307,7 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
                 unsafe.append(judged.unsafe / n)
                 crash.append(judged.crashes / n)
                 trajs.append(_resample((ev.info or {}).get("trajectory")))
-                first.append(((ev.info or {}).get("terms") or {}).get("first_runs_fitness") or [])
+                first.append(_first_runs_fitness(ev, objective))
                 groups.append(g)
                 keys.append(ev.test_key)
         finally:
@@ -318,6 +319,31 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
                                    "unsafe": np.asarray(unsafe), "crash": np.asarray(crash)},
                    np.asarray(trajs), np.asarray(groups), tuple(keys), tuple(featurizer.names), stack_rows(first),
                    modes.pop() if len(modes) == 1 else None)
+
+
+def _objective(store: EvaluationStore, featurizer: Featurizer):
+    """The objective a store's search judged its tests by (its recorded settings, the featurizer's reference)."""
+    from surrealist_gym.evaluation import GenerationObjective, ReplicationObjective
+
+    problem = (store.identity or {}).get("problem") or {}
+    if featurizer.reference is not None:
+        return ReplicationObjective(featurizer.reference, problem.get("averaging", "dba"))
+    return GenerationObjective(problem.get("aggregate", "riskiest"), problem.get("measure", "paper"))
+
+
+def _first_runs_fitness(ev, objective) -> list[float]:
+    """The fitness of a stored evaluation's first k runs alone (k = 1 .. n-1), to calibrate racing: scored from its
+    runs' trajectories, or the term stores kept before runs kept their trajectories."""
+    info = ev.info or {}
+    kept = (info.get("terms") or {}).get("first_runs_fitness")
+    if kept is not None or not info.get("run_trajectories"):
+        return kept or []
+    from surrealist_gym.evaluation import RunSummary
+
+    test = TestCase(obstacles=tuple(_obstacles_of(ev.test)))
+    runs = [RunSummary(**r, trajectory=None if t is None else np.asarray(t, dtype=np.float64).reshape(-1, 3))
+            for r, t in zip(ev.runs, info["run_trajectories"])]
+    return [objective(test, runs[:k]).fitness for k in range(1, len(runs))]
 
 
 def stack_rows(rows) -> np.ndarray:

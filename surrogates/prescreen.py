@@ -261,9 +261,9 @@ class Prescreened(Agent):
         return self._skip(action, test, rule, entry, told, best_fitness, prediction)
 
     def _skip(self, action, test, rule: str, entry: dict, told: float, best_fitness: float, prediction=None,
-              trajectory=None, first_runs: int | None = None) -> dict:
+              flown: dict | None = None) -> dict:
         """Log a skipped candidate; returns what the inner agent is told (a fitness below the best, and the
-        averaged trajectory of the runs flown, if any, with how many: the greedy's plateau test compares it with the
+        trajectory and statuses of the runs flown, if any: the greedy's plateau test compares it with the
         incumbent's over the same first runs)."""
         told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
         env = self._env
@@ -275,8 +275,8 @@ class Prescreened(Agent):
                 "evaluations": env.budget - env.budget_left, "budget_left": env.budget_left,
                 "simulations": env.simulations, "best_fitness": None if env.best is None else env.best.fitness,
                 "predicted": prediction}
-        if trajectory is not None:
-            info.update(trajectory=trajectory, first_runs=first_runs)
+        if flown is not None:
+            info.update(trajectory=flown.get("trajectory"), statuses=flown.get("statuses", ()))
         log.info("skipped candidate %s (%s): %s", entry["action"], rule,
                  {k: round(v, 3) for k, v in entry.items() if isinstance(v, float)})
         self.skipped.append(entry)
@@ -287,18 +287,18 @@ class Prescreened(Agent):
         on), else the log entry of a candidate dropped at a stage because its runs so far fall short of the
         incumbent's same first runs by more than that stage's margin (the inner agent is told the best minus that
         shortfall), or, with ``drop_ties``, score exactly as the incumbent's (told just below the best)."""
-        theirs = (incumbent.get("terms") or {}).get("first_runs_fitness") or []
         for k, margin in self.race_margins.items():
-            if len(theirs) < k or (margin is None and not self._drop_ties):
+            if incumbent.get("test") is None or (margin is None and not self._drop_ties):
                 return None
+            theirs = self._env.evaluator.evaluate(incumbent["test"], runs=k).fitness
             fitness, probed = self._env.probe(action, k)
-            verdict = race_verdict(theirs[k - 1], fitness, margin, self._drop_ties)
+            verdict = race_verdict(theirs, fitness, margin, self._drop_ties)
             if verdict:
-                shortfall = float(theirs[k - 1] - fitness)
+                shortfall = float(theirs - fitness)
                 entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
                          "race_margin": margin, "tie": verdict == "tie"}
                 return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness,
-                                  trajectory=probed.get("trajectory"), first_runs=k)
+                                  flown=probed)
         return None
 
     def _lowfi_verdict(self, test, incumbent, best_fitness: float) -> tuple[dict, float] | None:
@@ -370,7 +370,9 @@ class Prescreened(Agent):
             return
         self._X.append(self._featurizer.features(test.obstacles))
         self._y.append(float(fitness))
-        self._first.append(list((info.get("terms") or {}).get("first_runs_fitness") or []))
+        evaluator = self._env.evaluator
+        self._first.append([evaluator.evaluate(test, runs=k).fitness for k in range(1, evaluator.runs)]
+                           if self.config.race_stages else [])
         self._since_retrain += 1
 
     def _maybe_retrain(self) -> None:

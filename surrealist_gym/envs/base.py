@@ -245,6 +245,4 @@ class SurrealistEnv(gym.Env):
                     competition_distances=tuple(r.competition_distance for r in runs),
                     terms=copy.deepcopy(evaluation.terms),
                     trajectory=None if evaluation.trajectory is None else evaluation.trajectory.copy())
-        if evaluation.first_runs_trajectories:
-            info["first_runs_trajectories"] = tuple(t.copy() for t in evaluation.first_runs_trajectories)
         return info

@@ -67,7 +67,8 @@ def test_the_plateau_test_compares_a_candidate_judged_on_its_first_runs_with_the
                    sim_config={"common_noise": True})
     _, info = env.reset(seed=0)
     best = (None, info["fitness"], info)
-    first_run = info["first_runs_trajectories"][0]
+    first_run = env.unwrapped.evaluator.evaluate(info["test"], runs=1)
     agent = AdaptiveGreedy("authors")
-    assert agent._same(best, -1e9, {"trajectory": first_run, "first_runs": 1})
-    assert not agent._same(best, -1e9, {"trajectory": first_run})  # one run against three runs' average: DTW > 10
+    agent.setup(env, info)
+    assert agent._same(best, -1e9, {"trajectory": first_run.trajectory, "statuses": first_run.statuses})
+    assert not agent._same(best, -1e9, {"trajectory": first_run.trajectory})  # against three runs' average: DTW > 10

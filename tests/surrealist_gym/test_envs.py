@@ -106,8 +106,9 @@ def test_probe_flies_the_first_runs_and_step_only_the_rest(tmp_path):
     whole = make("Surrealist-Generate-v0", budget=5, runs=3).unwrapped
     whole.reset(seed=0)
     _, fitness, _, _, info = whole.step(whole.action_for(action))
-    first = info["terms"]["first_runs_fitness"]
-    assert len(first) == 2 and first[0] <= first[1] + 1e-12 and first[1] <= fitness + 1e-12  # riskiest so far
+    first = [whole.evaluator.evaluate(info["test"], runs=k).fitness for k in (1, 2)]  # scored on demand, no flight
+    assert whole.evaluator.simulations == 6
+    assert first[0] <= first[1] + 1e-12 and first[1] <= fitness + 1e-12  # the riskiest run so far
 
     env = make("Surrealist-Generate-v0", budget=5, runs=3, store=tmp_path / "e.sqlite").unwrapped
     env.reset(seed=0)
@@ -119,34 +120,35 @@ def test_probe_flies_the_first_runs_and_step_only_the_rest(tmp_path):
     _, stepped, _, _, sinfo = env.step(env.action_for(action))
     assert stepped == fitness and env.evaluator.simulations == 6 and sinfo["simulations"] == 6
     assert env.budget_left == 5 - 2
-    again, _ = env.probe(env.action_for(action), 1)  # evaluated in full: answered from its first_runs_fitness term
+    again, _ = env.probe(env.action_for(action), 1)  # evaluated in full: scored from its kept runs
     assert again == pytest.approx(first[0]) and env.evaluator.simulations == 6
 
 
-def test_replication_keeps_its_first_runs_averaged_trajectories_through_the_store(tmp_path):
-    """A partial evaluation's trajectory can be compared like for like: the replication env keeps the averaged
-    trajectory of the first k runs alone; a probe gets it; a store reads it back; a probe of a stored test too."""
+def test_a_partial_evaluation_is_scored_from_the_runs_a_store_keeps(tmp_path):
+    """Runs keep their trajectories, in memory and in the store: the score of a test's first k runs alone is
+    computed on demand, like for like with a probe, without flying again after a restart."""
     kwargs = dict(budget=3, runs=3, store=tmp_path / "r.sqlite", sim_config={"common_noise": True})
     env = make("Surrealist-Replicate-v0", **kwargs).unwrapped
     _, info = env.reset(seed=0)
-    first = info["first_runs_trajectories"]
-    assert len(first) == 2 and all(t.shape[1] == 3 for t in first)
-    assert not np.allclose(first[0][: len(info["trajectory"])], info["trajectory"][: len(first[0])])
+    first = env.evaluator.evaluate(info["test"], runs=1)
+    assert len(first.runs) == 1 and first.trajectory.shape[1] == 3
+    assert first.fitness != info["fitness"]  # one run is not the average of three
     values = env.values_for(np.zeros(env.action_space.shape))
     values[0] += 2.0
     action = env.action_for(values)
     probed, pinfo = env.probe(action, 2)
     _, stepped, _, _, sinfo = env.step(action)
-    assert np.array_equal(pinfo["trajectory"], sinfo["first_runs_trajectories"][1])
-    assert probed == pytest.approx(sinfo["terms"]["first_runs_fitness"][1])
+    two = env.evaluator.evaluate(sinfo["test"], runs=2)
+    assert np.array_equal(pinfo["trajectory"], two.trajectory) and probed == pytest.approx(two.fitness)
 
     again = make("Surrealist-Replicate-v0", **kwargs).unwrapped
-    _, reread = again.reset(seed=0)
+    again.reset(seed=0)
+    reread = again.evaluator.evaluate(sinfo["test"], runs=2)
     assert again.evaluator.simulations == 0
-    assert all(np.allclose(a, b, atol=1e-6) for a, b in zip(reread["first_runs_trajectories"], first))
+    assert reread.fitness == two.fitness and np.array_equal(reread.trajectory, two.trajectory)
     _, from_store = again.probe(action, 1)
     assert again.evaluator.simulations == 0
-    assert np.allclose(from_store["trajectory"], sinfo["first_runs_trajectories"][0], atol=1e-6)
+    assert from_store["runs"] == 1
 
 
 def test_envs_take_a_uav_profile():
