@@ -38,7 +38,7 @@ print(f"model: {args.kind} on {len(model.train_y)} stored evaluations, trained i
 
 agents = {"greedy": AdaptiveGreedy("paper", seed=args.seed),
           "greedy+prescreen": Prescreened(AdaptiveGreedy("paper"), model,
-                                          PrescreenConfig(first_runs=args.first_runs), seed=args.seed)}
+                                          PrescreenConfig.of(first_runs=args.first_runs), seed=args.seed)}
 for name, agent in agents.items():
     env = gym.make("Surrealist-Generate-v0", budget=args.budget, runs=args.runs, executor="inline")
     steps = []  # the info of every simulated step: info["simulations"] counts the runs flown so far

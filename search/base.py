@@ -2,7 +2,8 @@
 
 An agent proposes actions for a Surrealist env: an action is a vector with one value per mutator of the env
 (``env.unwrapped.mutators``), the mutation of the env's seed test. The env owns the budget, the memo and the
-fitness, so every agent is measured the same way. Subclasses implement ``_setup``, ``_ask`` and ``_tell``; RL
+fitness, so every agent is measured the same way; an agent binds to the env's outermost Surrealist layer
+(:func:`~surrealist_gym.envs.wrapper.search_layer`), so a wrapper that changes what is charged applies to it. Subclasses implement ``_setup``, ``_ask`` and ``_tell``; RL
 agents, whose libraries are run-style, override ``run`` and return the same :class:`SearchResult`.
 """
 from __future__ import annotations
@@ -46,7 +47,9 @@ class Agent(ABC):
     def setup(self, env, info: dict, start: tuple | None = None) -> None:
         """Bind to an env just reset; ``info`` is the reset info (it carries the seed test's fitness). ``start``
         (action, fitness, info) begins the search from an evaluated test instead of the seed test (a restart)."""
-        self._env = env.unwrapped
+        from surrealist_gym.envs.wrapper import search_layer
+
+        self._env = search_layer(env)
         self.rng = np.random.default_rng(self.seed)
         zero = np.zeros(len(self._env.mutators))
         self._best = (zero, float(info["fitness"]), info) if start is None else start
@@ -77,8 +80,8 @@ class Agent(ABC):
         self._pending = None
         for action, fitness, info in zip(actions, fitnesses, infos):
             self._history.append(float(fitness))
-            count = int(info.get("evaluations", self._evaluations))  # told out of order by a pre-screener
-            self._evaluations = max(self._evaluations, count)
+            count = int(info.get("evaluations", self._evaluations))
+            self._evaluations = max(self._evaluations, count)  # never decreases, whatever order results are told in
             if fitness > self._best[1]:
                 self._best = (np.asarray(action, dtype=np.float64), float(fitness), info)
                 self._evaluations_to_best = count
@@ -100,15 +103,14 @@ class Agent(ABC):
         """Search on ``env`` until the agent stops or the env's budget is spent."""
         _, info = env.reset(seed=seed if seed is not None else self.seed)
         self.setup(env, info)
-        done = False
-        while not done and not self.stop():
+        while not self.stop():
             actions = self.ask()
             fitnesses, infos = [], []
             for action in actions:
                 reward, step_info, done = self._step(env, action, callback)
                 fitnesses.append(reward)
                 infos.append(step_info)
-                if done:
+                if done:  # the episode is over (the stop reason is noted), or the rest of this ask is not wanted
                     break
             self.tell(actions[:len(fitnesses)], fitnesses, infos)
         return self.result

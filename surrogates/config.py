@@ -1,8 +1,11 @@
-"""The settings of pre-screening (:class:`PrescreenConfig`): which screening rule, its margin, racing's stages,
-retraining, and how skips are told to the inner agent (:mod:`surrogates.prescreen`, docs/surrogates.md)."""
+"""The settings of pre-screening (:class:`PrescreenConfig`), in three parts: how candidates are screened
+(:class:`ScreenConfig`), raced (:class:`RaceConfig`) and how the model learns online (:class:`OnlineConfig`);
+plus how skips are told to the inner agent and whether a stop is verified (:mod:`surrogates.prescreen`,
+docs/surrogates.md). ``PrescreenConfig.of(**settings)`` takes the settings by name, without their part.
+"""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from enum import Enum
 
 RULES = ("auto", "lowfi", "ei", "pi", "none")
@@ -19,66 +22,100 @@ class SkipAccounting(str, Enum):
 
 
 @dataclass(frozen=True, slots=True)
-class PrescreenConfig:
-    """How candidates are screened and the model retrained.
+class ScreenConfig:
+    """Which candidates are skipped without a simulation.
 
     Attributes:
-        rule: ``auto``, ``lowfi`` (low-fidelity shortfall), ``ei`` (expected improvement), ``pi``
-            (probability of improvement) or ``none`` (skip nothing: only race, with ``first_runs``); see the
-            module docstring.
-        margin: ``lowfi``: skip when the low-fidelity fitness is below the incumbent's by more than this (in
-            fitness units); None calibrates it on the model's training data (see ``miss_rate``).
-        miss_rate: share of the past real improvements whose low-fidelity shortfall may exceed the calibrated
-            margin.
+        rule: ``lowfi`` (low-fidelity shortfall), ``ei`` (expected improvement), ``pi`` (probability of
+            improvement), ``none`` (skip nothing) or ``auto`` (``lowfi`` once a margin is known, else ``ei``).
+        margin: ``lowfi``: skip when the low-fidelity fitness is below the incumbent's by more than this (fitness
+            units); None calibrates it on the model's training data (see ``PrescreenConfig.miss_rate``).
         threshold: EI below ``threshold`` x std of the training targets (``ei``), or P(improvement) below it
             (``pi``), skips a candidate.
-        pessimism: a skipped candidate is told ``mean - pessimism x std`` (capped below the best).
-        min_points: real evaluations needed before an online model is first trained.
-        retrain_every: retrain after this many new real evaluations (0: never retrain a pre-trained model;
-            an online model always retrains).
+        pessimism: a candidate the model skips is told ``mean - pessimism x std`` (capped below the best).
         max_skips: consecutive skips after which the next candidate is simulated anyway.
-        kind: model kind of an online model (``ensemble`` or ``knn``).
-        skips: how a skip is told to the inner agent (:class:`SkipAccounting`; default ``EVALUATION``).
-        lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
-            candidate screened; see :mod:`surrogates.lowfi`).
-        first_runs: racing: a candidate that passes the screen first flies only this many of its runs, and the
-            rest only if the fitness of those runs falls short of the incumbent's first runs by no more than
-            ``race_margin`` (0: off; must be below the env's runs). A tuple races in stages: after each of its
-            run counts (increasing, e.g. ``(1, 2, 3, 4)``) the candidate is compared again and dropped at the
-            first stage it falls behind; later stages fly only the runs not flown yet.
-        race_margin: racing's margin (fitness units, every stage); None calibrates one per stage like the
-            ``lowfi`` margin, on the model's training stores and the episode's evaluations, each stage at an equal
-            share of ``miss_rate`` (so the stages together miss about ``miss_rate`` of the improvements).
-        drop_ties: racing also drops a candidate whose first runs score exactly as the incumbent's (told just
-            below the best): with common random numbers the mutation left those flights unchanged. None (default):
-            on when the env flies common noise and no real improvement in the model's training stores tied its
-            incumbent (:func:`~surrogates.racing.tie_improvements`; checked again at each retrain).
-        verify_stop: when the inner agent stops with budget left, start it again from the best test with
-            screening and racing off, so that a stop the skips may have caused is checked by simulation (tests
-            already simulated are memo hits and cost nothing).
     """
 
     rule: str = "auto"
     margin: float | None = None
-    miss_rate: float = 0.02
     threshold: float = 0.01
     pessimism: float = 1.0
+    max_skips: int = 20
+
+    def __post_init__(self):
+        if self.rule not in RULES:
+            raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class RaceConfig:
+    """Racing: a candidate that passes the screen flies its runs in stages (:mod:`surrogates.racing`).
+
+    Attributes:
+        stages: the run counts after which the candidate is compared with the incumbent's same first runs
+            (increasing, each below the env's runs, e.g. ``(1, 2, 3, 4)``; empty: racing off); it is dropped at the
+            first stage it falls behind, and later stages fly only the runs not flown yet.
+        margin: the shortfall that drops a candidate (fitness units, every stage); None calibrates one per stage
+            like the ``lowfi`` margin, each stage at an equal share of ``PrescreenConfig.miss_rate``.
+        drop_ties: also drop a candidate whose first runs score exactly as the incumbent's (told just below the
+            best): with common random numbers the mutation left those flights unchanged. None: on when the env flies
+            common noise and no real improvement in the model's training stores tied its incumbent.
+    """
+
+    stages: tuple[int, ...] = ()
+    margin: float | None = None
+    drop_ties: bool | None = None
+
+    def __post_init__(self):
+        stages = self.stages
+        stages = (int(stages),) if isinstance(stages, int) and stages else tuple(int(k) for k in stages or ())
+        object.__setattr__(self, "stages", stages)
+        if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
+            raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
+                             f"runs, got {self.stages!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class OnlineConfig:
+    """How the model learns from the search's own evaluations.
+
+    Attributes:
+        kind: model kind of an online model (``ensemble`` or ``knn``).
+        min_points: real evaluations needed before an online model is first trained.
+        retrain_every: retrain after this many new real evaluations (0: never retrain a pre-trained model; an
+            online model always retrains).
+        lowfi: an online model's features include a low-fidelity flight of each test (one ~0.1 s flight per
+            candidate screened; :mod:`surrogates.lowfi`).
+    """
+
+    kind: str = "ensemble"
     min_points: int = 10
     retrain_every: int = 5
-    max_skips: int = 20
-    kind: str = "ensemble"
-    skips: SkipAccounting = SkipAccounting.EVALUATION
     lowfi: bool = True
-    first_runs: int | tuple[int, ...] = 0
-    race_margin: float | None = None
-    drop_ties: bool | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class PrescreenConfig:
+    """How candidates are screened, raced and the model retrained.
+
+    Attributes:
+        screen, race, online: the three parts (above).
+        miss_rate: share of the past real improvements that a calibrated margin (screening's, or racing's over all
+            its stages) may drop.
+        skips: how a skip is told to the inner agent (:class:`SkipAccounting`).
+        verify_stop: when the inner agent stops with budget left, start it again from the best test with screening
+            and racing off, so that a stop the skips may have caused is checked by simulation (tests already
+            simulated are memo hits and cost nothing).
+    """
+
+    screen: ScreenConfig = field(default_factory=ScreenConfig)
+    race: RaceConfig = field(default_factory=RaceConfig)
+    online: OnlineConfig = field(default_factory=OnlineConfig)
+    miss_rate: float = 0.02
+    skips: SkipAccounting = SkipAccounting.EVALUATION
     verify_stop: bool = False
 
     def __post_init__(self):
-        if isinstance(self.first_runs, (list, tuple)):
-            object.__setattr__(self, "first_runs", tuple(int(k) for k in self.first_runs))  # hashable, frozen
-        if self.rule not in RULES:
-            raise ValueError(f"prescreen rule: expected one of {', '.join(RULES)}, got {self.rule!r}")
         if not 0.0 <= self.miss_rate < 1.0:
             raise ValueError(f"prescreen miss_rate: expected a share in [0, 1), got {self.miss_rate!r}")
         try:
@@ -86,17 +123,26 @@ class PrescreenConfig:
         except ValueError:
             raise ValueError(f"prescreen skips: expected one of {[s.value for s in SkipAccounting]}, got "
                              f"{self.skips!r}") from None
-        stages = self.race_stages
-        if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
-            raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
-                             f"runs, got {self.first_runs!r}")
 
-    @property
-    def race_stages(self) -> tuple[int, ...]:
-        """The run counts after which racing compares a candidate with the incumbent (empty: racing off)."""
-        if isinstance(self.first_runs, tuple):  # __post_init__ turns any sequence into a tuple
-            return self.first_runs
-        return (int(self.first_runs),) if self.first_runs else ()
+    @classmethod
+    def of(cls, **settings) -> "PrescreenConfig":
+        """A config from settings named without their part: ``rule``, ``margin``, ``threshold``, ``pessimism``,
+        ``max_skips`` (screen); ``first_runs``, ``race_margin``, ``drop_ties`` (race); ``kind``, ``min_points``,
+        ``retrain_every``, ``lowfi`` (online); ``miss_rate``, ``skips``, ``verify_stop``."""
+        renamed = {"first_runs": "stages", "race_margin": "margin"}
+        parts = {"screen": ScreenConfig, "race": RaceConfig, "online": OnlineConfig}
+        values: dict[str, dict] = {name: {} for name in parts}
+        top = {}
+        for key, value in settings.items():
+            if key in ("miss_rate", "skips", "verify_stop"):
+                top[key] = value
+                continue
+            part = "race" if key in renamed else next(
+                (name for name, kind in parts.items() if key in {f.name for f in fields(kind)}), None)
+            if part is None:
+                raise TypeError(f"PrescreenConfig.of: unknown setting {key!r}")
+            values[part][renamed.get(key, key)] = value
+        return cls(**{name: kind(**values[name]) for name, kind in parts.items()}, **top)
 
 
-__all__ = ["RULES", "PrescreenConfig", "SkipAccounting"]
+__all__ = ["RULES", "OnlineConfig", "PrescreenConfig", "RaceConfig", "ScreenConfig", "SkipAccounting"]

@@ -2,18 +2,17 @@
 (docs/surrogates.md).
 
 :class:`Prescreened` asks the inner agent for candidates, most promising first, and screens each against the
-incumbent (the test with the best real fitness so far) by one rule (:class:`PrescreenConfig`):
-
-* ``lowfi``: skip when the candidate's low-fidelity fitness (:mod:`surrogates.lowfi`) falls short of the
-  incumbent's by more than a margin calibrated on past searches (:mod:`surrogates.replay`);
-* ``ei`` / ``pi``: skip on the surrogate's expected improvement or probability of improvement;
-* ``none``: skip nothing, only race; ``auto``: ``lowfi`` when a margin is known, else ``ei``.
+incumbent (the test with the best real fitness so far) by one rule of :mod:`surrogates.screening` (``lowfi``,
+``ei``, ``pi``; ``none`` skips nothing; ``auto`` is ``lowfi`` once a margin is known, else ``ei``), set by a
+:class:`PrescreenConfig`.
 
 A skipped candidate is not simulated: the inner agent is told an estimate below the best (``info["skipped"]``).
 A candidate that passes may be raced (:mod:`surrogates.racing`): its first runs fly first, the rest only if they
 keep up with the incumbent's. An online model (or ``retrain_every``) retrains on the episode's real evaluations;
 ``max_skips`` consecutive skips force a simulation; ``verify_stop`` restarts the inner agent, unscreened, from the
-best test when it stops with budget left.
+best test when it stops with budget left. The search is the base agent's ``run`` (on the env wrapped in
+:class:`~surrogates.racing.Racing` when racing): a batch of the inner agent's candidates is stepped most promising
+first, and the inner agent is told the results in the order it asked.
 
 Example:
     >>> import gymnasium as gym, surrealist_gym
@@ -27,8 +26,8 @@ from __future__ import annotations
 
 import itertools
 import logging
-import math
 import warnings
+from collections import deque
 from dataclasses import asdict
 from pathlib import Path
 
@@ -38,11 +37,14 @@ from search.base import Agent, SearchResult
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
 from surrealist_gym.evaluation import describe_noise
 
+from surrealist_gym.envs.wrapper import SurrealistWrapper
+
 from .config import PrescreenConfig, SkipAccounting
 from .dataset import Featurizer, stack_rows
 from .models import SurrogateModel
-from .racing import race_margin, race_verdict, tie_improvements
+from .racing import Racing, race_margin, race_verdict, tie_improvements
 from .replay import model_margin
+from .screening import LowFidelityShortfall, ModelImprovement, Skip
 
 log = logging.getLogger(__name__)
 
@@ -85,8 +87,7 @@ class Prescreened(Agent):
 
     @property
     def unspent(self) -> int:
-        """Budget the skipped and dropped candidates did not spend (the env charges a dropped candidate's probed
-        runs in whole evaluations)."""
+        """Budget the skipped and dropped candidates did not spend (raced runs are charged in whole evaluations)."""
         return self._env.budget_left - self.inner_budget_left
 
     @property
@@ -97,63 +98,44 @@ class Prescreened(Agent):
     @property
     def rule(self) -> str:
         """The rule in force: ``auto`` resolves to ``lowfi`` once a margin is known, else ``ei``."""
-        if self.config.rule != "auto":
-            return self.config.rule
+        if self.config.screen.rule != "auto":
+            return self.config.screen.rule
         return "lowfi" if self.margin is not None else "ei"
 
-    # --- the run: some candidates are answered without env.step ---------------------------------------------
+    # --- the base run, on the env raced --------------------------------------------------------------------------
     def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
-        """Search on ``env`` until the inner agent stops or the budget is spent; the result counts real
-        evaluations only (``history`` holds the fitness of each simulated or memo step)."""
-        seed = seed if seed is not None else self.seed
-        _, info = env.reset(seed=seed)
-        self.setup(env, info)
-        spends = self.config.skips is SkipAccounting.BUDGET
-        self.inner.setup(_SkipsSpendBudget(env.unwrapped, self) if spends else env, info)
-        done = False
-        while not done and (not self.stop() or self._verify_stop(env, info)):
-            self._candidates = candidates = self.inner.ask()
-            self.ask()
-            results: list[tuple | None] = [None] * len(candidates)
-            real = []
-            _, best, incumbent = self.best
-            if self.verified_at is None:
-                order, tests, predictions = self._most_promising_first(candidates)
-            else:  # the verify pass simulates every candidate: no tests to screen, nothing to predict
-                order, tests, predictions = range(len(candidates)), [None] * len(candidates), [None] * len(candidates)
-            for i in order:  # a better first result raises the bar for the rest
-                if done or self._inner_budget_spent:
-                    break
-                if tests[i] is not None and self._env.evaluated(tests[i]):
-                    tests[i] = None  # the same test earlier in this ask was simulated: now a free memo answer
-                again = None if tests[i] is None else self._told.get(tests[i].key())
-                if again is not None:  # skipped before: told the same again, free, as the env's memo would
-                    results[i] = (candidates[i], again[0], {**again[1], "memo": True})
-                    continue
-                skip = self._screen(candidates[i], tests[i], predictions[i], best, incumbent.get("test"))
-                if skip is None and tests[i] is not None:
-                    skip = self._race(candidates[i], tests[i], best, incumbent)
-                if skip is not None:
-                    results[i] = (candidates[i], skip["told_fitness"], skip["info"])
-                    self._told[tests[i].key()] = results[i][1:]
-                    done = self._env.budget_left <= 0
-                    continue
-                reward, step_info, done = self._step(env, candidates[i], callback)
-                results[i] = (candidates[i], reward, step_info)
-                real.append(results[i])
-                if reward > best:
-                    best, incumbent = reward, step_info
-            told = list(itertools.takewhile(lambda r: r is not None, results))  # in the order asked
-            self.tell([a for a, _, _ in real], [f for _, f, _ in real], [i for _, _, i in real])
-            self.inner.tell([a for a, _, _ in told], [f for _, f, _ in told], [i for _, _, i in told])
-        if not self._stop_reason:
-            self._stop_reason = self.stop().get("reason", "")
-        return self.result
+        """Search on ``env`` (wrapped in :class:`~surrogates.racing.Racing` when racing) until the inner agent
+        stops or the budget is spent; the result counts real evaluations only (``history`` holds the fitness of
+        each simulated or memo step)."""
+        return super().run(Racing(env) if self.config.race.stages else env, seed, callback)
 
     def stop(self) -> dict:
+        """The env's stop, else the inner agent's (or, with ``SkipAccounting.BUDGET``, its budget spent with the
+        skips); with ``verify_stop`` the first inner stop with budget left restarts the inner agent instead, with
+        screening and racing off."""
+        own = super().stop()
+        if own:
+            return own
+        reason = self._inner_stop()
+        if reason and self._verify_stop():
+            reason = self._inner_stop()
+        if reason:
+            self._stop_reason = reason["reason"]
+        return reason
+
+    def tell(self, actions, fitnesses, infos) -> None:
+        """The batch's results (recorded by ``_step``): the real ones to this agent, in the order simulated, and all
+        of them to the inner agent, in the order it asked (up to the first candidate not reached)."""
+        stepped = [self._results[i] for i in self._order if self._results[i] is not None]
+        real = [(a, f, i) for a, f, i, simulated in stepped if simulated]
+        super().tell([a for a, _, _ in real], [f for _, f, _ in real], [i for _, _, i in real])
+        told = list(itertools.takewhile(lambda r: r is not None, self._results))
+        self.inner.tell([a for a, _, _, _ in told], [f for _, f, _, _ in told], [i for _, _, i, _ in told])
+
+    def _inner_stop(self) -> dict:
         if self._inner_budget_spent:
             return {"reason": "budget spent (skipped and dropped candidates counted as evaluations)"}
-        return super().stop() or self.inner.stop()
+        return self.inner.stop()
 
     @property
     def _inner_budget_spent(self) -> bool:
@@ -162,14 +144,57 @@ class Prescreened(Agent):
         return (self.config.skips is SkipAccounting.BUDGET and self.verified_at is None
                 and self.inner_budget_left <= 0)
 
-    def _verify_stop(self, env, info: dict) -> bool:
-        """Begin the verify pass (see ``PrescreenConfig.verify_stop``) if due; True when it began."""
-        if (not self.config.verify_stop or self.verified_at is not None or super().stop()
-                or self._env.budget_left <= 0):
+    def _verify_stop(self) -> bool:
+        """Begin the verify pass (see ``PrescreenConfig.verify_stop``) if due; True when the inner agent goes on."""
+        if not self.config.verify_stop or self.verified_at is not None or self._env.budget_left <= 0:
             return False
         self.verified_at = self._evaluations
-        self.inner.setup(env, info, start=self.best)  # the env's own budget: what screening saved
+        self.inner.setup(self._env, self._reset_info, start=self.best)  # the env's own budget: what screening saved
         return not self.inner.stop()
+
+    def _ask(self) -> list[np.ndarray]:
+        """The inner agent's candidates, free ones first, then the most promising (by the model)."""
+        self._candidates = candidates = self.inner.ask()
+        self._predictions: dict[str, tuple[float, float]] = {}
+        if self.verified_at is None:
+            self._tests = [self._test(a) for a in candidates]
+            self._order = self._most_promising_first()
+        else:  # the verify pass simulates every candidate: no tests to screen, nothing to predict
+            self._tests, self._order = [None] * len(candidates), list(range(len(candidates)))
+        self._queue = deque(self._order)
+        self._results: list[tuple | None] = [None] * len(candidates)
+        _, best, incumbent = self.best
+        self._bar = (best, incumbent)  # a better result in this batch raises the bar for the rest
+        return [candidates[i] for i in self._order]
+
+    def _step(self, env, action, callback=None) -> tuple[float, dict, bool]:
+        """The next candidate: told again what it was told before, skipped, dropped by racing, or stepped on. The
+        batch is over when the episode is, or (``SkipAccounting.BUDGET``) the inner agent's budget is spent."""
+        i = self._queue.popleft()
+        test, (best, incumbent) = self._tests[i], self._bar
+        if test is not None and self._env.evaluated(test):
+            test = None  # the same test earlier in this ask was simulated: now a free memo answer
+        again = None if test is None else self._told.get(test.key())
+        if again is not None:  # skipped before: told the same again, free, as the env's memo would
+            self._results[i] = (action, again[0], {**again[1], "memo": True}, False)
+            return again[0], self._results[i][2], self._inner_budget_spent
+        told = info = None
+        skip = self._screen(test, best, incumbent.get("test"))
+        if skip is not None:
+            told, info = self._skip(action, test, self.rule, skip, best, self._predictions.get(test.key()))
+        elif test is not None:
+            told, info = self._race(action, test, best, incumbent) or (None, None)
+        if info is not None:
+            self._results[i] = (action, told, info, False)
+            self._told[test.key()] = (told, info)
+            if self._env.budget_left <= 0:
+                self._stop_reason = self._stop_reason or "budget spent"
+            return told, info, self._env.budget_left <= 0 or self._inner_budget_spent
+        reward, info, done = super()._step(env, action, callback)
+        self._results[i] = (action, reward, info, True)
+        if reward > best:
+            self._bar = (reward, info)
+        return reward, info, done or self._inner_budget_spent
 
     # --- Agent hooks ---------------------------------------------------------------------------------------------
     def _setup(self, info: dict) -> None:
@@ -179,9 +204,10 @@ class Prescreened(Agent):
         self.retrains = 0
         self.verified_at = None
         self._consecutive = 0
+        self._reset_info = info
         self._featurizer = (self._initial.featurizer if self._initial is not None
-                            else Featurizer.for_env(self._env, self.config.lowfi))
-        if self.config.rule == "lowfi" and self._featurizer.lowfi is None:
+                            else Featurizer.for_env(self._env, self.config.online.lowfi))
+        if self.config.screen.rule == "lowfi" and self._featurizer.lowfi is None:
             raise SurrealistError("prescreen rule lowfi: the model has no low-fidelity features (train it with "
                                   "--lowfi)")
         self._X: list[np.ndarray] = []
@@ -189,10 +215,10 @@ class Prescreened(Agent):
         self._since_retrain = 0
         self.model = self._initial
         self._first: list[list[float]] = []
-        self.margin = self._calibrated_margin()
-        self.race_margins = self._calibrated_race_margins()
-        self._drop_ties = self._tie_rule()
+        self._calibrate()
         self._add_point(info)
+        spends = self.config.skips is SkipAccounting.BUDGET
+        self.inner.setup(_SpentBySkips(self._env, self) if spends else self._env, info)
 
     def _check_noise_mode(self) -> None:
         """Warn when the model learnt from evaluations flown in the other noise mode: its racing margins were
@@ -204,9 +230,6 @@ class Prescreened(Agent):
             warnings.warn(f"{name}: trained on evaluations flown with {describe_noise(trained)}, this search flies "
                           f"{describe_noise(flies)}; its racing margins were calibrated in the other mode (train it "
                           f"on stores flown the same way, or match --common-noise)", UserWarning, stacklevel=2)
-
-    def _ask(self) -> list[np.ndarray]:  # the inner agent's candidates (run() tells back the simulated ones)
-        return self._candidates
 
     def _tell(self, actions, fitnesses, infos) -> None:
         for info in infos:
@@ -224,49 +247,52 @@ class Prescreened(Agent):
             return None  # the env rejects it for free
         return None if self._env.evaluated(test) else test  # a memo hit costs nothing
 
-    def _most_promising_first(self, candidates) -> tuple[list[int], list, list]:
-        """Candidate indices, free ones first, then by predicted fitness (the order asked without a model); the
-        tests (None: free) and the model's predictions (mean, std on the model's scale; None without a model)."""
-        tests = [self._test(a) for a in candidates]
+    def _most_promising_first(self) -> list[int]:
+        """Candidate indices, free ones first, then by predicted fitness (the order asked without a model)."""
         if self.model is None:
-            return list(range(len(candidates))), tests, [None] * len(candidates)
-        predictions = [None if t is None else self._predict(t) for t in tests]
+            return list(range(len(self._candidates)))
 
         def priority(i):
-            p = predictions[i]
-            return -np.inf if p is None else (-p[0] if np.isfinite(p[0]) else np.inf)
-        return sorted(range(len(candidates)), key=priority), tests, predictions
+            if self._tests[i] is None:
+                return -np.inf
+            mean = self._predict(self._tests[i])[0]
+            return -mean if np.isfinite(mean) else np.inf
+        return sorted(range(len(self._candidates)), key=priority)
 
     def _predict(self, test) -> tuple[float, float]:
-        mean, std = self.model.predict(self._featurizer.transform([test]))
-        return float(mean[0]), max(float(std[0]), 1e-9)
+        """The model's (mean, std) for a test, on its scale (once per test in a batch)."""
+        key = test.key()
+        if key not in self._predictions:
+            mean, std = self.model.predict(self._featurizer.transform([test]))
+            self._predictions[key] = (float(mean[0]), max(float(std[0]), 1e-9))
+        return self._predictions[key]
 
-    def _screen(self, action, test, prediction, best_fitness: float, incumbent) -> dict | None:
-        """None to simulate the candidate, else the log entry of a skip (with what the inner agent is told)."""
-        if test is None or self._consecutive >= self.config.max_skips:
+    def _screen(self, test, best_fitness: float, incumbent) -> Skip | None:
+        """The screening rule's verdict on a candidate (None: simulate it); ``max_skips`` in a row force one."""
+        if test is None or self._consecutive >= self.config.screen.max_skips:
             self._consecutive = 0
             return None
-        rule = self.rule
-        if rule == "none":
-            verdict = None
-        elif rule == "lowfi":
-            verdict = self._lowfi_verdict(test, incumbent, best_fitness)
-        else:
-            verdict = None if prediction is None else self._model_verdict(prediction, best_fitness)
-        if verdict is None:
-            self._consecutive = 0
-            return None
-        self._consecutive += 1
-        entry, told = verdict
-        return self._skip(action, test, rule, entry, told, best_fitness, prediction)
+        skip = None if self._rule is None else self._rule.verdict(test, incumbent, best_fitness)
+        self._consecutive = 0 if skip is None else self._consecutive + 1
+        return skip
 
-    def _skip(self, action, test, rule: str, entry: dict, told: float, best_fitness: float, prediction=None,
-              flown: dict | None = None) -> dict:
-        """Log a skipped candidate; returns what the inner agent is told (a fitness below the best, and the
-        trajectory and statuses of the runs flown, if any: the greedy's plateau test compares it with the
+    def _screening_rule(self):
+        """The rule in force as a :mod:`surrogates.screening` rule (None: nothing to skip on yet)."""
+        cfg, rule = self.config.screen, self.rule
+        if rule == "lowfi" and self.margin is not None:
+            return LowFidelityShortfall(self._featurizer.lowfi, self.margin)
+        if rule in ("ei", "pi") and self.model is not None:
+            return ModelImprovement(self.model, self._predict, rule, cfg.threshold, cfg.pessimism)
+        return None
+
+    def _skip(self, action, test, rule: str, skip: Skip, best_fitness: float, prediction=None,
+              flown=None) -> tuple[float, dict]:
+        """Log a skipped candidate; returns the fitness and info the inner agent is told (a fitness below the best,
+        and the trajectory and statuses of the runs flown, if any: the greedy's plateau test compares it with the
         incumbent's over the same first runs)."""
-        told = min(told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
+        told = min(skip.told, best_fitness - 1e-9 * max(1.0, abs(best_fitness)))
         env = self._env
+        entry = dict(skip.why)
         entry.update({"action": np.asarray(action, dtype=np.float64).tolist(), "test_key": test.key(),
                       "obstacles": [o.to_list() for o in test.obstacles], "rule": rule, "told_fitness": told,
                       "after_evaluations": env.budget - env.budget_left, "simulations": env.simulations})
@@ -276,88 +302,63 @@ class Prescreened(Agent):
                 "simulations": env.simulations, "best_fitness": None if env.best is None else env.best.fitness,
                 "predicted": prediction}
         if flown is not None:
-            info.update(trajectory=flown.get("trajectory"), statuses=flown.get("statuses", ()))
+            info.update(trajectory=flown.trajectory, statuses=flown.statuses)
         log.info("skipped candidate %s (%s): %s", entry["action"], rule,
                  {k: round(v, 3) for k, v in entry.items() if isinstance(v, float)})
         self.skipped.append(entry)
-        return {"told_fitness": told, "info": info}
+        return told, info
 
-    def _race(self, action, test, best_fitness: float, incumbent: dict) -> dict | None:
+    def _race(self, action, test, best_fitness: float, incumbent: dict) -> tuple[float, dict] | None:
         """Racing: fly the candidate's first runs, stage by stage; None to fly the rest (the candidate is stepped
-        on), else the log entry of a candidate dropped at a stage because its runs so far fall short of the
-        incumbent's same first runs by more than that stage's margin (the inner agent is told the best minus that
-        shortfall), or, with ``drop_ties``, score exactly as the incumbent's (told just below the best)."""
+        on), else what the inner agent is told of a candidate dropped at a stage because its runs so far fall short
+        of the incumbent's same first runs by more than that stage's margin (the best minus that shortfall), or,
+        with ``drop_ties``, score exactly as the incumbent's (just below the best)."""
         for k, margin in self.race_margins.items():
             if incumbent.get("test") is None or (margin is None and not self._drop_ties):
                 return None
             theirs = self._env.evaluator.evaluate(incumbent["test"], runs=k).fitness
-            fitness, probed = self._env.probe(action, k)
-            verdict = race_verdict(theirs, fitness, margin, self._drop_ties)
+            flown = self._env.race(action, k)
+            verdict = race_verdict(theirs, flown.fitness, margin, self._drop_ties)
             if verdict:
-                shortfall = float(theirs - fitness)
-                entry = {"first_runs": k, "first_runs_fitness": float(fitness), "race_shortfall": shortfall,
+                shortfall = float(theirs - flown.fitness)
+                entry = {"first_runs": k, "first_runs_fitness": float(flown.fitness), "race_shortfall": shortfall,
                          "race_margin": margin, "tie": verdict == "tie"}
-                return self._skip(action, test, "race", entry, best_fitness - shortfall, best_fitness,
-                                  flown=probed)
+                return self._skip(action, test, "race", Skip(best_fitness - shortfall, entry), best_fitness,
+                                  flown=flown)
         return None
 
-    def _lowfi_verdict(self, test, incumbent, best_fitness: float) -> tuple[dict, float] | None:
-        """Skip when the low-fidelity fitness falls short of the incumbent's by more than the margin; the inner
-        agent is told the best real fitness minus that shortfall."""
-        if self.margin is None or incumbent is None:
-            return None
-        lowfi = self._featurizer.lowfi
-        shortfall = float(lowfi.fitness(incumbent.obstacles) - lowfi.fitness(test.obstacles))
-        if not shortfall > self.margin:
-            return None
-        return {"lowfi_shortfall": shortfall, "margin": self.margin}, best_fitness - shortfall
-
-    def _model_verdict(self, prediction, best_fitness: float) -> tuple[dict, float] | None:
-        """The model's rule (``ei`` or ``pi``); a skip is told the prediction minus ``pessimism`` std."""
-        mean, std = prediction
-        best = float(self.model.to_scale(best_fitness))
-        z = (mean - best) / std
-        cdf = 0.5 * (1.0 + math.erf(z / math.sqrt(2.0)))
-        if self.rule == "pi":
-            score, limit = cdf, self.config.threshold
-        else:
-            pdf = math.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi)
-            score = std * (z * cdf + pdf)
-            limit = self.config.threshold * self._target_scale()
-        if score >= limit:
-            return None
-        told = float(self.model.from_scale(min(mean - self.config.pessimism * std, best)))
-        return {"predicted_mean": mean, "predicted_std": std, "score": score, "limit": limit}, told
-
-    def _target_scale(self) -> float:
-        y = self.model.to_scale(self.model.train_y)
-        return float(np.std(y)) or 1.0
+    def _calibrate(self) -> None:
+        """Margins, the tie rule and the screening rule, for the model in force."""
+        self.margin = self._calibrated_margin()
+        self.race_margins = self._calibrated_race_margins()
+        self._drop_ties = self._tie_rule()
+        self._rule = self._screening_rule()
 
     def _calibrated_margin(self) -> float | None:
         """The ``lowfi`` margin: the configured one, else calibrated on the model's training data."""
         if self._featurizer.lowfi is None:
             return None  # no low-fidelity flights to compare
-        if self.config.margin is not None:
-            return float(self.config.margin)
+        if self.config.screen.margin is not None:
+            return float(self.config.screen.margin)
         return None if self.model is None else model_margin(self.model, self.config.miss_rate)
 
     def _calibrated_race_margins(self) -> dict[int, float | None]:
         """Racing's margin per stage: the configured one, else calibrated on the model's training data at an equal
         share of the miss rate."""
-        stages = self.config.race_stages
+        stages = self.config.race.stages
         if stages and stages[-1] >= self._env.evaluator.runs:
             raise SurrealistError(f"prescreen first_runs: {stages[-1]} must be below the env's runs "
                                   f"({self._env.evaluator.runs})")
-        if self.config.race_margin is not None:
-            return {k: float(self.config.race_margin) for k in stages}
+        if self.config.race.margin is not None:
+            return {k: float(self.config.race.margin) for k in stages}
         share = self.config.miss_rate / max(len(stages), 1)
         return {k: None if self.model is None else race_margin(self.model, k, share) for k in stages}
 
     def _tie_rule(self) -> bool:
         """Whether racing drops ties (``PrescreenConfig.drop_ties``; None: under common noise, unless a tie improved
         in the model's training stores)."""
-        if self.config.drop_ties is not None:
-            return self.config.drop_ties
+        if self.config.race.drop_ties is not None:
+            return self.config.race.drop_ties
         if not self._env.evaluator.sim_config.common_noise:
             return False
         model = self.model
@@ -372,11 +373,11 @@ class Prescreened(Agent):
         self._y.append(float(fitness))
         evaluator = self._env.evaluator
         self._first.append([evaluator.evaluate(test, runs=k).fitness for k in range(1, evaluator.runs)]
-                           if self.config.race_stages else [])
+                           if self.config.race.stages else [])
         self._since_retrain += 1
 
     def _maybe_retrain(self) -> None:
-        cfg = self.config
+        cfg = self.config.online
         online = self._initial is None
         if not online and cfg.retrain_every <= 0:
             return
@@ -398,31 +399,23 @@ class Prescreened(Agent):
         model = SurrogateModel(self._featurizer, kind, "fitness", config, seed=(self.seed or 0) + self.retrains)
         self.model = model.fit(X, y, groups, first)
         model.common_noise = self._env.evaluator.sim_config.common_noise
-        self.margin = self._calibrated_margin()
-        self.race_margins = self._calibrated_race_margins()
-        self._drop_ties = self._tie_rule()
+        self._calibrate()
         self.retrains += 1
         self._since_retrain = 0
         log.info("surrogate retrained on %d evaluations", len(y))
 
 
-class _SkipsSpendBudget:
-    """The env as the inner agent sees it with ``SkipAccounting.BUDGET``: the same env, whose
-    ``budget_left`` is :attr:`Prescreened.inner_budget_left`."""
+class _SpentBySkips(SurrealistWrapper):
+    """The env as the inner agent sees it with ``SkipAccounting.BUDGET``: its ``budget_left`` is
+    :attr:`Prescreened.inner_budget_left`."""
 
     def __init__(self, env, prescreened: Prescreened):
-        self._real, self._prescreened = env, prescreened
-
-    @property
-    def unwrapped(self):
-        return self
+        super().__init__(env)
+        self._prescreened = prescreened
 
     @property
     def budget_left(self) -> int:
         return self._prescreened.inner_budget_left
-
-    def __getattr__(self, name):
-        return getattr(self._real, name)
 
 
 def wrap(agent: Agent, spec: str | Path | None, env=None, config: PrescreenConfig | None = None) -> Agent:

@@ -157,8 +157,8 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
         from surrogates.prescreen import PrescreenConfig, wrap
 
         skips = SkipAccounting.BUDGET if options.skips_spend_budget else SkipAccounting.EVALUATION
-        config = PrescreenConfig(rule=options.screen or "auto", first_runs=stages, skips=skips,
-                                 verify_stop=options.verify_stop)
+        config = PrescreenConfig.of(rule=options.screen or "auto", first_runs=stages, skips=skips,
+                                    verify_stop=options.verify_stop)
         agent = wrap(agent, options.surrogate or "online", env, config)
     bar = tqdm(total=options.budget, unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)

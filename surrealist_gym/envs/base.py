@@ -12,10 +12,6 @@ on what came before it (and a resumed search retraces the interrupted one); ``in
 runs the episode's evaluations stand for; an invalid test (overlap, non-positive size) is not simulated, costs no budget and
 scores a penalty. The episode is truncated when the budget is spent.
 
-``probe(action, runs=k)`` flies only the first k of a test's n runs (racing: a search can drop a test whose first
-runs already fall short); those runs are charged to the budget as k/n of an evaluation, and ``step`` on the same
-action later flies only the rest (the evaluation is the same as in one go).
-
 Subclasses override only the hooks ``_objective`` and, if needed, ``_terminated``.
 """
 from __future__ import annotations
@@ -73,7 +69,6 @@ class SurrealistEnv(gym.Env):
         self._steps = 0
         self._seed_fitness = 0.0
         self._episode_keys: set[str] = set()
-        self._probed: dict[str, int] = {}  # runs flown by probe() of tests not yet stepped on, by test key
         self._best: Evaluation | None = None
         self._seed_evaluation: Evaluation | None = None
         self._last_action = np.zeros(n)
@@ -101,8 +96,8 @@ class SurrealistEnv(gym.Env):
 
     @property
     def budget_left(self) -> int:
-        """Evaluations left; the runs of probed tests count as their share of an evaluation."""
-        return self._budget - self._evaluations - sum(self._probed.values()) // self.evaluator.runs
+        """Evaluations left."""
+        return self._budget - self._evaluations
 
     @property
     def evaluations(self) -> int:
@@ -156,7 +151,6 @@ class SurrealistEnv(gym.Env):
         self._simulations = 0
         self._steps = 0
         self._episode_keys: set[str] = set()
-        self._probed = {}
         self._last_action = np.zeros(len(self._mutators))
         evaluation, _ = self._evaluate(self._seed_test)
         if not np.isfinite(evaluation.fitness):
@@ -189,20 +183,6 @@ class SurrealistEnv(gym.Env):
         info = self._info(evaluation, invalid, memo)
         return self._observation(fitness), float(fitness), terminated, truncated, info
 
-    def probe(self, action, runs: int) -> tuple[float, dict]:
-        """The fitness of the action's test judged on its first ``runs`` runs alone, and the step's info (with
-        ``info["runs"]`` the runs judged). Costs the runs not flown before; a test already evaluated in this episode
-        is answered from its evaluation. Raises InvalidTestCase for an invalid action."""
-        test = self.test_for(np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0))
-        key = test.key()
-        evaluation = self.evaluator.evaluate(test, runs=runs)
-        if key not in self._episode_keys and len(evaluation.runs) > self._probed.get(key, 0):
-            self._simulations += len(evaluation.runs) - self._probed.get(key, 0)
-            self._probed[key] = len(evaluation.runs)
-        info = self._info(evaluation, None, key in self._episode_keys)
-        info["runs"] = len(evaluation.runs)
-        return evaluation.fitness, info
-
     def close(self):
         self.evaluator.close()
 
@@ -216,7 +196,7 @@ class SurrealistEnv(gym.Env):
             self._evaluations += 1
         evaluation = self.evaluator.evaluate(test)
         if not memo:
-            self._simulations += len(evaluation.runs) - self._probed.pop(key, 0)
+            self._simulations += len(evaluation.runs)
         return evaluation, memo
 
     def _penalty(self) -> float:

@@ -101,7 +101,9 @@ def test_replicate_from_a_log_without_seed_places_the_papers_box():
     assert box.x == pytest.approx(-17.0 / 2, abs=0.6) and box.y == pytest.approx(6.8 / 2, abs=0.6)
 
 
-def test_probe_flies_the_first_runs_and_step_only_the_rest(tmp_path):
+def test_racing_flies_the_first_runs_and_step_only_the_rest(tmp_path):
+    from surrogates.racing import Racing
+
     action = [4.0, -1.0]
     whole = make("Surrealist-Generate-v0", budget=5, runs=3).unwrapped
     whole.reset(seed=0)
@@ -110,25 +112,40 @@ def test_probe_flies_the_first_runs_and_step_only_the_rest(tmp_path):
     assert whole.evaluator.simulations == 6
     assert first[0] <= first[1] + 1e-12 and first[1] <= fitness + 1e-12  # the riskiest run so far
 
-    env = make("Surrealist-Generate-v0", budget=5, runs=3, store=tmp_path / "e.sqlite").unwrapped
+    env = Racing(make("Surrealist-Generate-v0", budget=5, runs=3, store=tmp_path / "e.sqlite"))
     env.reset(seed=0)
-    probed, pinfo = env.probe(env.action_for(action), 2)
-    assert probed == pytest.approx(first[1]) and pinfo["runs"] == 2
-    assert env.evaluator.simulations == 3 + 2 and pinfo["simulations"] == 5
+    raced = env.race(env.action_for(action), 2)
+    assert raced.fitness == pytest.approx(first[1]) and len(raced.runs) == 2
+    assert env.evaluator.simulations == 3 + 2 and env.simulations == 5
     assert env.budget_left == 5 - 1  # two runs of three do not make an evaluation yet
     assert len(list(EvaluationStore(tmp_path / "e.sqlite"))) == 1  # a partial evaluation is not stored
     _, stepped, _, _, sinfo = env.step(env.action_for(action))
     assert stepped == fitness and env.evaluator.simulations == 6 and sinfo["simulations"] == 6
-    assert env.budget_left == 5 - 2
-    again, _ = env.probe(env.action_for(action), 1)  # evaluated in full: scored from its kept runs
-    assert again == pytest.approx(first[0]) and env.evaluator.simulations == 6
+    assert env.budget_left == 5 - 2 and sinfo["budget_left"] == 3
+    again = env.race(env.action_for(action), 1)  # evaluated in full: scored from its kept runs
+    assert again.fitness == pytest.approx(first[0]) and env.evaluator.simulations == 6 and env.simulations == 6
+
+
+def test_raced_runs_are_charged_to_the_budget_in_whole_evaluations():
+    from surrogates.racing import Racing
+
+    env = Racing(make("Surrealist-Generate-v0", budget=2, runs=2))
+    env.reset(seed=0)
+    env.race(env.action_for([4.0, -1.0]), 1)
+    assert env.budget_left == 1 and env.unwrapped.budget_left == 1
+    env.race(env.action_for([3.0, -2.0]), 1)
+    assert env.budget_left == 0 and env.simulations == 4  # two half evaluations make one
+    *_, truncated, info = env.step(env.action_for([2.0, 1.0]))
+    assert truncated and info["budget_left"] < 0
 
 
 def test_a_partial_evaluation_is_scored_from_the_runs_a_store_keeps(tmp_path):
     """Runs keep their trajectories, in memory and in the store: the score of a test's first k runs alone is
-    computed on demand, like for like with a probe, without flying again after a restart."""
+    computed on demand, like for like with a race, without flying again after a restart."""
+    from surrogates.racing import Racing
+
     kwargs = dict(budget=3, runs=3, store=tmp_path / "r.sqlite", sim_config={"common_noise": True})
-    env = make("Surrealist-Replicate-v0", **kwargs).unwrapped
+    env = Racing(make("Surrealist-Replicate-v0", **kwargs))
     _, info = env.reset(seed=0)
     first = env.evaluator.evaluate(info["test"], runs=1)
     assert len(first.runs) == 1 and first.trajectory.shape[1] == 3
@@ -136,19 +153,17 @@ def test_a_partial_evaluation_is_scored_from_the_runs_a_store_keeps(tmp_path):
     values = env.values_for(np.zeros(env.action_space.shape))
     values[0] += 2.0
     action = env.action_for(values)
-    probed, pinfo = env.probe(action, 2)
+    raced = env.race(action, 2)
     _, stepped, _, _, sinfo = env.step(action)
     two = env.evaluator.evaluate(sinfo["test"], runs=2)
-    assert np.array_equal(pinfo["trajectory"], two.trajectory) and probed == pytest.approx(two.fitness)
+    assert np.array_equal(raced.trajectory, two.trajectory) and raced.fitness == pytest.approx(two.fitness)
 
-    again = make("Surrealist-Replicate-v0", **kwargs).unwrapped
+    again = Racing(make("Surrealist-Replicate-v0", **kwargs))
     again.reset(seed=0)
     reread = again.evaluator.evaluate(sinfo["test"], runs=2)
     assert again.evaluator.simulations == 0
     assert reread.fitness == two.fitness and np.array_equal(reread.trajectory, two.trajectory)
-    _, from_store = again.probe(action, 1)
-    assert again.evaluator.simulations == 0
-    assert from_store["runs"] == 1
+    assert len(again.race(action, 1).runs) == 1 and again.evaluator.simulations == 0
 
 
 def test_envs_take_a_uav_profile():

@@ -38,7 +38,7 @@ def model(rq2_store, generate_featurizer):
 def _run(model, seed=0):
     env = _env()
     steps = []
-    agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig(threshold=0.5, max_skips=3), seed=seed)
+    agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig.of(threshold=0.5, max_skips=3), seed=seed)
     result = agent.run(env, seed=seed, callback=steps.append)
     return agent, result, steps, env
 
@@ -66,7 +66,7 @@ def test_same_seed_same_search(runs):
 
 def test_online_model_trains_as_evaluations_arrive():
     agent = Prescreened(AdaptiveGreedy("paper"), "online",
-                        PrescreenConfig(min_points=2, retrain_every=1, kind="knn"), seed=1)
+                        PrescreenConfig.of(min_points=2, retrain_every=1, kind="knn"), seed=1)
     result = agent.run(_env(), seed=1)
     assert result.evaluations <= BUDGET and agent.retrains >= 1 and agent.model is not None
 
@@ -82,15 +82,21 @@ def test_wrap(model, tmp_path):
 
 
 def test_free_then_most_promising_candidates_first(model):
+    candidates = [np.array([0.1, 0.0]), np.array([-0.1, 0.3]), np.array([0.0, -1.0])]  # the last one overlaps
+
+    class Fixed(AdaptiveGreedy):
+        def _ask(self):
+            return candidates
+
     env = _env()
     _, info = env.reset(seed=0)
-    agent = Prescreened(AdaptiveGreedy("paper"), model, seed=0)
+    agent = Prescreened(Fixed("paper"), model, seed=0)
     agent.setup(env, info)
-    candidates = [np.array([0.1, 0.0]), np.array([-0.1, 0.3]), np.array([0.0, -1.0])]  # the last one overlaps
-    order, tests, predictions = agent._most_promising_first(candidates)
-    means = [p[0] for p in predictions[:2]]
-    assert tests[2] is None and predictions[2] is None and order[0] == 2
-    assert order[1:] == sorted([0, 1], key=lambda i: -means[i])
+    asked = agent.ask()
+    means = [agent._predict(env.unwrapped.test_for(a))[0] for a in candidates[:2]]
+    assert asked[0] is candidates[2]  # free: the env rejects it without a simulation
+    assert [next(i for i, c in enumerate(candidates) if c is a) for a in asked[1:]] == sorted(
+        [0, 1], key=lambda i: -means[i])
 
 
 def test_replay_margin_replays_each_search_in_order():
@@ -111,7 +117,7 @@ def lowfi_model(rq1_lowfi_dataset, replicate_lowfi_featurizer):
 
 def test_lowfi_rule_skips_candidates_the_coarse_flight_finds_clearly_worse(lowfi_model):
     env = gym.make("Surrealist-Replicate-v0", budget=6, runs=1, executor="inline")
-    agent = Prescreened(AdaptiveGreedy("authors"), lowfi_model, PrescreenConfig(miss_rate=0.5), seed=0)
+    agent = Prescreened(AdaptiveGreedy("authors"), lowfi_model, PrescreenConfig.of(miss_rate=0.5), seed=0)
     result = agent.run(env, seed=0)
     assert agent.rule == "lowfi" and agent.margin is not None  # auto: the model's stores calibrate a margin
     assert result.evaluations <= 6 and env.unwrapped.evaluator.simulations == result.evaluations
@@ -122,14 +128,14 @@ def test_lowfi_rule_skips_candidates_the_coarse_flight_finds_clearly_worse(lowfi
 
 
 def test_lowfi_rule_needs_low_fidelity_features(model):
-    agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig(rule="lowfi"), seed=0)
+    agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig.of(rule="lowfi"), seed=0)
     with pytest.raises(SurrealistError, match="low-fidelity"):
         agent.run(_env(), seed=0)
 
 
 def test_racing_drops_candidates_whose_first_runs_fall_short():
     env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline")
-    config = PrescreenConfig(rule="ei", first_runs=1, race_margin=0.0, lowfi=False)
+    config = PrescreenConfig.of(rule="ei", first_runs=1, race_margin=0.0, lowfi=False)
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
     raced = [s for s in agent.skipped if s["rule"] == "race"]
@@ -143,7 +149,7 @@ def test_racing_drops_candidates_whose_first_runs_fall_short():
 
 def test_racing_in_stages_drops_a_candidate_at_the_first_stage_it_falls_behind():
     env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline")
-    config = PrescreenConfig(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False)
+    config = PrescreenConfig.of(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False)
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
     assert agent.race_margins == {1: 0.0, 2: 0.0}
@@ -155,32 +161,32 @@ def test_racing_in_stages_drops_a_candidate_at_the_first_stage_it_falls_behind()
 
 
 def test_racing_stages_must_increase():
-    assert PrescreenConfig(first_runs=(1, 2, 3)).race_stages == (1, 2, 3)
-    assert PrescreenConfig(first_runs=2).race_stages == (2,) and PrescreenConfig().race_stages == ()
+    assert PrescreenConfig.of(first_runs=(1, 2, 3)).race.stages == (1, 2, 3)
+    assert PrescreenConfig.of(first_runs=2).race.stages == (2,) and PrescreenConfig().race.stages == ()
     with pytest.raises(ValueError, match="increasing"):
-        PrescreenConfig(first_runs=(2, 1))
+        PrescreenConfig.of(first_runs=(2, 1))
 
 
 def test_skips_spend_the_inner_agents_budget(model):
     # a screen that skips every candidate: with SkipAccounting.BUDGET the greedy runs out of (its) budget after as many
     # candidates as the budget allows, having simulated only the seed test; the env's budget is left unspent
     env = gym.make("Surrealist-Generate-v0", budget=5, runs=1, executor="inline")
-    config = PrescreenConfig(rule="pi", threshold=1.0, max_skips=10**6, skips=SkipAccounting.BUDGET)
+    config = PrescreenConfig.of(rule="pi", threshold=1.0, max_skips=10**6, skips=SkipAccounting.BUDGET)
     agent = Prescreened(AdaptiveGreedy("paper"), model, config, seed=0)
     result = agent.run(env, seed=0)
     assert len(agent.skipped) == 4 and agent.unspent == pytest.approx(4.0)
     assert result.stop_reason.startswith("budget spent") and env.unwrapped.budget_left == 4
     assert env.unwrapped.evaluator.simulations == 1
-    assert PrescreenConfig(skips="budget").skips is SkipAccounting.BUDGET
+    assert PrescreenConfig.of(skips="budget").skips is SkipAccounting.BUDGET
     with pytest.raises(ValueError, match="prescreen skips: expected one of"):
-        PrescreenConfig(skips="sometimes")
+        PrescreenConfig.of(skips="sometimes")
 
 
 def test_the_inner_agent_stops_where_its_budget_with_skips_counted_ends():
     # every candidate is dropped after its first run (a margin below any shortfall): the greedy is told exactly as
     # many candidates as the budget holds after the seed test, as the env would cut it off without screening
     env = gym.make("Surrealist-Generate-v0", budget=4, runs=2, executor="inline")
-    config = PrescreenConfig(rule="none", first_runs=1, race_margin=-1e9, lowfi=False, skips=SkipAccounting.BUDGET)
+    config = PrescreenConfig.of(rule="none", first_runs=1, race_margin=-1e9, lowfi=False, skips=SkipAccounting.BUDGET)
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
     assert len(agent.skipped) == 3 and result.stop_reason.startswith("budget spent")
@@ -201,7 +207,7 @@ class _AsksTwice(AdaptiveGreedy):
 def test_a_test_asked_twice_in_one_ask_is_flown_once_and_then_a_memo_answer():
     env = gym.make("Surrealist-Generate-v0", budget=4, runs=2, executor="inline", sim_config={"common_noise": True})
     inner = _AsksTwice("paper")
-    agent = Prescreened(inner, "online", PrescreenConfig(rule="none", first_runs=1, lowfi=False), seed=0)
+    agent = Prescreened(inner, "online", PrescreenConfig.of(rule="none", first_runs=1, lowfi=False), seed=0)
     agent.run(env, seed=0)
     (first, _), (second, info) = inner.told
     assert second == first and info["memo"] and not agent.skipped  # not raced against itself
@@ -213,7 +219,7 @@ def test_racing_drops_ties_under_common_noise():
     env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline",
                    sim_config={"common_noise": True})  # a mapping, as `surrealist compare --common-noise` passes it
     assert env.unwrapped.evaluator.sim_config.common_noise
-    config = PrescreenConfig(rule="ei", first_runs=1, race_margin=1e9, lowfi=False)  # no drop by shortfall
+    config = PrescreenConfig.of(rule="ei", first_runs=1, race_margin=1e9, lowfi=False)  # no drop by shortfall
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
     ties = [s for s in agent.skipped if s["rule"] == "race"]
@@ -223,7 +229,7 @@ def test_racing_drops_ties_under_common_noise():
 
 def test_racing_needs_fewer_first_runs_than_runs():
     env = gym.make("Surrealist-Generate-v0", budget=2, runs=2, executor="inline")
-    agent = Prescreened(AdaptiveGreedy("paper"), "online", PrescreenConfig(first_runs=2, lowfi=False), seed=0)
+    agent = Prescreened(AdaptiveGreedy("paper"), "online", PrescreenConfig.of(first_runs=2, lowfi=False), seed=0)
     with pytest.raises(SurrealistError, match="first_runs"):
         agent.run(env, seed=0)
 
@@ -244,7 +250,7 @@ def test_a_stop_the_skips_caused_is_verified_by_simulation(model):
     ends = {}
     for verify in (False, True):
         env = gym.make("Surrealist-Generate-v0", budget=3, runs=1, executor="inline")
-        config = PrescreenConfig(rule="pi", threshold=1.0, max_skips=10**6, verify_stop=verify)
+        config = PrescreenConfig.of(rule="pi", threshold=1.0, max_skips=10**6, verify_stop=verify)
         agent = Prescreened(AdaptiveGreedy("paper"), model, config, seed=0)
         result = agent.run(env, seed=0)
         ends[verify] = (agent, result, env.unwrapped)
@@ -269,7 +275,7 @@ def test_a_dropped_candidate_tells_its_first_runs_trajectory_and_how_many_runs()
 
     env = gym.make("Surrealist-Replicate-v0", budget=4, runs=3, executor="inline",
                    sim_config={"common_noise": True})
-    config = PrescreenConfig(rule="none", first_runs=(1, 2), race_margin=0.0, lowfi=False)
+    config = PrescreenConfig.of(rule="none", first_runs=(1, 2), race_margin=0.0, lowfi=False)
     agent = Prescreened(Recording("authors"), "online", config, seed=0)
     agent.run(env, seed=0)
     dropped = [i for i in told if i.get("skipped") and not i.get("memo")]
@@ -296,7 +302,7 @@ def test_a_model_used_in_the_other_noise_mode_is_flagged(model, tmp_path):
 def test_an_online_model_keeps_the_noise_mode_it_learnt_from():
     env = gym.make("Surrealist-Generate-v0", budget=3, runs=1, executor="inline", sim_config={"common_noise": True})
     agent = Prescreened(AdaptiveGreedy("paper"), "online",
-                        PrescreenConfig(min_points=2, retrain_every=1, kind="knn", lowfi=False), seed=0)
+                        PrescreenConfig.of(min_points=2, retrain_every=1, kind="knn", lowfi=False), seed=0)
     agent.run(env, seed=0)
     assert agent.model is not None and agent.model.common_noise is True
 
@@ -320,7 +326,7 @@ def test_ties_are_raced_only_where_no_tie_improved_in_the_training_stores():
         env = gym.make("Surrealist-Generate-v0", budget=1, runs=3, executor="inline",
                        sim_config={"common_noise": True})
         _, info = env.reset(seed=0)
-        agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig(rule="none", first_runs=1), seed=0)
+        agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig.of(rule="none", first_runs=1), seed=0)
         agent.setup(env, info)
         return agent._drop_ties
 
