@@ -6,8 +6,8 @@
 Each repetition is one search with its own base seed (the simulation noise); its evaluations are stored in
 ``OUT/<problem>-rep<N>.sqlite``, so an interrupted run resumes where it stopped, and its metrics in
 ``OUT/<problem>-rep<N>.json`` (``search.repetitions``; a JSON of an older version is rewritten by replaying the
-store). The paper's figures are printed beside ours. ``--common-noise`` flies every test's run i with the same noise (``SimConfig.common_noise``; default out
-``results/paper-crn``).
+store). The paper's figures are printed beside ours. ``--common-noise`` flies every test's run i with the same noise
+(``SimConfig.common_noise``; default out ``results/paper-crn``).
 """
 from __future__ import annotations
 

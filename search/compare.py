@@ -89,7 +89,7 @@ class _Shared:
 
 
 def _slug(name: str) -> str:
-    """A file-name stem for an agent name; no dots, so ``with_suffix`` never eats the repetition number."""
+    """A file-name stem for an agent name (``ppo:results/policies/x.zip`` holds a colon, slashes and dots)."""
     return re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_")
 
 

@@ -37,7 +37,8 @@ def run_repetition(stem, make_env: Callable[[Path], object], make_agent: Callabl
     search; ``callback`` gets each step's info. A JSON that is not SearchMetrics (an older format) is rewritten from
     the search replayed from its store."""
     stem = Path(stem)
-    cached = stem.with_suffix(".json")
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    cached = stem.parent / f"{stem.name}.json"  # not with_suffix: a stem may hold dots ("miss0.02")
     if cached.is_file():
         try:
             return Repetition(SearchMetrics.from_json(json.loads(cached.read_text())))
@@ -50,7 +51,7 @@ def run_repetition(stem, make_env: Callable[[Path], object], make_agent: Callabl
         if callback is not None:
             callback(info)
 
-    env = make_env(stem.with_suffix(".sqlite"))
+    env = make_env(stem.parent / f"{stem.name}.sqlite")
     try:
         agent = make_agent()
         start = time.perf_counter()
