@@ -19,7 +19,6 @@ import json
 import math
 import re
 import threading
-import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +28,9 @@ import numpy as np
 
 from surrealist_gym.errors import SurrealistError
 
+from .metrics import SearchMetrics
 from .registry import agent_label, make_agent
+from .repetitions import run_repetition
 
 SETTINGS_FILE = "compare.json"
 # (metric key, column title, format); a metric absent from every search of a problem is left out of the tables
@@ -52,17 +53,12 @@ PAIRED = (("best_fitness", "final fitness"), ("simulations_to_best", "simulation
 
 @dataclass(frozen=True, slots=True)
 class SearchRecord:
-    """One finished search: its metrics and its convergence trace ``(evaluations, simulations, best fitness)``."""
+    """One finished search of an agent: its metrics (with its convergence trace)."""
 
     agent: str
     repetition: int
-    metrics: dict
-    trace: tuple
+    metrics: SearchMetrics
     new_simulations: int = 0  # simulated by this call (0 for a search read back from its JSON)
-
-    def to_json(self) -> dict:
-        return {"agent": self.agent, "repetition": self.repetition, "metrics": self.metrics,
-                "trace": [list(t) for t in self.trace]}
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,7 +89,7 @@ class _Shared:
 
 
 def _slug(name: str) -> str:
-    """A file-name stem for an agent name; no dots, so ``with_suffix`` never eats the repetition number."""
+    """A file-name stem for an agent name (``ppo:results/policies/x.zip`` holds a colon, slashes and dots)."""
     return re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_")
 
 
@@ -161,73 +157,24 @@ def _check_settings(path: Path, settings: dict) -> None:
 def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, progress, lock) -> SearchRecord:
     import gymnasium as gym
 
-    stem = out / "searches" / f"{_slug(name)}-rep{rep}"
-    cached = stem.with_suffix(".json")
-    if cached.is_file():
-        data = json.loads(cached.read_text())
+    def make_env(store):
+        kwargs = dict(env_kwargs, budget=budget, random_seed=rep, store=str(store), executor=executor)
+        return gym.make(env_id, **(kwargs if runs is None else dict(kwargs, runs=runs)))
+
+    def report(evaluations, done: bool) -> None:
         if progress is not None:
             with lock:
-                progress({"agent": name, "repetition": rep, "evaluations": budget, "budget": budget, "done": True})
-        return SearchRecord(name, rep, data["metrics"], tuple(tuple(t) for t in data["trace"]))
-    kwargs = dict(env_kwargs, budget=budget, random_seed=rep, store=str(stem.with_suffix(".sqlite")),
-                  executor=executor)
-    if runs is not None:
-        kwargs["runs"] = runs
-    env = gym.make(env_id, **kwargs)
-    agent = make_agent(name, seed=rep)
-    trace = []
+                progress({"agent": name, "repetition": rep, "evaluations": evaluations, "budget": budget,
+                          "done": done})
 
-    def callback(info: dict) -> None:
-        trace.append((int(info["evaluations"]), int(info["simulations"]), float(info["best_fitness"])))
-        if progress is not None:
-            with lock:
-                progress({"agent": name, "repetition": rep, "evaluations": info["evaluations"], "budget": budget,
-                          "done": False})
-
-    start = time.perf_counter()
-    result = agent.run(env, seed=rep, callback=callback)
-    base = env.unwrapped
-    wall = time.perf_counter() - start + base.evaluator.replayed_seconds  # a resumed search counts its first part
-    seed_eval = base.seed_evaluation
-    trace.insert(0, (1, len(seed_eval.runs), float(seed_eval.fitness)))
-    metrics = _metrics(base, result, trace, wall)
-    record = SearchRecord(name, rep, metrics, tuple(trace), base.evaluator.simulations)
-    env.close()
-    cached.write_text(json.dumps(record.to_json()) + "\n")
-    if progress is not None:
-        with lock:
-            progress({"agent": name, "repetition": rep, "evaluations": budget, "budget": budget, "done": True})
-    return record
-
-
-def _metrics(env, result, trace, wall: float) -> dict:
-    """Table 2 metrics of one search."""
-    from surrealist_gym.outcomes import outcomes
-
-    seed, best = env.seed_evaluation, env.best
-    sims_to_best = next(s for e, s, f in trace if f >= best.fitness)
-    metrics = {"seed_fitness": seed.fitness, "best_fitness": best.fitness, "evaluations": result.evaluations,
-               "evaluations_to_best": result.evaluations_to_best, "simulations": trace[-1][1],
-               "simulations_to_best": sims_to_best, "wall_seconds": round(wall, 3)}
-    if "dtw" in best.terms:
-        for key in ("dtw", "frechet"):
-            metrics[f"best_{key}"], metrics[f"seed_{key}"] = best.terms[key], seed.terms[key]
-            metrics[f"{key}_reduction"] = _reduction(best.terms[key], seed.terms[key])
-    if "min_dist" in best.terms or "sum_dist" in best.terms:
-        measure = getattr(env, "distance_measure", "paper")
-        best_o, seed_o = outcomes(best.runs, measure), outcomes(seed.runs, measure)
-        metrics.update(best_min_distance=best_o.closest, seed_min_distance=seed_o.closest,
-                       min_distance_reduction=_reduction(best_o.closest, seed_o.closest),
-                       crash_rate=best_o.crash_rate, unsafe_rate=best_o.unsafe_rate)
-    return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in metrics.items()}
-
-
-def _reduction(best: float, seed: float) -> float:
-    return 1.0 - best / seed if seed else float("nan")
+    finished = run_repetition(out / "searches" / f"{_slug(name)}-rep{rep}", make_env,
+                              lambda: make_agent(name, seed=rep), rep, lambda info: report(info["evaluations"], False))
+    report(budget, True)
+    return SearchRecord(name, rep, finished.metrics, finished.new_simulations)
 
 
 def _values(records, agent: str, key: str) -> list[float]:
-    vals = [r.metrics.get(key) for r in records if r.agent == agent]
+    vals = [getattr(r.metrics, key) for r in records if r.agent == agent]
     return [float(v) for v in vals if v is not None and math.isfinite(float(v))]
 
 
@@ -271,11 +218,11 @@ def _write_reports(out: Path, settings: dict, records, summary, pairwise, agents
         writer.writeheader()
         writer.writerows(pairwise)
     with open(out / "searches.csv", "w", newline="") as f:
-        keys = sorted({k for r in records for k in r.metrics})
+        keys = sorted({k for r in records for k in r.metrics.figures()})
         writer = csv.writer(f)
         writer.writerow(["agent", "repetition"] + keys)
         for r in records:
-            writer.writerow([r.agent, r.repetition] + [r.metrics.get(k, "") for k in keys])
+            writer.writerow([r.agent, r.repetition] + [r.metrics.figures().get(k, "") for k in keys])
     (out / "compare.md").write_text(_markdown(settings, summary, pairwise, present))
     _plot_convergence(out / "convergence.png", records, agents, settings["env_id"])
 
@@ -311,7 +258,7 @@ def _markdown(settings, summary, pairwise, present) -> str:
 
 def convergence_curves(records, agent: str) -> tuple[np.ndarray, np.ndarray]:
     """Simulations grid and best-fitness curves (one row per search of ``agent``; NaN before its first point)."""
-    traces = [r.trace for r in records if r.agent == agent]
+    traces = [r.metrics.trace for r in records if r.agent == agent]
     top = max((t[-1][1] for t in traces), default=0)
     grid = np.arange(0, top + 1)
     curves = np.full((len(traces), grid.size), np.nan)

@@ -48,15 +48,15 @@ def test_reports_are_written(compared):
     assert sum(e["done"] for e in events) == 4
     for record in result.searches:
         m = record.metrics
-        assert m["evaluations"] == 3 and m["best_fitness"] >= m["seed_fitness"]
-        assert record.trace[0][:2] == (1, 1) and record.trace[-1][1] == m["simulations"]
+        assert m.evaluations == 3 and m.best_fitness >= m.seed_fitness
+        assert m.trace[0][:2] == (1, 1) and m.trace[-1][1] == m.simulations
 
 
 def test_same_problems_for_every_agent(compared):
     _, result, _ = compared
     by_rep = {}
     for record in result.searches:
-        by_rep.setdefault(record.repetition, set()).add(record.metrics["seed_fitness"])
+        by_rep.setdefault(record.repetition, set()).add(record.metrics.seed_fitness)
     assert all(len(seeds) == 1 for seeds in by_rep.values())  # repetition r: the same seed evaluation
 
 
@@ -64,7 +64,7 @@ def test_resume_does_no_new_simulations(compared):
     out, first, _ = compared
     again = compare("Surrealist-Generate-v0", ["greedy", "random"], out=out, **SETTINGS)
     assert again.new_simulations == 0
-    assert [s.metrics["best_fitness"] for s in again.searches] == [s.metrics["best_fitness"] for s in first.searches]
+    assert [s.metrics for s in again.searches] == [s.metrics for s in first.searches]
 
 
 def test_interrupted_search_replays_from_its_store(compared, tmp_path):
@@ -77,8 +77,8 @@ def test_interrupted_search_replays_from_its_store(compared, tmp_path):
     (copy / "searches" / sqlite.name).write_bytes(sqlite.read_bytes())  # evaluations stored, no finished JSON
     again = compare("Surrealist-Generate-v0", ["random"], out=copy, **{**SETTINGS, "repetitions": 2})
     replayed = again.searches[1]
-    assert replayed.new_simulations == 0 and replayed.trace == next(
-        s.trace for s in first.searches if s.agent == "random" and s.repetition == 1)
+    assert replayed.new_simulations == 0 and replayed.metrics.trace == next(
+        s.metrics.trace for s in first.searches if s.agent == "random" and s.repetition == 1)
 
 
 def test_other_settings_in_the_same_folder_are_refused(compared):
