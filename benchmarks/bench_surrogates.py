@@ -91,10 +91,10 @@ def _label(args) -> str:
 def prescreened(args, rep: int, featurizer: Featurizer) -> SearchMetrics:
     """Repetition ``rep`` of the pre-screened greedy (cached in OUT/<problem>-<label>-rep<N>)."""
     paper, training = _paper(args), max(args.from_rep, 10)
-    config = PrescreenConfig(rule=args.rule, threshold=args.threshold, miss_rate=args.miss_rate, min_points=10,
-                             retrain_every=10, lowfi=args.lowfi, first_runs=args.first_runs,
-                             skips=SkipAccounting.BUDGET if args.skips_spend_budget else SkipAccounting.EVALUATION,
-                             verify_stop=args.verify_stop)
+    config = PrescreenConfig.of(rule=args.rule, threshold=args.threshold, miss_rate=args.miss_rate, min_points=10,
+                                retrain_every=10, lowfi=args.lowfi, first_runs=args.first_runs,
+                                skips=SkipAccounting.BUDGET if args.skips_spend_budget else SkipAccounting.EVALUATION,
+                                verify_stop=args.verify_stop)
 
     def make_env(store: Path):
         if not store.is_file():  # greedy alone's evaluations, read back instead of flown again

@@ -26,6 +26,7 @@ class SearchResult:
     evaluations_to_best: int     # evaluations spent until the best was found (the paper's "needed budget")
     history: tuple[float, ...] = field(default=())  # fitness of every step, in order
     stop_reason: str = ""
+    simulations: int = 0         # runs the search simulated, as the env layer it searched through counts them
 
 
 class Agent(ABC):
@@ -97,7 +98,7 @@ class Agent(ABC):
             raise RuntimeError("no result before a run")
         action, fitness, info = self._best
         return SearchResult(action, fitness, info, self._evaluations, self._evaluations_to_best,
-                            tuple(self._history), self._stop_reason)
+                            tuple(self._history), self._stop_reason, int(self._env.simulations))
 
     def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
         """Search on ``env`` until the agent stops or the env's budget is spent."""

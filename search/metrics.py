@@ -81,6 +81,7 @@ def search_metrics(env, result, trace: Sequence[Point] = (), wall_seconds: float
     ``result`` (a :class:`~search.base.SearchResult`); ``trace`` holds the points its steps reported, in order."""
     env = env.unwrapped
     seed, best = env.seed_evaluation, env.best
+    simulations = result.simulations or env.simulations  # the agent's layer counts raced runs too
     trace = ((1, len(seed.runs), float(seed.fitness)), *trace)
     extra: dict = {}
     if "dtw" in best.terms:
@@ -93,8 +94,8 @@ def search_metrics(env, result, trace: Sequence[Point] = (), wall_seconds: float
                  "crash_rate": best_o.crash_rate, "unsafe_rate": best_o.unsafe_rate}
     return SearchMetrics(
         seed_fitness=float(seed.fitness), best_fitness=float(best.fitness), evaluations=result.evaluations,
-        evaluations_to_best=result.evaluations_to_best, simulations=env.simulations,
-        simulations_to_best=next((s for _, s, f in trace if f >= best.fitness), env.simulations),
+        evaluations_to_best=result.evaluations_to_best, simulations=simulations,
+        simulations_to_best=next((s for _, s, f in trace if f >= best.fitness), simulations),
         wall_seconds=round(wall_seconds, 3), trace=tuple(trace), **extra)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Sequence
@@ -162,10 +163,37 @@ class _Once:
         return self._submit(*args)
 
 
+LOST_SCHEDULER_S = 25.0  # a chunk is given up on after its client has been cut off from the scheduler this long
+
+
+class _Watched:
+    """A Dask future whose result is given up on (ConnectionError) once its client has lost the scheduler for
+    ``patience`` seconds, so a lost scheduler stops a search (two attempts) within a minute instead of hanging."""
+
+    def __init__(self, future, client, patience: float):
+        self._future, self._client, self._patience = future, client, patience
+
+    def result(self):
+        lost_since = None
+        while True:
+            try:
+                return self._future.result(timeout=1.0)
+            except TimeoutError:
+                if self._client.status == "running":
+                    lost_since = None
+                    continue
+                lost_since = lost_since or time.monotonic()
+                if time.monotonic() - lost_since > self._patience:
+                    import logging  # the search reports the lost scheduler in one line; the client's own
+                    logging.getLogger("distributed.client").setLevel(logging.CRITICAL)  # reconnect traceback goes
+                    raise ConnectionError(f"the Dask scheduler has been unreachable for {self._patience:.0f} s "
+                                          f"(client {self._client.status})") from None
+
+
 class DaskExecutor(_ChunkedExecutor):
     """Runs on a Dask cluster: a scheduler address (``tcp://host:port``) or a ``distributed.Client``."""
 
-    def __init__(self, scheduler):
+    def __init__(self, scheduler, patience: float = LOST_SCHEDULER_S):
         try:
             from distributed import Client
         except ImportError as err:
@@ -173,9 +201,10 @@ class DaskExecutor(_ChunkedExecutor):
         self.client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         self._own = not isinstance(scheduler, Client)
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
+        self.patience = patience
 
     def _submit(self, test, indices, seed, config):
-        return self.client.submit(fly, test, indices, seed, config, pure=False)
+        return _Watched(self.client.submit(fly, test, indices, seed, config, pure=False), self.client, self.patience)
 
     def close(self) -> None:
         if self._own:

@@ -5,7 +5,7 @@ import warnings
 import pytest
 
 import surrealist_gym as sg
-from surrealist_gym.executors import InlineExecutor, LocalPoolExecutor, make_executor
+from surrealist_gym.executors import DaskExecutor, InlineExecutor, LocalPoolExecutor, make_executor
 from surrealist_gym.sim import SimConfig
 
 
@@ -85,3 +85,44 @@ def test_infrastructure_that_fails_twice_stops_with_one_line(test_case):
 
     with pytest.raises(InfrastructureError, match="failed twice outside the simulator \\(ConnectionError"):
         _fly_with_retry(lambda *a: Lost(), test_case, [0, 1], 5, SimConfig())
+
+
+def test_a_lost_dask_scheduler_stops_the_search_with_one_line(test_case):
+    """A scheduler process killed under a connected executor: nothing becomes an error run; the executor gives up
+    with an InfrastructureError once the client has been cut off for its patience (25 s by default, 3 s here) on
+    each of two attempts, or its reconnection window closes (distributed.comm.timeouts.connect), instead of
+    waiting on the lost cluster."""
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    pytest.importorskip("distributed")
+    import dask
+
+    from surrealist_gym.errors import InfrastructureError
+
+    with socket.socket() as free:
+        free.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{free.getsockname()[1]}"
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                                  "--port", address.rsplit(":", 1)[1], "--no-dashboard"], **quiet)
+    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
+                               "--no-dashboard"], **quiet)
+    try:
+        with dask.config.set({"distributed.comm.timeouts.connect": "5s"}), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            executor = DaskExecutor(address, patience=3.0)
+            executor.client.wait_for_workers(1, timeout=60)
+            assert [r.status for r in executor.run(test_case, [0], 5, SimConfig())] != ["error"]
+            scheduler.kill()
+            scheduler.wait()
+            time.sleep(0.5)
+            with pytest.raises(InfrastructureError, match="failed twice outside the simulator"):
+                executor.run(test_case, [0, 1], 5, SimConfig())
+            executor.close()
+    finally:
+        for process in (worker, scheduler):
+            process.kill()
+            process.wait()

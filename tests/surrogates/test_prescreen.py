@@ -158,6 +158,7 @@ def test_racing_in_stages_drops_a_candidate_at_the_first_stage_it_falls_behind()
     assert all(s["race_shortfall"] > 0 for s in raced)
     assert len({s["test_key"] for s in raced}) == len(raced)  # asked again, a dropped test is a free memo answer
     assert env.unwrapped.evaluator.simulations == 3 * result.evaluations + sum(s["first_runs"] for s in raced)
+    assert result.simulations == env.unwrapped.evaluator.simulations > env.unwrapped.simulations  # raced runs count
 
 
 def test_racing_stages_must_increase():
