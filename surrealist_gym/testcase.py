@@ -7,6 +7,7 @@ A cylinder (Aerialist's TREE) has diameter ``l`` (= ``w``).
 from __future__ import annotations
 
 import csv
+import functools
 import json
 import math
 import os
@@ -259,7 +260,7 @@ def load_test(path) -> TestCase:
         raise InvalidTestCase(f"{name}: cannot read test case ({err.strerror})") from err
     except UnicodeDecodeError as err:
         raise InvalidTestCase(f"{name}: not UTF-8 text (byte {err.start})") from None
-    doc = _safe_yaml(text, name)
+    doc = safe_yaml(text, name)
     if not isinstance(doc, dict):
         raise InvalidTestCase(f"{name}: expected a mapping with sections {sorted(_SECTIONS)}")
     unknown = set(doc) - _SECTIONS
@@ -408,21 +409,37 @@ def _finite(value) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
 
 
-def _safe_yaml(text: str, name: str):
+def safe_yaml(text: str, name: str):
     """``yaml.safe_load`` for files from anywhere: no aliases (an alias bomb expands to gigabytes; Aerialist files
-    have none), and nesting too deep for the parser is an error, not a crash."""
+    have none), nesting too deep for the parser is an error, not a crash, and numbers read as YAML 1.2 reads them
+    (``1e9`` is a number, not a string)."""
     import yaml
 
     try:
         if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)):
-            raise InvalidTestCase(f"{name}: YAML aliases (*name) are not supported in test cases")
-        return yaml.safe_load(text)
+            raise InvalidTestCase(f"{name}: YAML aliases (*name) are not supported")
+        return yaml.load(text, Loader=_loader())
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark else ""
         raise InvalidTestCase(f"{name}: invalid YAML{where}") from None
     except RecursionError:
         raise InvalidTestCase(f"{name}: YAML nested too deeply") from None
+
+
+@functools.cache
+def _loader():
+    """A SafeLoader whose floats include exponents without a dot (``1e9``, ``-2E-3``), as in YAML 1.2."""
+    import re
+
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float",
+                                 re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"), list("-+0123456789"))
+    return Loader
 
 
 def _construct(cls, values: dict, where: str):

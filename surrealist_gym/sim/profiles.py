@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import InvalidProfile
+from ..errors import InvalidProfile, InvalidTestCase
 from ..frozendict import FrozenDict
 from .config import AvoidanceModel, SimConfig, VehicleModel
 
@@ -190,14 +190,16 @@ def load_profile(name_or_path) -> UavProfile:
     path = Path(key)
     if not path.suffix.lower() in (".yaml", ".yml"):
         raise InvalidProfile(f"--uav {key!r}: not a preset ({', '.join(PRESETS)}) nor a .yaml file")
-    import yaml
+    from ..testcase import safe_yaml
 
     try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        doc = safe_yaml(path.read_text(encoding="utf-8"), key)
     except OSError as err:
         raise InvalidProfile(f"{key}: cannot read profile ({err.strerror})") from None
-    except (yaml.YAMLError, UnicodeDecodeError) as err:
+    except UnicodeDecodeError as err:
         raise InvalidProfile(f"{key}: not a valid YAML file ({type(err).__name__})") from None
+    except InvalidTestCase as err:
+        raise InvalidProfile(str(err)) from None
     if not isinstance(doc, dict):
         raise InvalidProfile(f"{key}: expected a mapping of profile fields")
     names = {f.name for f in dataclasses.fields(UavProfile)}

@@ -89,6 +89,7 @@ def test_dict_obstacle_form_with_angle_and_tree(tmp_path):
     ("simulation:\n  wind: {velocity_mean: 3, direction: [north, 0, 0]}\n", "'direction': expected 3 finite numbers"),
     ("simulation:\n  wind: {velocity_mean: .inf}\n", "'velocity_mean': expected a finite number >= 0"),
     ("simulation:\n  obstacles: [1.0e+9,3,3, 0,0,0, 0]\n", "'l': expected at most 10000 m"),
+    ("simulation:\n  obstacles: [1e9,3,3, 0,0,0, 0]\n", "'l': expected at most 10000 m"),  # 1e9 is a number
     ("simulation:\n  obstacles: &a [3,3,3, 0,9,0, 0]\n  world: *a\n", "YAML aliases (*name) are not supported"),
     ("a: " + "[" * 50_000 + "]" * 50_000 + "\n", "YAML nested too deeply"),
 ])
@@ -99,6 +100,11 @@ def test_invalid_yaml_one_line_error(tmp_path, yaml_text, reason):
         sg.load_test(path)
     message = str(err.value)
     assert reason in message and "bad.yaml" in message and "\n" not in message
+
+
+def test_numbers_with_an_exponent_read_as_numbers(tmp_path):
+    (tmp_path / "t.yaml").write_text("simulation:\n  obstacles: [3e0,3,3, 1E1,0,0, 0]\n")
+    assert sg.load_test(tmp_path / "t.yaml").obstacles[0] == Obstacle(3, 3, 3, 10, 0, 0, 0)
 
 
 def test_text_that_is_not_utf8_is_a_one_line_error(tmp_path):
