@@ -42,7 +42,9 @@ def _version() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = _parser().parse_args(argv)
+    args._flags = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))  # the options given explicitly
     warnings.simplefilter("ignore", DeprecationWarning)
     warnings.formatwarning = lambda msg, category, *a, **k: f"warning: {msg}\n"
     try:

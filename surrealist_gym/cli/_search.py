@@ -63,12 +63,14 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         if not saved.is_file():
             raise SurrealistError(f"{out}: not a results folder to resume (no {RUN_FILE})")
         options = options_type.from_json(saved)
+        flags = getattr(args, "_flags", frozenset())  # options typed on the command line, even at their defaults
         for f in dataclasses.fields(options_type):  # what the command line changes: where it runs, nothing else
             given = getattr(args, f.name, f.default)
+            typed = "--" + f.name.replace("_", "-") in flags or given != f.default
             if f.name in ("workers", "dask_scheduler"):
                 if given is not None:
                     options = dataclasses.replace(options, **{f.name: given})
-            elif f.name != "agent" and given != f.default and given != getattr(options, f.name):
+            elif f.name != "agent" and typed and given != getattr(options, f.name):
                 flag = "--" + f.name.replace("_", "-")
                 raise SurrealistError(f"{flag}: the search in {out} was started with {getattr(options, f.name)!r}; "
                                       f"--resume keeps its options (only --workers and --dask-scheduler change)")

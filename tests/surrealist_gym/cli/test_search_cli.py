@@ -283,5 +283,7 @@ def test_resume_takes_new_workers_and_refuses_a_new_identity(tmp_path, capsys):
     (out / "run.json").write_text(json.dumps(GenerateOptions(budget=2, runs=1, workers=1).to_json()))
     assert main(["generate", "--resume", str(out), "--budget", "9"]) == 2
     assert "--budget: the search in" in capsys.readouterr().err
+    assert main(["generate", "--resume", str(out), "--budget", "100"]) == 2  # the default, typed: a change too
+    assert "--budget: the search in" in capsys.readouterr().err
     assert main(["generate", "--resume", str(out), "--workers", "2"]) == 0
     assert json.loads((out / "summary.json").read_text())["evaluations"] <= 2
