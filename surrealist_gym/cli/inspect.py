@@ -57,6 +57,7 @@ def summary(flight) -> dict:
         "format": flight.format,
         "vehicle": flight.vehicle_type,
         "duration_s": round(flight.duration, 3),
+        "damage": flight.damage or None,
         "home": None if flight.home is None else dict(zip(("lat", "lon", "alt"), flight.home)),
         "modes": [{"mode": s.mode, "start_s": round(s.start, 3), "end_s": round(s.end, 3),
                    "duration_s": round(s.duration, 3)} for s in flight.modes],
@@ -74,6 +75,8 @@ def _text(info: dict) -> str:
     lines = [f"log         {info['path']} ({info['format']})",
              f"vehicle     {info['vehicle']}",
              f"duration    {info['duration_s']:.1f} s"]
+    if info.get("damage"):
+        lines.append(f"damaged     {info['damage']}")
     if info["home"]:
         h = info["home"]
         lines.append(f"home        lat {h['lat']:.7f}, lon {h['lon']:.7f}, alt {h['alt']:.1f} m AMSL")

@@ -156,6 +156,8 @@ class ReplicateOptions(SearchOptions):
                                   "the middle of the straight path, turned along it)", metavar="TEST.yaml")
     averaging: str = _opt("dba", "how the runs of a test are averaged before the DTW (default dba)",
                           choices=["dba", "soft_dtw"])
+    allow_partial: bool = _opt(False, "replicate a damaged (truncated) log as far as it is readable",
+                               action="store_true")
 
 
 @dataclass(frozen=True)

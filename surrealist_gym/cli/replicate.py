@@ -19,5 +19,6 @@ def run(args) -> int:
         env = ReplicateEnv(reference_log=options.log, seed_test=options.seed, runs=options.runs,
                            budget=options.budget, averaging=options.averaging, executor=options.dask_scheduler,
                            store=out / "evaluations.sqlite", random_seed=options.random_seed,
-                           workers=options.workers, sim_config=sim_config_of(options))
+                           workers=options.workers, sim_config=sim_config_of(options),
+                           allow_partial=options.allow_partial)
     return run_search(env, options, out, "replicate")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from ..errors import LogFormatError
 from ..evaluation import ReplicationObjective
 from ..mutators import AUTHORS_ORDER, default_mutators
 from ..testcase import Obstacle, TestCase, load_test
@@ -20,9 +21,10 @@ class ReplicateEnv(SurrealistEnv):
 
     def __init__(self, reference_log=None, seed_test=None, runs: int = 5, budget: int = 100, mutators=None,
                  averaging: str = "dba", executor=None, store=None, random_seed: int = 0, sim_config=None,
-                 workers: int | None = None, uav=None, reference_trajectory=None):
+                 workers: int | None = None, uav=None, reference_trajectory=None, allow_partial: bool = False):
         """``reference_trajectory`` (a Trajectory) replaces the log's, e.g. a simulated flight with hidden
-        obstacles that plays the real one; the seed test then must be given."""
+        obstacles that plays the real one; the seed test then must be given. A damaged log (truncated, or with
+        corrupt data skipped) is refused unless ``allow_partial``: its flight may be cut short."""
         from .. import data_path
         from ..logs import read_flight
 
@@ -39,6 +41,9 @@ class ReplicateEnv(SurrealistEnv):
             if reference_log is None:
                 reference_log = seed_test.reference_log or data_path("case0.ulg")
             self.flight = read_flight(reference_log)
+            if self.flight.damage and not allow_partial:
+                raise LogFormatError(f"{self.flight.path}: {self.flight.damage}; replicating it would replicate a "
+                                     f"flight cut short (allow it with --allow-partial)")
             seed_test = replace(seed_test or seed_from_flight(self.flight), reference_log=str(self.flight.path))
             self.reference = self.flight.trajectory
         self.averaging = averaging

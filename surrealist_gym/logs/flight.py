@@ -99,6 +99,8 @@ class FlightLog:
         vehicle_type: e.g. ``"multirotor (PX4 airframe 4016)"`` or ``"ArduSub V4.1.0 (submarine)"``.
         start_us: first timestamp of the log [us]; mode spans count from here.
         end_us: last timestamp of the log [us].
+        damage: how the file is damaged, e.g. "the file ends inside a message at byte 1244978: truncated, positions
+            readable for 21.7 s"; empty for a whole log (checked for ULogs).
         trajectory: the paper's pipeline over all of ``positions`` (computed, z up).
 
     Example::
@@ -118,6 +120,7 @@ class FlightLog:
     vehicle_type: str = "unknown"
     start_us: int = 0
     end_us: int = 0
+    damage: str = ""
     trajectory: Trajectory = field(init=False)
 
     def __post_init__(self):

@@ -87,15 +87,18 @@ def read_ulog(source) -> FlightLog:
     for d in ulog.data_list:
         if d.multi_id == 0 or d.name not in data:
             data[d.name] = d.data
+    start_us = int(ulog.start_timestamp)
+    positions = _positions(name, data.get("vehicle_local_position"), start_us)
+    readable = f"positions readable for {(int(positions.timestamp_us[-1]) - start_us) / 1e6:.1f} s"
+    damage = ""
     if ulog.file_corruption:
-        warnings.warn(f"{name}: corrupt data in the ULog was skipped (pyulog resynchronised)", stacklevel=2)
+        damage = f"corrupt data in the file was skipped (pyulog resynchronised; {readable})"
     elif not hasattr(source, "read"):
         cut = _truncated_at(os.fspath(source))
         if cut is not None:
-            warnings.warn(f"{name}: the file ends inside a message at byte {cut}: truncated, the flight it holds "
-                          f"may be incomplete", stacklevel=2)
-    start_us = int(ulog.start_timestamp)
-    positions = _positions(name, data.get("vehicle_local_position"), start_us)
+            damage = f"the file ends inside a message at byte {cut}: truncated, {readable}"
+    if damage:
+        warnings.warn(f"{name}: {damage}; the flight it holds may be incomplete", stacklevel=2)
     params = dict(ulog.initial_parameters)
     # the header's last timestamp, unless corrupt data put it beyond the last position sample by more than a minute
     end_us = min(int(ulog.last_timestamp), int(positions.timestamp_us[-1]) + 60_000_000)
@@ -107,7 +110,8 @@ def read_ulog(source) -> FlightLog:
     home = _home(data.get("home_position"), data.get("vehicle_local_position"))
     mission = _mission(name, data.get("navigator_mission_item"), data.get("mission"), home)
     return FlightLog(path=name, format="ulog", positions=positions, mission=mission, params=params, modes=modes,
-                     home=home, vehicle_type=_vehicle_type(params, status), start_us=start_us, end_us=end_us)
+                     home=home, vehicle_type=_vehicle_type(params, status), start_us=start_us, end_us=end_us,
+                     damage=damage)
 
 
 def _name(source) -> str:

@@ -211,9 +211,27 @@ def test_a_truncated_ulog_says_so(tmp_path, share):
     data = CASE0_ULG.read_bytes()
     cut = tmp_path / "cut.ulg"
     cut.write_bytes(data[:int(len(data) * share)])
-    with pytest.warns(UserWarning, match="cut.ulg: the file ends inside a message at byte .*: truncated"):
+    with pytest.warns(UserWarning, match="cut.ulg: the file ends inside a message at byte .*: truncated, positions"):
         flight = read_ulog(cut)
     assert flight.end_us <= flight.positions.timestamp_us[-1] + 60_000_000
+    readable = (flight.positions.timestamp_us[-1] - flight.start_us) / 1e6
+    assert flight.damage.endswith(f"truncated, positions readable for {readable:.1f} s")
+
+
+def test_a_search_refuses_a_truncated_log_unless_allowed(tmp_path, capsys):
+    from surrealist_gym.cli import main
+
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(CASE0_ULG.read_bytes()[:int(CASE0_ULG.stat().st_size * 0.9)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["replicate", str(cut), "--budget", "1", "--runs", "1", "--out", str(tmp_path / "r")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert "truncated, positions readable for" in err and "--allow-partial" in err
+        assert main(["inspect", str(cut), "--no-plot"]) == 0
+        assert "damaged     the file ends inside a message" in capsys.readouterr().out
+        assert main(["replicate", str(cut), "--allow-partial", "--budget", "1", "--runs", "1", "--workers", "1",
+                     "--out", str(tmp_path / "r")]) == 0
 
 
 def test_whole_ulogs_are_not_called_truncated():
