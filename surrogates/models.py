@@ -30,6 +30,7 @@ from .dataset import Dataset, Featurizer
 
 FORMAT = "surrealist-surrogate/1"
 KINDS = ("ensemble", "knn")
+TRAIN_ARRAYS = ("train_X", "train_y", "train_groups", "train_first_runs")  # saved with the weights
 
 
 class SurrogateModelError(SurrealistError):
@@ -79,41 +80,36 @@ class EnsembleRegressor:
         threads = torch.get_num_threads()
         torch.set_num_threads(1)  # tiny matrices: one thread is fastest, and leaves the cores to the simulations
         try:
-            return self._fit(torch, X, y, seed)
+            cfg = self.config
+            X, y = np.asarray(X, dtype=np.float64), np.asarray(y, dtype=np.float64)
+            x_mean, x_std = X.mean(axis=0), X.std(axis=0)
+            x_std[x_std < 1e-9] = 1.0
+            y_mean, y_std = float(y.mean()), float(y.std()) or 1.0
+            gen = torch.Generator().manual_seed(int(seed))
+            xt = torch.as_tensor((X - x_mean) / x_std, dtype=torch.float32)
+            yt = torch.as_tensor((y - y_mean) / y_std, dtype=torch.float32)
+            n, d, m, h = len(X), X.shape[1], cfg.members, cfg.hidden
+            counts = torch.stack([torch.bincount(torch.randint(n, (n,), generator=gen), minlength=n)
+                                  for _ in range(m)]).float()  # (m, n) bootstrap weights
+            params = {
+                "w1": torch.randn(m, d, h, generator=gen) * math.sqrt(2.0 / d), "b1": torch.zeros(m, 1, h),
+                "w2": torch.randn(m, h, h, generator=gen) * math.sqrt(2.0 / h), "b2": torch.zeros(m, 1, h),
+                "w3": torch.randn(m, h, 1, generator=gen) * math.sqrt(1.0 / h), "b3": torch.zeros(m, 1, 1)}
+            for p in params.values():
+                p.requires_grad_(True)
+            opt = torch.optim.AdamW(params.values(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+            xb = xt.expand(m, n, d)
+            for _ in range(cfg.epochs):
+                opt.zero_grad()
+                loss = ((_forward(params, xb) - yt) ** 2 * counts).sum() / counts.sum()
+                loss.backward()
+                opt.step()
+            with torch.no_grad():
+                squared = (_forward(params, xb) - yt) ** 2
+                oob = squared[counts == 0]  # each member's residuals on the rows its bootstrap left out
+                noise = float(oob.mean()) if oob.numel() else float(squared.mean())
         finally:
             torch.set_num_threads(threads)
-
-    def _fit(self, torch, X, y, seed) -> "EnsembleRegressor":
-        cfg = self.config
-        X, y = np.asarray(X, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        x_mean, x_std = X.mean(axis=0), X.std(axis=0)
-        x_std[x_std < 1e-9] = 1.0
-        y_mean, y_std = float(y.mean()), float(y.std()) or 1.0
-        gen = torch.Generator().manual_seed(int(seed))
-        xt = torch.as_tensor((X - x_mean) / x_std, dtype=torch.float32)
-        yt = torch.as_tensor((y - y_mean) / y_std, dtype=torch.float32)
-        n, d, m, h = len(X), X.shape[1], cfg.members, cfg.hidden
-        counts = torch.stack([torch.bincount(torch.randint(n, (n,), generator=gen), minlength=n)
-                              for _ in range(m)]).float()  # (m, n) bootstrap weights
-        params = {
-            "w1": torch.randn(m, d, h, generator=gen) * math.sqrt(2.0 / d), "b1": torch.zeros(m, 1, h),
-            "w2": torch.randn(m, h, h, generator=gen) * math.sqrt(2.0 / h), "b2": torch.zeros(m, 1, h),
-            "w3": torch.randn(m, h, 1, generator=gen) * math.sqrt(1.0 / h), "b3": torch.zeros(m, 1, 1)}
-        for p in params.values():
-            p.requires_grad_(True)
-        opt = torch.optim.AdamW(params.values(), lr=cfg.lr, weight_decay=cfg.weight_decay)
-        xb = xt.expand(m, n, d)
-        for _ in range(cfg.epochs):
-            opt.zero_grad()
-            pred = _forward(params, xb)
-            loss = ((pred - yt) ** 2 * counts).sum() / counts.sum()
-            loss.backward()
-            opt.step()
-        with torch.no_grad():
-            pred = _forward(params, xb)
-            oob = counts == 0
-            resid = ((pred - yt) ** 2)[oob]
-            noise = float(resid.mean()) if resid.numel() else float(((pred - yt) ** 2).mean())
         self.state = {k: v.detach().clone() for k, v in params.items()}
         self.state.update(x_mean=torch.as_tensor(x_mean), x_std=torch.as_tensor(x_std),
                           y_scale=torch.tensor([y_mean, y_std, noise], dtype=torch.float64))
@@ -129,9 +125,7 @@ class EnsembleRegressor:
         with torch.no_grad():
             pred = _forward(s, xt.expand(s["w1"].shape[0], *xt.shape)).numpy().astype(np.float64)
         y_mean, y_std, noise = s["y_scale"].tolist()
-        mean = pred.mean(axis=0)
-        std = np.sqrt(pred.var(axis=0) + noise)
-        return mean * y_std + y_mean, std * y_std
+        return pred.mean(axis=0) * y_std + y_mean, np.sqrt(pred.var(axis=0) + noise) * y_std
 
 
 def _forward(p, x):
@@ -171,11 +165,10 @@ class KNNRegressor:
     def predict(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if self.state is None:
             raise RuntimeError("predict() before fit()")
-        s = {k: np.asarray(v) for k, v in self.state.items()}
+        s = self.state
         Z = (np.asarray(X, dtype=np.float64).reshape(-1, len(s["x_mean"])) - s["x_mean"]) / s["x_std"]
         d = np.sqrt(((Z[:, None, :] - s["X"][None, :, :]) ** 2).sum(axis=2))
-        k = min(self.config.k, len(s["y"]))
-        idx = np.argsort(d, axis=1, kind="stable")[:, :k]
+        idx = np.argsort(d, axis=1, kind="stable")[:, :min(self.config.k, len(s["y"]))]
         w = 1.0 / (np.take_along_axis(d, idx, axis=1) + 1e-6)
         w /= w.sum(axis=1, keepdims=True)
         yk = s["y"][idx]
@@ -225,17 +218,16 @@ class SurrogateModel:
         self.metrics: dict = {}
         self.path: Path | None = None  # the folder it was loaded from
 
-    # --- scale ---------------------------------------------------------------------------------------------------
     def to_scale(self, y) -> np.ndarray:
         """Target values -> the modelled scale (higher is better for fitness)."""
         y = np.asarray(y, dtype=np.float64)
         return -np.log1p(-np.minimum(y, 0.0)) if self.log_scale else y
 
     def from_scale(self, t) -> np.ndarray:
+        """The modelled scale -> target values (the inverse of :meth:`to_scale`)."""
         t = np.asarray(t, dtype=np.float64)
         return -np.expm1(-t) if self.log_scale else t
 
-    # --- training and prediction -----------------------------------------------------------------------------
     def fit(self, X: np.ndarray, y: np.ndarray, groups=None, first_runs=None) -> "SurrogateModel":
         """Train on features X and raw target values y (fitness etc.); ``groups`` names the search each row comes
         from (rows of one search in the order evaluated; default: all one search); ``first_runs`` (rows, k) the
@@ -254,6 +246,7 @@ class SurrogateModel:
         return self
 
     def fit_dataset(self, dataset: Dataset) -> "SurrogateModel":
+        """Train on a dataset's rows with a known target (and keep its noise mode)."""
         dataset.target(self.target)  # checks the name
         self.common_noise = dataset.common_noise
         return self.fit(dataset.X, dataset.targets[self.target], dataset.groups, dataset.first_runs)
@@ -270,7 +263,6 @@ class SurrogateModel:
         """Mean and std (modelled scale) for test cases or stored test dicts."""
         return self.predict(self.featurizer.transform(tests))
 
-    # --- persistence ----------------------------------------------------------------------------------------------
     def save(self, path) -> Path:
         """Write ``path/weights.pt`` and ``path/meta.json``; returns the folder."""
         torch = _torch()
@@ -278,11 +270,8 @@ class SurrogateModel:
             raise SurrealistError("surrogate: save() before fit()")
         out = Path(path)
         out.mkdir(parents=True, exist_ok=True)
-        tensors = {f"regressor.{k}": torch.as_tensor(np.asarray(v)) if not torch.is_tensor(v) else v
-                   for k, v in self.regressor.state.items()}
-        tensors.update({"train_X": torch.as_tensor(self.train_X), "train_y": torch.as_tensor(self.train_y),
-                        "train_groups": torch.as_tensor(self.train_groups),
-                        "train_first_runs": torch.as_tensor(self.train_first_runs)})
+        tensors = {f"regressor.{k}": torch.as_tensor(v) for k, v in self.regressor.state.items()}
+        tensors.update({name: torch.as_tensor(getattr(self, name)) for name in TRAIN_ARRAYS})
         torch.save(tensors, out / "weights.pt")
         meta = {"format": FORMAT, "kind": self.kind, "target": self.target, "seed": self.seed,
                 "log_scale": self.log_scale, "common_noise": self.common_noise,
@@ -307,12 +296,10 @@ class SurrogateModel:
             model = cls(Featurizer.from_dict(meta["featurizer"], folder), meta["kind"], meta["target"], meta["config"],
                         meta["seed"])
             state = {k.split(".", 1)[1]: v for k, v in tensors.items() if k.startswith("regressor.")}
-            if model.kind == "knn":
-                state = {k: v.numpy() for k, v in state.items()}
-            model.regressor.state = state
-            model.train_X, model.train_y = tensors["train_X"].numpy(), tensors["train_y"].numpy()
-            model.train_groups = tensors["train_groups"].numpy()
-            first_runs = tensors.get("train_first_runs")
+            model.regressor.state = {k: v.numpy() for k, v in state.items()} if model.kind == "knn" else state
+            for name in TRAIN_ARRAYS[:3]:
+                setattr(model, name, tensors[name].numpy())
+            first_runs = tensors.get("train_first_runs")  # absent from models saved before it was kept
             model.train_first_runs = (np.full((len(model.train_y), 0), np.nan) if first_runs is None
                                       else first_runs.numpy())
             model.log_scale = bool(meta["log_scale"])
@@ -352,11 +339,10 @@ class Predictions:
         return np.abs(self.modelled_true - self.modelled_mean) / np.maximum(self.modelled_std, 1e-12)
 
     def metrics(self) -> dict:
-        """R2 and Spearman rho of predicted vs true values (target scale), R2 on the modelled scale
-        (``r2_modelled``: on a log-scale model's log scale a few far-off predictions in the long tail of bad fitness
-        values no longer dominate), and the calibration of the uncertainty on the modelled scale (share of true
-        values within 1 and 2 predicted standard deviations: 0.68 and 0.95 when calibrated; mean Gaussian negative
-        log-likelihood)."""
+        """``n``; ``r2``, ``spearman`` and ``mae`` of predicted vs true values (target scale); ``r2_modelled`` (R2 on
+        the modelled scale); calibration of the uncertainty on the modelled scale: ``within_1sd``/``within_2sd``
+        (share of true values within 1 and 2 predicted sd: 0.68 and 0.95 when calibrated) and ``nll`` (mean
+        Gaussian negative log-likelihood)."""
         from scipy import stats
 
         y, pred, z, std = self.true, self.mean, self.z, self.modelled_std
