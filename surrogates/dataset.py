@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
@@ -159,16 +160,13 @@ class Featurizer:
 
     def features(self, obstacles: Sequence[Obstacle]) -> np.ndarray:
         """The feature vector of one layout of obstacles."""
-        rows = [self._obstacle_features(o) for o in obstacles]
-        rows.sort(key=lambda r: (round(r[12], 6), round(r[13], 6), r[4], r[5]))  # along, lateral, x, y
-        out = np.zeros((self.slots, len(PER_OBSTACLE)))
-        for i, row in enumerate(rows[:self.slots]):
-            out[i] = row
+        rows = sorted((self._obstacle_features(o) for o in obstacles),
+                      key=lambda r: (round(r[12], 6), round(r[13], 6), r[4], r[5]))  # along, lateral, x, y
+        out, pooled = np.zeros((self.slots, len(PER_OBSTACLE))), [0.0, 50.0, 50.0, 50.0, 0.0]
         if rows:
             arr = np.asarray(rows)
+            out[:min(len(rows), self.slots)] = arr[:self.slots]
             pooled = [len(rows), arr[:, 15].min(), arr[:, 16].min(), arr[:, 17].min(), arr[:, 18].sum()]
-        else:
-            pooled = [0.0, 50.0, 50.0, 50.0, 0.0]
         parts = [out.ravel(), pooled]
         if self.lowfi is not None:
             parts.append(self.lowfi.outcomes(obstacles))
@@ -177,42 +175,37 @@ class Featurizer:
     def _obstacle_features(self, o: Obstacle) -> list[float]:
         rad = math.radians(o.r)
         centre = np.array([o.x, o.y])
-        a, b = self.path[:-1], self.path[1:]
-        seg = b - a
+        a, seg = self.path[:-1], np.diff(self.path, axis=0)
         length2 = np.maximum((seg ** 2).sum(axis=1), 1e-12)
         t = np.clip(((centre - a) * seg).sum(axis=1) / length2, 0.0, 1.0)
-        nearest = a + t[:, None] * seg
-        k = int(np.argmin(np.linalg.norm(centre - nearest, axis=1)))
-        direction = seg[k] / math.sqrt(length2[k])
-        rel = centre - a[k]
-        lateral = float(direction[0] * rel[1] - direction[1] * rel[0])  # + to the right of the path (NED)
-        along = (self._cumulative[k] + t[k] * math.sqrt(length2[k])) / max(self._cumulative[-1], 1e-9)
+        k = int(np.argmin(np.linalg.norm(centre - (a + t[:, None] * seg), axis=1)))  # the nearest segment
+        length = math.sqrt(length2[k])
+        direction = seg[k] / length
+
+        def frame(points):  # along and across that segment from its start (across: + to the right, NED)
+            rel = points - a[k]
+            return rel @ direction, direction[0] * rel[..., 1] - direction[1] * rel[..., 0]
+
+        lateral = float(frame(centre)[1])
+        along = (self._cumulative[k] + t[k] * length) / max(self._cumulative[-1], 1e-9)
         theta = rad - math.atan2(direction[1], direction[0])
         if o.shape.value == "cylinder":
-            half_across = o.l / 2
+            half_across, area = o.l / 2, math.pi * o.l * o.l / 4
         else:
-            half_across = abs(o.l / 2 * math.sin(theta)) + abs(o.w / 2 * math.cos(theta))
-        gap = abs(lateral) - half_across
+            half_across, area = abs(o.l / 2 * math.sin(theta)) + abs(o.w / 2 * math.cos(theta)), o.l * o.w
         dist_path = float(obstacle_distances(self._dense, [o]).min())
-        if self.reference is not None:
+        c_along, c_lat = frame(np.asarray(o.footprint()))
+        if self.reference is None:
+            dist_ref, near, ref_lateral = dist_path, 0.0, 0.0
+        else:
             d_ref = obstacle_distances(self.reference, [o])[:, 0]
             dist_ref, near = float(d_ref.min()), float((d_ref < NEAR).sum())
-        else:
-            dist_ref, near = dist_path, 0.0
-        area = o.l * o.w if o.shape.value == "box" else math.pi * o.l * o.l / 4
-        corners = np.asarray(o.footprint()) - a[k]
-        c_along = corners @ direction
-        c_lat = direction[0] * corners[:, 1] - direction[1] * corners[:, 0]
-        ref_lateral = 0.0
-        if self.reference is not None:  # where the reference passed, across the path, beside the obstacle
-            r_rel = self.reference - a[k]
-            r_along = r_rel @ direction
-            r_lat = direction[0] * r_rel[:, 1] - direction[1] * r_rel[:, 0]
+            r_along, r_lat = frame(self.reference)  # where the reference passed, across the path, beside the obstacle
             beside = (r_along >= c_along.min() - 1.0) & (r_along <= c_along.max() + 1.0)
             ref_lateral = float(r_lat[beside].mean()) if beside.any() else 0.0
         return [1.0, o.l, o.w, o.h, o.x, o.y, o.z, math.sin(rad), math.cos(rad), math.sin(2 * rad),
-                math.cos(2 * rad), area, along, lateral, half_across, gap, dist_path, dist_ref, near,
-                float(c_along.min()), float(c_along.max()), float(c_lat.min()), float(c_lat.max()), ref_lateral]
+                math.cos(2 * rad), area, along, lateral, half_across, abs(lateral) - half_across, dist_path, dist_ref,
+                near, float(c_along.min()), float(c_along.max()), float(c_lat.min()), float(c_lat.max()), ref_lateral]
 
 
 def _obstacles_of(item) -> tuple[Obstacle, ...]:
@@ -288,8 +281,7 @@ class Dataset:
 
 def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
     """A dataset from one or more evaluation stores (paths or EvaluationStore) searched on one problem."""
-    X, fit, mind, unsafe, crash, trajs, groups, keys, first = [], [], [], [], [], [], [], [], []
-    modes = set()  # the noise modes the evaluations were flown with
+    rows, modes = [], set()  # modes: the noise modes the evaluations were flown with
     for g, source in enumerate(stores):
         store = source if isinstance(source, EvaluationStore) else _open(source)
         try:
@@ -297,27 +289,23 @@ def load_dataset(stores: Sequence, featurizer: Featurizer) -> Dataset:
             for ev in store:
                 modes.add(flown_with_common_noise(ev))
                 try:
-                    X.append(featurizer.features(_obstacles_of(ev.test)))
+                    x = featurizer.features(_obstacles_of(ev.test))
                 except SurrealistError as err:
                     raise DatasetError(f"{store.path}: evaluation {ev.id}: {err}") from err
                 runs = ev.runs or ()
-                fit.append(np.nan if ev.fitness is None else float(ev.fitness))
                 judged, n = outcomes(runs), max(len(runs), 1)
-                mind.append(judged.closest if runs else np.nan)
-                unsafe.append(judged.unsafe / n)
-                crash.append(judged.crashes / n)
-                trajs.append(_resample((ev.info or {}).get("trajectory")))
-                first.append(_first_runs_fitness(ev, objective))
-                groups.append(g)
-                keys.append(ev.test_key)
+                rows.append((x, np.nan if ev.fitness is None else float(ev.fitness),
+                             judged.closest if runs else np.nan, judged.unsafe / n, judged.crashes / n,
+                             _resample((ev.info or {}).get("trajectory")), _first_runs_fitness(ev, objective), g,
+                             ev.test_key))
         finally:
             if store is not source:
                 store.close()
-    if not X:
+    if not rows:
         raise DatasetError(f"{', '.join(map(str, stores))}: no evaluations stored")
-    return Dataset(np.asarray(X), {"fitness": np.asarray(fit), "min_distance": np.asarray(mind),
-                                   "unsafe": np.asarray(unsafe), "crash": np.asarray(crash)},
-                   np.asarray(trajs), np.asarray(groups), tuple(keys), tuple(featurizer.names), stack_rows(first),
+    X, fit, mind, unsafe, crash, trajs, first, groups, keys = zip(*rows)
+    return Dataset(np.asarray(X), dict(zip(TARGETS, map(np.asarray, (fit, mind, unsafe, crash)))), np.asarray(trajs),
+                   np.asarray(groups), keys, tuple(featurizer.names), stack_rows(first),
                    modes.pop() if len(modes) == 1 else None)
 
 
@@ -356,8 +344,6 @@ def stack_rows(rows) -> np.ndarray:
 
 
 def _open(path) -> EvaluationStore:
-    from pathlib import Path
-
     if not Path(path).is_file():
         raise DatasetError(f"{path}: no such evaluation store")
     try:
