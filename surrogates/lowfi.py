@@ -1,9 +1,8 @@
 """A low-fidelity simulator whose outcomes are features for the surrogate models (multi-fidelity surrogates).
 
 Our own simulator at coarse rates (position loop 10 Hz, planner and log 5 Hz, attitude loop 50 Hz) with no noise
-flies a test once in ~0.1 s of CPU, about a tenth of a 5-run evaluation. Its flight does not replace the real
-simulation: the models learn how the real fitness follows from it (and from the obstacles' geometry). The UAV
-Testing Competition's 2025 winner used the same idea with a low-fidelity simulator of its own.
+flies a test once. Its flight does not replace the real simulation: the models learn how the real fitness follows
+from it (and from the obstacles' geometry).
 
 Outcomes (``NAMES``): the problem's fitness of the low-fidelity flight (replication: -DTW to the reference;
 generation: paper eq. 2 of the one run), DTW and Fréchet distance of the trajectory to the reference (0 without a
@@ -68,20 +67,19 @@ class LowFidelity:
             run = simulate(test, runs=1, seed=0, config=self.config)[0]
             self.runs += 1
             xyz = np.asarray(run.trajectory, dtype=np.float64).reshape(-1, 3)
-            if self.reference is not None and len(xyz):
-                d, f = dtw(self.reference, xyz), frechet(self.reference, xyz)
-            else:
-                d = f = 0.0
+            d = f = 0.0
             if not len(xyz):
-                fitness = NO_FLIGHT_FITNESS
-            elif self.reference is not None:
-                fitness = -d
+                fitness, top = NO_FLIGHT_FITNESS, (0.0, 0.0, 0.0)
             else:
-                fitness = generation_fitness([xyz], test.obstacles).fitness
-            top = (xyz[:, 2].max(), xyz[:, 1].min(), xyz[:, 1].max()) if len(xyz) else (0.0, 0.0, 0.0)
+                top = (xyz[:, 2].max(), xyz[:, 1].min(), xyz[:, 1].max())
+                if self.reference is not None:
+                    d, f = dtw(self.reference, xyz), frechet(self.reference, xyz)
+                    fitness = -d
+                else:
+                    fitness = generation_fitness([xyz], test.obstacles).fitness
             self._cache[key] = np.array([fitness, d, f, np.log1p(d), np.log1p(f), min(run.min_distance_2d, 50.0),
-                                         min(run.min_distance, 50.0), float(run_status(run) is RunStatus.COLLISION), run.duration,
-                                         *top])
+                                         min(run.min_distance, 50.0), float(run_status(run) is RunStatus.COLLISION),
+                                         run.duration, *top])
         return self._cache[key]
 
     def fitness(self, obstacles) -> float:

@@ -44,24 +44,19 @@ def plot_predictions(path, model: SurrogateModel, predicted: Predictions, title:
     else:
         pad = 0.05 * (span[1] - span[0]) or 1.0
         limits = (span[0] - pad, span[1] + pad)
-    scatter.set_xlim(*limits)
-    scatter.set_ylim(*limits)  # a wide bar may leave the frame; the points never do
-    scatter.set_xlabel(f"true {model.target}")
-    scatter.set_ylabel(f"predicted {model.target} (mean +/- 1 sd)")
-    scatter.set_title(f"{metrics['n']} evaluations: Spearman {metrics['spearman']:.3f}, R2 {metrics['r2']:.3f}")
-    scatter.legend(loc="upper left")
-    scatter.grid(alpha=0.3)
+    scatter.set(xlim=limits, ylim=limits,  # a wide bar may leave the frame; the points never do
+                xlabel=f"true {model.target}", ylabel=f"predicted {model.target} (mean +/- 1 sd)",
+                title=f"{metrics['n']} evaluations: Spearman {metrics['spearman']:.3f}, R2 {metrics['r2']:.3f}")
 
     nominal = np.linspace(0.0, 1.0, 41)
     observed = [(z <= NormalDist().inv_cdf(0.5 + p / 2)).mean() if p < 1 else 1.0 for p in nominal]
     calibration.plot(nominal, observed, marker=".", label=f"{model.kind}")
     calibration.plot([0, 1], [0, 1], color="black", linewidth=1, label="calibrated")
-    calibration.set_xlabel("nominal coverage of the central interval")
-    calibration.set_ylabel("share of true values inside")
-    calibration.set_title(f"uncertainty: {metrics['within_1sd']:.0%} within 1 sd (68% ideal)")
-    calibration.set_aspect("equal")
-    calibration.legend(loc="upper left")
-    calibration.grid(alpha=0.3)
+    calibration.set(xlabel="nominal coverage of the central interval", ylabel="share of true values inside",
+                    title=f"uncertainty: {metrics['within_1sd']:.0%} within 1 sd (68% ideal)", aspect="equal")
+    for ax in (scatter, calibration):
+        ax.legend(loc="upper left")
+        ax.grid(alpha=0.3)
     if title:
         fig.suptitle(title)
     fig.tight_layout()
