@@ -26,6 +26,7 @@ Example:
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -108,8 +109,6 @@ class Featurizer:
     @classmethod
     def for_problem(cls, problem: str = "replicate", seed_test=None, log=None, lowfi: bool = False) -> "Featurizer":
         """The featurizer of the bundled problems: ``replicate`` (case0, its reference) or ``generate`` (RQ2)."""
-        import warnings
-
         import surrealist_gym as sg
         from surrealist_gym.testcase import load_test
 

@@ -167,7 +167,7 @@ class KNNRegressor:
             raise RuntimeError("predict() before fit()")
         s = self.state
         Z = (np.asarray(X, dtype=np.float64).reshape(-1, len(s["x_mean"])) - s["x_mean"]) / s["x_std"]
-        d = np.sqrt(((Z[:, None, :] - s["X"][None, :, :]) ** 2).sum(axis=2))
+        d = np.linalg.norm(Z[:, None, :] - s["X"][None, :, :], axis=2)
         idx = np.argsort(d, axis=1, kind="stable")[:, :min(self.config.k, len(s["y"]))]
         w = 1.0 / (np.take_along_axis(d, idx, axis=1) + 1e-6)
         w /= w.sum(axis=1, keepdims=True)
