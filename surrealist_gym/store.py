@@ -6,6 +6,7 @@ interrupted resumes from the store and loses nothing; surrogate models train on 
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import sqlite3
@@ -78,11 +79,15 @@ class EvaluationStore:
     @property
     def identity(self) -> dict | None:
         """What the stored fitness values depend on (:meth:`claim`), or None for a store that never recorded it."""
-        try:
-            row = self._db.execute("SELECT value FROM meta WHERE key = ?", (f"identity:{self.search}",)).fetchone()
-        except sqlite3.OperationalError:  # no meta table: a store of schema version 1
-            return None
-        return None if row is None else json.loads(row[0])
+        with self._readable():
+            try:
+                row = self._db.execute("SELECT value FROM meta WHERE key = ?",
+                                       (f"identity:{self.search}",)).fetchone()
+            except sqlite3.OperationalError as err:
+                if "no such table" in str(err):  # no meta table: a store of schema version 1
+                    return None
+                raise
+            return None if row is None else json.loads(row[0])
 
     def claim(self, identity: dict) -> None:
         """Record the identity of the search that writes here, or check it against the one recorded: a store holds
@@ -114,18 +119,32 @@ class EvaluationStore:
 
     def get(self, test_key: str) -> StoredEvaluation | None:
         """The first stored evaluation of this test in this search, or None."""
-        row = self._db.execute(
-            "SELECT * FROM evaluations WHERE search = ? AND test_key = ? ORDER BY id LIMIT 1",
-            (self.search, test_key)).fetchone()
-        return None if row is None else self._from_row(row)
+        with self._readable():
+            row = self._db.execute(
+                "SELECT * FROM evaluations WHERE search = ? AND test_key = ? ORDER BY id LIMIT 1",
+                (self.search, test_key)).fetchone()
+            return None if row is None else self._from_row(row)
 
     def __iter__(self) -> Iterator[StoredEvaluation]:
-        cur = self._db.execute("SELECT * FROM evaluations WHERE search = ? ORDER BY id", (self.search,))
-        for row in cur:
-            yield self._from_row(row)
+        with self._readable():
+            cur = self._db.execute("SELECT * FROM evaluations WHERE search = ? ORDER BY id", (self.search,))
+            for row in cur:
+                yield self._from_row(row)
 
     def __len__(self) -> int:
-        return self._db.execute("SELECT COUNT(*) FROM evaluations WHERE search = ?", (self.search,)).fetchone()[0]
+        with self._readable():
+            return self._db.execute("SELECT COUNT(*) FROM evaluations WHERE search = ?",
+                                    (self.search,)).fetchone()[0]
+
+    @contextlib.contextmanager
+    def _readable(self):
+        """A damaged file (corrupt pages, bytes that are not the JSON written) is one SurrealistError line."""
+        try:
+            yield
+        except (sqlite3.DatabaseError, ValueError, TypeError, KeyError) as err:
+            reason = " ".join(str(err).split())[:80]
+            raise SurrealistError(f"{self.path}: a damaged evaluation store ({type(err).__name__}: {reason}); move "
+                                  f"it aside or use another results folder") from None
 
     def searches(self) -> list[str]:
         return [r[0] for r in self._db.execute("SELECT DISTINCT search FROM evaluations ORDER BY search")]

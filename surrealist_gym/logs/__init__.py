@@ -12,6 +12,7 @@ Example::
 from __future__ import annotations
 
 import os
+import struct
 
 from ..errors import LogFormatError
 from .flight import FlightLog, LocalPositions, ModeSpan
@@ -52,14 +53,16 @@ def read_flight(path) -> FlightLog:
         return read_ulog(path)  # pymavlink reads files by name only
     name = os.fspath(path)
     fmt = detect_format(name)
-    if fmt == "ulog":
-        return read_ulog(name)
-    if fmt == "tlog":
-        return read_tlog(name)
-    if fmt == "dataflash":
-        return read_dataflash(name)
-    raise LogFormatError(f"{name}: unknown log format (expected a PX4 ULog .ulg, a MAVLink .tlog "
-                         f"or an ArduPilot DataFlash .bin)")
+    readers = {"ulog": read_ulog, "tlog": read_tlog, "dataflash": read_dataflash}
+    if fmt not in readers:
+        raise LogFormatError(f"{name}: unknown log format (expected a PX4 ULog .ulg, a MAVLink .tlog "
+                             f"or an ArduPilot DataFlash .bin)")
+    try:
+        return readers[fmt](name)
+    except (AttributeError, KeyError, IndexError, TypeError, ValueError, OverflowError, struct.error) as err:
+        # damaged message definitions decode into messages without the fields their type promises
+        reason = " ".join(str(err).split())[:80]
+        raise LogFormatError(f"{name}: corrupt {fmt} log ({type(err).__name__}: {reason})") from None
 
 
 __all__ = ["FlightLog", "LocalPositions", "ModeSpan", "detect_format", "read_flight", "read_ulog", "write_ulog"]

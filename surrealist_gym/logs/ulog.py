@@ -47,6 +47,7 @@ def parse_ulog(source, topics=None):
     from pyulog import ULog
 
     name = _name(source)
+    stall = None
     try:
         if hasattr(source, "read"):
             start = source.tell()
@@ -55,10 +56,14 @@ def parse_ulog(source, topics=None):
         else:
             with open(source, "rb") as f:
                 head = f.read(len(ULOG_MAGIC))
+                stall = _definitions_stall(head + f.read()) if head == ULOG_MAGIC else None
     except OSError as err:
         raise LogFormatError(f"{name}: cannot read log file ({err.strerror or err})") from err
     if head != ULOG_MAGIC:
         raise LogFormatError(f"{name}: not a ULog file (the file does not start with the ULog magic bytes)")
+    if stall is not None:
+        raise LogFormatError(f"{name}: corrupt ULog (a damaged message header at byte {stall}, in the definitions "
+                             f"before the data)")
     chatter = io.StringIO()
     try:
         with contextlib.redirect_stdout(chatter):  # pyulog prints its warnings
@@ -118,6 +123,31 @@ def _name(source) -> str:
     if hasattr(source, "read"):
         return str(getattr(source, "name", "<ULog stream>"))
     return os.fspath(source)
+
+
+_DATA_SECTION = (ord("A"), ord("L"), ord("C"))  # the message types that end pyulog's definitions section
+_DEFINITIONS = tuple(map(ord, "IMFPQB"))  # the ones it reads there (a damaged one it skips whole)
+
+
+def _definitions_stall(data: bytes) -> int | None:
+    """Where pyulog would never leave the definitions section of this ULog (it steps back over a damaged header by
+    its stated size, which near the end of the file is further than it read), else None. Follows its reading of
+    the section: 3-byte headers (uint16 size, uint8 type), a damaged header of an unknown type (type 0, size 0 or
+    over 10,000) skipped by one byte, the section ending at the first data message."""
+    pos, n = 16, len(data)
+    while pos < n:
+        if pos + 3 > n:
+            return None  # a short last header: pyulog reads nothing more
+        size, kind = data[pos] | data[pos + 1] << 8, data[pos + 2]
+        if kind in _DATA_SECTION:
+            return None
+        end = min(pos + 3 + size, n)
+        if kind not in _DEFINITIONS and (kind == 0 or size == 0 or size > 10000):
+            if end - 2 - size <= pos:
+                return pos
+            end -= 2 + size
+        pos = end
+    return None
 
 
 def _truncated_at(path: str) -> int | None:

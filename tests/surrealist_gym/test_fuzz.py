@@ -87,3 +87,22 @@ def test_a_mutated_flight_log_is_read_or_refused_in_one_line(tmp_path, name, edi
     path = tmp_path / Path(name).name
     path.write_bytes(mutate(source.read_bytes(), edits))
     _holds(sg.read_flight, path)
+
+
+@settings(max_examples=int(__import__("os").environ.get("FUZZ_EXAMPLES", 40)), deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(edits=EDITS)
+def test_a_damaged_store_is_read_or_refused_in_one_line(tmp_path, edits):
+    from surrealist_gym.store import EvaluationStore
+
+    source = Path(__file__).resolve().parents[1] / "data" / "stores" / "rq2-rep0.sqlite"
+    path = tmp_path / "evaluations.sqlite"
+    path.write_bytes(mutate(source.read_bytes(), edits, head=8192))
+
+    def read(store_path):
+        store = EvaluationStore(store_path)
+        try:
+            len(store), store.identity, [e.fitness for e in store]
+        finally:
+            store.close()
+    _holds(read, path)
