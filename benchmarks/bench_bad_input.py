@@ -21,8 +21,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "surrealist_gym" / "data"
 FORMATS = ROOT.parent / "shared" / "data" / "formats"
-LOGS = [DATA / "case0.ulg", FORMATS / "ulog" / "px4tools_19_56_46.ulg", FORMATS / "tlog" / "dronekit_log_upload_test.tlog",
-        FORMATS / "dataflash" / "pymavlink_test.BIN"]
+LOGS = [DATA / "case0.ulg", FORMATS / "ulog" / "px4tools_19_56_46.ulg",
+        FORMATS / "tlog" / "dronekit_log_upload_test.tlog", FORMATS / "dataflash" / "pymavlink_test.BIN"]
 TESTS = [DATA / "rq1-seed1.yaml", DATA / "rq2-seed.yaml"]
 PLANS = [DATA / "case0.plan", DATA / "auto1.plan"]
 QUIET = ["--runs", "1", "--no-plot", "--no-ulog", "--no-reference"]
@@ -98,9 +98,9 @@ def main() -> int:
     print("|---|---|---|---|---|---|")
     for kind, rows in results.items():
         if rows:
-            print(f"| {kind} | {len(rows)} | {sum(r['clean'] for r in rows)} ({np.mean([r['clean'] for r in rows]):.0%})"
-                  f" | {sum(r['code'] == 2 for r in rows)} | {max(r['seconds'] for r in rows):.1f} | "
-                  f"{max(r['rss_mb'] for r in rows):.0f} |")
+            clean = sum(r["clean"] for r in rows)
+            print(f"| {kind} | {len(rows)} | {clean} ({clean / len(rows):.0%}) | {sum(r['code'] == 2 for r in rows)} | "
+                  f"{max(r['seconds'] for r in rows):.1f} | {max(r['rss_mb'] for r in rows):.0f} |")
     for kind, rows in results.items():
         for r in [r for r in rows if r["code"] == 2][:2]:
             print(f"e.g. {kind}: {r['error']}")
