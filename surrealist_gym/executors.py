@@ -198,7 +198,11 @@ class DaskExecutor(_ChunkedExecutor):
             from distributed import Client
         except ImportError as err:
             raise DependencyNotInstalled("Dask executor needs distributed: pip install 'surrealist-gym[dask]'") from err
-        self.client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        try:
+            self.client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        except (OSError, TimeoutError, ValueError) as err:
+            raise SurrealistError(f"--dask-scheduler {scheduler}: cannot connect ({' '.join(str(err).split())[:80]})"
+                                  ) from None
         self._own = not isinstance(scheduler, Client)
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
         self.patience = patience

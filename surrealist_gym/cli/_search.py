@@ -68,8 +68,10 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
             given = getattr(args, f.name, f.default)
             typed = "--" + f.name.replace("_", "-") in flags or given != f.default
             if f.name in ("workers", "dask_scheduler"):
-                if given is not None:
-                    options = dataclasses.replace(options, **{f.name: given})
+                if given is not None:  # where it runs now: --workers alone leaves the cluster it ran on before
+                    other = {"workers": "dask_scheduler", "dask_scheduler": "workers"}[f.name]
+                    moved = {other: None} if getattr(args, other, None) is None else {}
+                    options = dataclasses.replace(options, **{f.name: given, **moved})
             elif f.name != "agent" and typed and given != getattr(options, f.name):
                 flag = "--" + f.name.replace("_", "-")
                 raise SurrealistError(f"{flag}: the search in {out} was started with {getattr(options, f.name)!r}; "

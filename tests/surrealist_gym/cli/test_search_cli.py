@@ -287,3 +287,20 @@ def test_resume_takes_new_workers_and_refuses_a_new_identity(tmp_path, capsys):
     assert "--budget: the search in" in capsys.readouterr().err
     assert main(["generate", "--resume", str(out), "--workers", "2"]) == 0
     assert json.loads((out / "summary.json").read_text())["evaluations"] <= 2
+
+
+def test_resume_on_local_workers_leaves_a_lost_cluster(tmp_path):
+    """A search whose Dask scheduler was lost resumes on local workers: --workers alone replaces the cluster."""
+    from surrealist_gym.cli.options import GenerateOptions
+
+    out = tmp_path / "gen"
+    out.mkdir()
+    lost = GenerateOptions(budget=2, runs=1, dask_scheduler="tcp://127.0.0.1:9").to_json()
+    (out / "run.json").write_text(json.dumps(lost))
+    assert main(["generate", "--resume", str(out), "--workers", "1"]) == 0
+    assert json.loads((out / "summary.json").read_text())["evaluations"] <= 2
+    dask = pytest.importorskip("dask")
+    with dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
+        assert main(["generate", "--budget", "1", "--dask-scheduler", "tcp://127.0.0.1:9", "--out",
+                     str(tmp_path / "g2")]) == 2  # an unreachable scheduler: one line, no folder left behind
+    assert not (tmp_path / "g2").exists()
