@@ -11,6 +11,7 @@ import json
 import os
 import sqlite3
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Iterator
 
@@ -95,6 +96,9 @@ class EvaluationStore:
         recorded, not compared)."""
         held = self.identity
         if held is None:
+            if len(self):
+                warnings.warn(f"{self.path}: written before stores recorded their search; its evaluations are taken "
+                              f"as this search's, and its identity is recorded now", stacklevel=2)
             self._upgrade()
             self._db.execute("INSERT INTO meta (key, value) VALUES (?, ?)",
                              (f"identity:{self.search}", json.dumps(identity, sort_keys=True)))

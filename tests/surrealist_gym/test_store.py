@@ -66,3 +66,7 @@ def test_a_store_records_one_search_and_reading_changes_nothing(tmp_path):
     with EvaluationStore(old) as store:
         assert store.identity is None and len(store) > 0 and next(iter(store)).fitness is not None
     assert old.read_bytes() == before
+    with EvaluationStore(old) as store, pytest.warns(UserWarning, match="written before stores recorded their search"):
+        store.claim({"runs": 10, "seed": 0, "version": "0.1.0"})  # resuming it: repaired, in one line
+    with EvaluationStore(old) as store:
+        assert store.identity["runs"] == 10
