@@ -33,6 +33,10 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
+    from .options import check_at_least
+
+    check_at_least(args, repetitions=1, budget=1, runs=1, workers=1, parallel=1)
+
     from search.compare import compare
 
     from gymnasium.envs.registration import registry

@@ -43,10 +43,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _check(args) -> None:
-    for name, value, low in (("--runs", args.runs, 1), ("--every", args.every, 1), ("--workers", args.workers, 1),
-                             ("--limit", args.limit, 1)):
-        if value is not None and value < low:
-            raise SurrealistError(f"{name}: expected a positive number, got {value}")
+    from .options import check_at_least
+
+    check_at_least(args, runs=1, every=1, workers=1, limit=1)
     if not args.close > 0 or not math.isfinite(args.close):
         raise SurrealistError(f"--close: expected a positive number of metres, got {args.close:g}")
     if not args.buffer >= 0 or not math.isfinite(args.buffer):

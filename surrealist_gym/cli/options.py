@@ -175,4 +175,14 @@ class GenerateOptions(SearchOptions):
                                      "only)", action="store_true")
 
 
-__all__ = ["GenerateOptions", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "race_stages"]
+def check_at_least(args: argparse.Namespace, **lowest) -> None:
+    """One line for a whole-number option below its lowest value (``--runs: expected a whole number >= 1, got 0``),
+    worded as the search options' check; an option left unset (None) passes."""
+    for name, low in lowest.items():
+        value = getattr(args, name, None)
+        if value is not None and not value >= low:
+            raise SurrealistError(f"--{name.replace('_', '-')}: expected a whole number >= {low}, got {value!r}")
+
+
+__all__ = ["GenerateOptions", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "check_at_least",
+           "race_stages"]

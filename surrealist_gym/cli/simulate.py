@@ -65,10 +65,10 @@ def run(args: argparse.Namespace) -> int:
     from ..geometry import competition_distance
     from ..sim import SimConfig, simulate
 
+    from .options import check_at_least
+
+    check_at_least(args, runs=1, seed=0)
     test = load_test(args.test)
-    if args.runs < 1:
-        from ..errors import SimulationError
-        raise SimulationError(f"--runs: expected a positive number, got {args.runs}")
     ref_path = args.reference or (None if args.no_reference else test.reference_log)
     reference = None
     if ref_path:

@@ -23,6 +23,10 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
+    from .options import check_at_least
+
+    check_at_least(args, steps=1, episode_budget=2, runs=1, threads=1, random_seed=0)
+
     from ..errors import DependencyNotInstalled
     try:
         import torch

@@ -257,6 +257,19 @@ def test_bad_search_values_are_one_line_errors(tmp_path, capsys, argv, message):
     assert message in err and "Traceback" not in err and not out.exists()
 
 
+@pytest.mark.parametrize("argv, message", [
+    (["compare", "--repetitions", "0"], "--repetitions: expected a whole number >= 1, got 0"),
+    (["compare", "--parallel", "0"], "--parallel: expected a whole number >= 1, got 0"),
+    (["train-ppo", "--steps", "-5"], "--steps: expected a whole number >= 1, got -5"),
+    (["simulate", "TEST", "--seed", "-1"], "--seed: expected a whole number >= 0, got -1"),
+    (["simulate", "TEST", "--runs", "0"], "--runs: expected a whole number >= 1, got 0")])
+def test_bad_numbers_of_other_commands_are_one_line_errors(tmp_path, capsys, argv, message):
+    argv = [sg.data_path("rq1-seed1.yaml") if a == "TEST" else a for a in argv]
+    assert main([*argv, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err and not (tmp_path / "out").exists()
+
+
 def test_out_that_is_a_file_is_refused(tmp_path, capsys):
     afile = tmp_path / "results.txt"
     afile.write_text("not a folder")
