@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -54,8 +55,8 @@ def _params(items: list[str]) -> dict:
             out[name.strip()] = float(value) if sep else None
         except ValueError:
             out[name.strip()] = None
-        if out[name.strip()] is None:
-            raise SimulationError(f"--param {item!r}: expected NAME=number")
+        if out[name.strip()] is None or not math.isfinite(out[name.strip()]):
+            raise SimulationError(f"--param {item!r}: expected NAME=number (a finite number)")
     return out
 
 

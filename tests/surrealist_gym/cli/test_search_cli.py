@@ -262,7 +262,8 @@ def test_bad_search_values_are_one_line_errors(tmp_path, capsys, argv, message):
     (["compare", "--parallel", "0"], "--parallel: expected a whole number >= 1, got 0"),
     (["train-ppo", "--steps", "-5"], "--steps: expected a whole number >= 1, got -5"),
     (["simulate", "TEST", "--seed", "-1"], "--seed: expected a whole number >= 0, got -1"),
-    (["simulate", "TEST", "--runs", "0"], "--runs: expected a whole number >= 1, got 0")])
+    (["simulate", "TEST", "--runs", "0"], "--runs: expected a whole number >= 1, got 0"),
+    (["simulate", "TEST", "--param", "MPC_XY_CRUISE=1e400"], "expected NAME=number (a finite number)")])
 def test_bad_numbers_of_other_commands_are_one_line_errors(tmp_path, capsys, argv, message):
     argv = [sg.data_path("rq1-seed1.yaml") if a == "TEST" else a for a in argv]
     assert main([*argv, "--out", str(tmp_path / "out")]) == 2
