@@ -1,6 +1,10 @@
 """The results folder of a search: best test (Aerialist YAML + its mission), evaluations.csv, summary.json, and
-plots in the paper's style (Figure 1: real vs seed vs best; Figure 2: fitness over evaluations and per-run
-minimum distances of seed and best).
+plots in the paper's style (Figure 1: real vs seed vs best, top view and altitude, horizontal speed and distance
+to the goal over time; Figure 2: fitness over evaluations and per-run minimum distances of seed and best).
+
+Time base of the profiles: the real flight (``env.reference``) keeps its own times; the seed's and best's
+trajectories (one run, or the DBA average of the runs, all from the paper's pipeline of 0.5 s window means) carry
+no times and are taken as sampled every 0.5 s (:data:`~surrealist_gym.trajectory.WINDOW_S`).
 """
 from __future__ import annotations
 
@@ -15,6 +19,7 @@ from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
 from .mission import write_plan
 from .store import EvaluationStore
 from .testcase import save_test
+from .trajectory import Profile, profile
 
 
 def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> dict:
@@ -50,10 +55,32 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         "best_unsafe_rate": best_outcomes.unsafe_rate, "best_crash_rate": best_outcomes.crash_rate,
         "best_stuck_rate": best_outcomes.blocked_rate,
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
     reference = getattr(env, "reference", None)
-    plot_search(out, seed_eval, best_eval, result.history, reference, measure)
+    goal = search_goal(seed_eval, reference)
+    summary["goal"] = None if goal is None else [round(float(v), 3) for v in goal]
+    summary["profiles"] = {k: p.summary() for k, p in search_profiles(seed_eval, best_eval, reference, goal).items()}
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
+    plot_search(out, seed_eval, best_eval, result.history, reference, measure, goal=goal)
     return summary
+
+
+def search_goal(seed_eval, reference=None):
+    """The goal of the distance-to-goal profiles: the real flight's last point when replicating, else the last
+    waypoint of the seed's mission, else the last point of the seed's trajectory (None: nothing to go by)."""
+    if reference is not None and len(reference):
+        return np.asarray(reference)[-1]
+    mission = getattr(seed_eval.test, "mission", None)
+    if mission is not None and mission.waypoints:
+        return np.asarray(mission.waypoints[-1], dtype=np.float64)
+    if seed_eval.trajectory is not None and len(seed_eval.trajectory):
+        return np.asarray(seed_eval.trajectory)[-1]
+    return None
+
+
+def search_profiles(seed_eval, best_eval, reference=None, goal=None) -> dict[str, Profile]:
+    """Profiles over time of ``real`` (when there is one), ``seed`` and ``best`` (those with a trajectory)."""
+    named = {"real": reference, "seed": seed_eval.trajectory, "best": best_eval.trajectory}
+    return {k: profile(v, goal) for k, v in named.items() if v is not None and len(v)}
 
 
 def _jsonable(value):
@@ -87,22 +114,36 @@ def write_evaluations_csv(store: EvaluationStore | None, path: Path, measure: Me
 
 
 def plot_search(out: Path, seed_eval, best_eval, history, reference=None,
-                measure: Measure | str = Measure.PAPER) -> None:
-    """figure1.png (trajectories and obstacles), fitness.png and min_distances.png."""
+                measure: Measure | str = Measure.PAPER, goal=None) -> None:
+    """figure1.png (top view of trajectories and obstacles; altitude, horizontal speed and distance to ``goal``
+    over time), fitness.png and min_distances.png. ``goal`` None: :func:`search_goal`."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle, Polygon
 
-    fig, (top, alt) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [1.2, 1]})
-    lines = [("real flight", reference, "k", 2.5), ("seed", seed_eval.trajectory, "tab:orange", 1.5),
-             ("best", best_eval.trajectory, "tab:blue", 1.5)]
-    for label, traj, colour, width in lines:
-        if traj is None:
+    if goal is None:
+        goal = search_goal(seed_eval, reference)
+    fig = plt.figure(figsize=(14, 7))
+    grid = fig.add_gridspec(3, 2, width_ratios=[1.2, 1])
+    top = fig.add_subplot(grid[:, 0])
+    alt = fig.add_subplot(grid[0, 1])
+    speed = fig.add_subplot(grid[1, 1], sharex=alt)
+    to_goal = fig.add_subplot(grid[2, 1], sharex=alt)
+    profiles = search_profiles(seed_eval, best_eval, reference, goal)
+    lines = [("real", "real flight", reference, "k", 2.5), ("seed", "seed", seed_eval.trajectory, "tab:orange", 1.5),
+             ("best", "best", best_eval.trajectory, "tab:blue", 1.5)]
+    for key, label, traj, colour, width in lines:
+        if key not in profiles:
             continue
         xyz = np.asarray(traj)
         top.plot(xyz[:, 1], xyz[:, 0], color=colour, lw=width, label=label)
-        alt.plot(np.arange(len(xyz)) * 0.5, xyz[:, 2], color=colour, lw=width, label=label)
+        p = profiles[key]
+        alt.plot(p.t, p.altitude, color=colour, lw=width, label=label)
+        speed.plot(p.t, p.horizontal_speed, color=colour, lw=width, label=label)
+        to_goal.plot(p.t, p.distance_to_goal, color=colour, lw=width, label=label)
+    if goal is not None:
+        top.plot([goal[1]], [goal[0]], "*", color="tab:green", ms=12, label="goal")
     for evaluation, colour, style in ((seed_eval, "tab:orange", "--"), (best_eval, "tab:blue", "-")):
         for o in evaluation.test.obstacles:
             if o.shape.value == "cylinder":
@@ -115,9 +156,14 @@ def plot_search(out: Path, seed_eval, best_eval, history, reference=None,
     top.set_aspect("equal", adjustable="datalim")
     top.legend(loc="best", fontsize=8)
     top.set_title("top view (obstacles: seed dashed, best solid)")
-    alt.set_xlabel("time [s] (0.5 s windows)")
     alt.set_ylabel("altitude [m]")
-    alt.set_title("altitude")
+    alt.set_title("over time (simulated: 0.5 s samples)")
+    alt.legend(loc="best", fontsize=8)
+    speed.set_ylabel("horizontal speed [m/s]")
+    to_goal.set_ylabel("distance to goal [m]")
+    to_goal.set_xlabel("time [s]")
+    for ax in (alt, speed):
+        ax.tick_params(labelbottom=False)
     fig.tight_layout()
     fig.savefig(out / "figure1.png", dpi=110)
     plt.close(fig)

@@ -163,3 +163,66 @@ def as_points(trajectory) -> np.ndarray:
     if pts.ndim != 2 or pts.shape[1] not in (2, 3):
         raise ValueError(f"expected a Trajectory or an (N, 3) array, got shape {pts.shape}")
     return pts
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Profile:
+    """A trajectory over time: one value per sample.
+
+    Attributes:
+        t: (N,) seconds since the first sample.
+        altitude: (N,) z [m] (up, relative to the start).
+        horizontal_speed: (N,) speed in the x-y plane [m/s] (central differences, one-sided at the ends).
+        distance_to_goal: (N,) horizontal distance to the goal [m].
+    """
+
+    t: np.ndarray
+    altitude: np.ndarray
+    horizontal_speed: np.ndarray
+    distance_to_goal: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+
+    def summary(self) -> dict:
+        """Duration [s], mean and max horizontal speed and its 10/50/90 percentiles [m/s], final distance to the
+        goal [m]; rounded to 0.01 for ``summary.json``."""
+        speed = self.horizontal_speed
+        if speed.size == 0:
+            return {"duration_s": 0.0, "samples": 0}
+        p10, p50, p90 = np.percentile(speed, [10, 50, 90])
+        return {"duration_s": round(self.duration, 2), "samples": int(speed.size),
+                "mean_horizontal_speed_mps": round(float(speed.mean()), 2),
+                "max_horizontal_speed_mps": round(float(speed.max()), 2),
+                "horizontal_speed_percentiles_mps": {"p10": round(float(p10), 2), "p50": round(float(p50), 2),
+                                                     "p90": round(float(p90), 2)},
+                "final_distance_to_goal_m": round(float(self.distance_to_goal[-1]), 2)}
+
+
+def profile(trajectory, goal=None, dt: float = WINDOW_S) -> Profile:
+    """Altitude, horizontal speed and horizontal distance to ``goal`` over time.
+
+    Time base: a :class:`Trajectory` keeps its own ``t``; an (N, 3) array of points (what an evaluation keeps:
+    one run, or the DBA average of the runs, all from the paper's pipeline of 0.5 s window means) is taken as
+    sampled every ``dt`` seconds from 0 (default :data:`WINDOW_S` = 0.5 s). ``goal`` is an (x, y[, z]) point;
+    None means the trajectory's last point.
+    """
+    if isinstance(trajectory, Trajectory):
+        t, xyz = trajectory.t - (trajectory.t[0] if len(trajectory) else 0.0), trajectory.xyz
+    else:
+        xyz = as_points(trajectory)
+        if xyz.shape[1] != 3:
+            raise ValueError(f"profile: expected (N, 3) points, got shape {xyz.shape}")
+        t = np.arange(len(xyz)) * float(dt)
+    if len(xyz) == 0:
+        empty = np.zeros(0)
+        return Profile(empty, empty, empty, empty)
+    goal_xy = xyz[-1, :2] if goal is None else np.asarray(goal, dtype=np.float64)[:2]
+    if len(xyz) >= 2:
+        velocity = np.gradient(xyz[:, :2], t, axis=0)
+        speed = np.hypot(velocity[:, 0], velocity[:, 1])
+    else:
+        speed = np.zeros(1)
+    distance = np.hypot(xyz[:, 0] - goal_xy[0], xyz[:, 1] - goal_xy[1])
+    return Profile(frozen_array(t), frozen_array(xyz[:, 2]), frozen_array(speed), frozen_array(distance))
