@@ -3,8 +3,10 @@
 An agent proposes actions for a Surrealist env: an action is a vector with one value per mutator of the env
 (``env.unwrapped.mutators``), the mutation of the env's seed test. The env owns the budget, the memo and the
 fitness, so every agent is measured the same way; an agent binds to the env's outermost Surrealist layer
-(:func:`~surrealist_gym.envs.wrapper.search_layer`), so a wrapper that changes what is charged applies to it. Subclasses implement ``_setup``, ``_ask`` and ``_tell``; RL
-agents, whose libraries are run-style, override ``run`` and return the same :class:`SearchResult`.
+(:func:`~surrealist_gym.envs.wrapper.search_layer`), so a wrapper that changes what is charged applies to it.
+Subclasses implement ``_setup``, ``_ask`` and ``_tell`` (a wrapping agent may also override ``ask``, ``_step``,
+``tell`` and ``stop``); RL agents, whose libraries are run-style, override ``run`` and return the same
+:class:`SearchResult`.
 """
 from __future__ import annotations
 
@@ -72,7 +74,7 @@ class Agent(ABC):
         return actions
 
     def tell(self, actions: Sequence[np.ndarray], fitnesses: Sequence[float], infos: Sequence[dict]) -> None:
-        """Report the fitness (and env info) of actions from the last ask(); a prefix is allowed if the budget ran out."""
+        """Report the fitness (and env info) of actions from the last ask(); a prefix if the budget ran out."""
         if self._pending is None:
             raise RuntimeError("tell() called without a pending ask()")
         if not (len(actions) == len(fitnesses) == len(infos)) or len(actions) > len(self._pending):

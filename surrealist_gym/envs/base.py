@@ -9,8 +9,9 @@ the share of the budget left. ``reset`` evaluates the seed (one evaluation). A t
 episode comes from the memo and costs no budget (``info["memo"]``); one evaluated in an earlier episode, or by an
 interrupted search whose store is reused, is not simulated again but costs budget, so an episode does not depend
 on what came before it (and a resumed search retraces the interrupted one); ``info["simulations"]`` counts the
-runs the episode's evaluations stand for; an invalid test (overlap, non-positive size) is not simulated, costs no budget and
-scores a penalty. The episode is truncated when the budget is spent.
+runs the episode's evaluations stand for; an invalid test (overlap, non-positive size) is not simulated, costs no
+budget and scores a penalty. The episode is truncated when the budget is spent. A wrapper that changes what is
+charged (e.g. ``surrogates.racing.Racing``) is a :class:`~surrealist_gym.envs.wrapper.SurrealistWrapper`.
 
 Subclasses override only the hooks ``_objective`` and, if needed, ``_terminated``.
 """
