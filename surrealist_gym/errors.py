@@ -41,6 +41,12 @@ class DependencyNotInstalled(SurrealistError):
     """An optional dependency is missing; the message names the pip command that installs it."""
 
 
+def one_line(err: Exception, limit: int = 80) -> str:
+    """A foreign exception's text for a SurrealistError message: on one line (SQLite and pymavlink quote text with
+    its line breaks), at most ``limit`` characters."""
+    return " ".join(str(err).split())[:limit]
+
+
 class InfrastructureError(SurrealistError):
     """The machinery that runs simulations failed (a worker or pool died, a scheduler was lost), not the simulation:
     never stored as a result; the search stops and ``--resume`` re-flies what is missing."""

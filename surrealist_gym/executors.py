@@ -6,6 +6,7 @@ fails again it becomes a run with status ``error`` and the search goes on.
 """
 from __future__ import annotations
 
+import logging
 import math
 import os
 import sys
@@ -16,7 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .errors import DependencyNotInstalled, InfrastructureError, SurrealistError
+from .errors import DependencyNotInstalled, InfrastructureError, SurrealistError, one_line
 from .trajectory import Trajectory
 
 
@@ -184,8 +185,8 @@ class _Watched:
                     continue
                 lost_since = lost_since or time.monotonic()
                 if time.monotonic() - lost_since > self._patience:
-                    import logging  # the search reports the lost scheduler in one line; the client's own
-                    logging.getLogger("distributed.client").setLevel(logging.CRITICAL)  # reconnect traceback goes
+                    # the search reports the lost scheduler in one line; the client's reconnect traceback goes
+                    logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
                     raise ConnectionError(f"the Dask scheduler has been unreachable for {self._patience:.0f} s "
                                           f"(client {self._client.status})") from None
 
@@ -201,8 +202,7 @@ class DaskExecutor(_ChunkedExecutor):
         try:
             self.client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         except (OSError, TimeoutError, ValueError) as err:
-            raise SurrealistError(f"--dask-scheduler {scheduler}: cannot connect ({' '.join(str(err).split())[:80]})"
-                                  ) from None
+            raise SurrealistError(f"--dask-scheduler {scheduler}: cannot connect ({one_line(err)})") from None
         self._own = not isinstance(scheduler, Client)
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
         self.patience = patience

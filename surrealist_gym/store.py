@@ -15,7 +15,7 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Iterator
 
-from .errors import SurrealistError
+from .errors import SurrealistError, one_line
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS evaluations (
@@ -69,7 +69,7 @@ class EvaluationStore:
             if "evaluations" not in tables:  # a new store; an existing one is not changed by reading it
                 self._upgrade()
         except sqlite3.DatabaseError as err:
-            raise SurrealistError(f"{self.path}: not an evaluation store ({_one_line(err)})") from None
+            raise SurrealistError(f"{self.path}: not an evaluation store ({one_line(err)})") from None
 
     def _upgrade(self) -> None:
         """Create the tables (or add the meta table to a store written before it existed)."""
@@ -147,7 +147,7 @@ class EvaluationStore:
             yield
         except (sqlite3.DatabaseError, ValueError, TypeError, KeyError) as err:
             raise SurrealistError(f"{self.path}: a damaged evaluation store ({type(err).__name__}: "
-                                  f"{_one_line(err)}); move it aside or use another results folder") from None
+                                  f"{one_line(err)}); move it aside or use another results folder") from None
 
     def searches(self) -> list[str]:
         return [r[0] for r in self._db.execute("SELECT DISTINCT search FROM evaluations ORDER BY search")]
@@ -166,11 +166,6 @@ class EvaluationStore:
         (id_, search, key, test, seeds, runs, fitness, info, sim_s, wall_s, created) = row
         return StoredEvaluation(key, json.loads(test), tuple(json.loads(seeds)), tuple(json.loads(runs)), fitness,
                                 json.loads(info), sim_s, wall_s, search, id_, created)
-
-
-def _one_line(err: Exception) -> str:
-    """An error's text on one line, at most 80 characters (SQLite quotes schema text with its line breaks)."""
-    return " ".join(str(err).split())[:80]
 
 
 def _short(value) -> str:

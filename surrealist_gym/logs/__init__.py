@@ -14,7 +14,7 @@ from __future__ import annotations
 import os
 import struct
 
-from ..errors import LogFormatError
+from ..errors import LogFormatError, one_line
 from .flight import FlightLog, LocalPositions, ModeSpan
 from .mavlink import DATAFLASH_MAGIC, MAVLINK_STX, read_dataflash, read_tlog
 from .ulog import ULOG_MAGIC, read_ulog
@@ -61,8 +61,7 @@ def read_flight(path) -> FlightLog:
         return readers[fmt](name)
     except (AttributeError, KeyError, IndexError, TypeError, ValueError, OverflowError, struct.error) as err:
         # damaged message definitions decode into messages without the fields their type promises
-        reason = " ".join(str(err).split())[:80]
-        raise LogFormatError(f"{name}: corrupt {fmt} log ({type(err).__name__}: {reason})") from None
+        raise LogFormatError(f"{name}: corrupt {fmt} log ({type(err).__name__}: {one_line(err)})") from None
 
 
 __all__ = ["FlightLog", "LocalPositions", "ModeSpan", "detect_format", "read_flight", "read_ulog", "write_ulog"]
