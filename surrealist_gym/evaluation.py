@@ -163,15 +163,17 @@ class Evaluator:
             store.claim(search_identity(objective, runs, seed, self.sim_config))
         self._memo: dict[str, Evaluation] = {}
         self._partial: dict[str, tuple[tuple[RunSummary, ...], float]] = {}  # runs flown by partial evaluations
+        self._first_runs: dict[tuple[str, int], Evaluation] = {}  # first-k scores of tests known in full
         self.simulations = 0
         self.replayed_seconds = 0.0  # simulation time of the evaluations read back from the store
 
     def evaluate(self, test: TestCase, runs: int | None = None) -> Evaluation:
         """The evaluation of ``test``: from the memo, else the store, else simulated (and stored).
 
-        ``runs=k`` (< n): the objective's score of the first k runs alone (``len(result.runs) == k``), neither
-        stored nor memoised as the test's evaluation. Runs already flown or stored are reused; those flown here are
-        kept, so a later full evaluation of the test flies only the rest.
+        ``runs=k`` (< n): the objective's score of the first k runs alone (``len(result.runs) == k``), not stored
+        as the test's evaluation. Runs already flown or stored are reused (the score of a test known in full is
+        kept, as racing and the plateau test ask for it again); those flown here are kept, so a later full
+        evaluation of the test flies only the rest.
         """
         n = self.runs if runs is None else max(1, min(int(runs), self.runs))
         key = test.key()
@@ -179,7 +181,9 @@ class Evaluator:
         if known is not None and n == self.runs:
             return replace(known, cached=True)
         if known is not None and all(r.trajectory is not None for r in known.runs[:n]):
-            return self._judge(test, known.runs[:n], 0.0, cached=True)
+            if (key, n) not in self._first_runs:
+                self._first_runs[key, n] = self._judge(test, known.runs[:n], 0.0, cached=True)
+            return self._first_runs[key, n]
         flown, sim_seconds = self._partial.get(key, ((), 0.0))
         if len(flown) < n:
             start = time.perf_counter()

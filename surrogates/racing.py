@@ -70,7 +70,7 @@ class Racing(SurrealistWrapper):
     def race(self, action, runs: int) -> Evaluation:
         """The evaluation of the action's test on its first ``runs`` runs alone (flying those not flown yet; a test
         evaluated in the episode is answered from its runs). Raises InvalidTestCase for an invalid action."""
-        test = self.inner.test_for(np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0))
+        test = self.inner.test_for(action)
         evaluation = self.inner.evaluator.evaluate(test, runs=runs)
         if not self.inner.evaluated(test):
             self._raced[test.key()] = max(self._raced.get(test.key(), 0), len(evaluation.runs))
