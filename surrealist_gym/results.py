@@ -58,9 +58,10 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
     reference = getattr(env, "reference", None)
     goal = search_goal(seed_eval, reference)
     summary["goal"] = None if goal is None else [round(float(v), 3) for v in goal]
-    summary["profiles"] = {k: p.summary() for k, p in search_profiles(seed_eval, best_eval, reference, goal).items()}
+    profiles = search_profiles(seed_eval, best_eval, reference, goal)
+    summary["profiles"] = {k: p.summary() for k, p in profiles.items()}
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
-    plot_search(out, seed_eval, best_eval, result.history, reference, measure, goal=goal)
+    plot_search(out, seed_eval, best_eval, result.history, reference, measure, goal=goal, profiles=profiles)
     return summary
 
 
@@ -114,9 +115,10 @@ def write_evaluations_csv(store: EvaluationStore | None, path: Path, measure: Me
 
 
 def plot_search(out: Path, seed_eval, best_eval, history, reference=None,
-                measure: Measure | str = Measure.PAPER, goal=None) -> None:
+                measure: Measure | str = Measure.PAPER, goal=None, profiles=None) -> None:
     """figure1.png (top view of trajectories and obstacles; altitude, horizontal speed and distance to ``goal``
-    over time), fitness.png and min_distances.png. ``goal`` None: :func:`search_goal`."""
+    over time), fitness.png and min_distances.png. ``goal`` None: :func:`search_goal`; ``profiles`` None:
+    :func:`search_profiles`."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -130,7 +132,8 @@ def plot_search(out: Path, seed_eval, best_eval, history, reference=None,
     alt = fig.add_subplot(grid[0, 1])
     speed = fig.add_subplot(grid[1, 1], sharex=alt)
     to_goal = fig.add_subplot(grid[2, 1], sharex=alt)
-    profiles = search_profiles(seed_eval, best_eval, reference, goal)
+    if profiles is None:
+        profiles = search_profiles(seed_eval, best_eval, reference, goal)
     lines = [("real", "real flight", reference, "k", 2.5), ("seed", "seed", seed_eval.trajectory, "tab:orange", 1.5),
              ("best", "best", best_eval.trajectory, "tab:blue", 1.5)]
     for key, label, traj, colour, width in lines:

@@ -208,13 +208,9 @@ def profile(trajectory, goal=None, dt: float = WINDOW_S) -> Profile:
     sampled every ``dt`` seconds from 0 (default :data:`WINDOW_S` = 0.5 s). ``goal`` is an (x, y[, z]) point;
     None means the trajectory's last point.
     """
-    if isinstance(trajectory, Trajectory):
-        t, xyz = trajectory.t - (trajectory.t[0] if len(trajectory) else 0.0), trajectory.xyz
-    else:
-        xyz = as_points(trajectory)
-        if xyz.shape[1] != 3:
-            raise ValueError(f"profile: expected (N, 3) points, got shape {xyz.shape}")
-        t = np.arange(len(xyz)) * float(dt)
+    if not isinstance(trajectory, Trajectory):
+        trajectory = Trajectory.from_array(as_points(trajectory), float(dt))  # (N, 2) points fail here
+    t, xyz = trajectory.t - (trajectory.t[0] if len(trajectory) else 0.0), trajectory.xyz
     if len(xyz) == 0:
         empty = np.zeros(0)
         return Profile(empty, empty, empty, empty)

@@ -27,7 +27,6 @@ from __future__ import annotations
 import itertools
 import logging
 import warnings
-from collections import deque
 from dataclasses import asdict
 from pathlib import Path
 
@@ -154,14 +153,14 @@ class Prescreened(Agent):
 
     def _ask(self) -> list[np.ndarray]:
         """The inner agent's candidates, free ones first, then the most promising (by the model)."""
-        self._candidates = candidates = self.inner.ask()
+        candidates = self.inner.ask()
         self._predictions: dict[str, tuple[float, float]] = {}
         if self.verified_at is None:
             self._tests = [self._test(a) for a in candidates]
             self._order = self._most_promising_first()
         else:  # the verify pass simulates every candidate: no tests to screen, nothing to predict
             self._tests, self._order = [None] * len(candidates), list(range(len(candidates)))
-        self._queue = deque(self._order)
+        self._next = iter(self._order)
         self._results: list[tuple | None] = [None] * len(candidates)
         _, best, incumbent = self.best
         self._bar = (best, incumbent)  # a better result in this batch raises the bar for the rest
@@ -170,7 +169,7 @@ class Prescreened(Agent):
     def _step(self, env, action, callback=None) -> tuple[float, dict, bool]:
         """The next candidate: told again what it was told before, skipped, dropped by racing, or stepped on. The
         batch is over when the episode is, or (``SkipAccounting.BUDGET``) the inner agent's budget is spent."""
-        i = self._queue.popleft()
+        i = next(self._next)
         test, (best, incumbent) = self._tests[i], self._bar
         if test is not None and self._env.evaluated(test):
             test = None  # the same test earlier in this ask was simulated: now a free memo answer
@@ -250,14 +249,14 @@ class Prescreened(Agent):
     def _most_promising_first(self) -> list[int]:
         """Candidate indices, free ones first, then by predicted fitness (the order asked without a model)."""
         if self.model is None:
-            return list(range(len(self._candidates)))
+            return list(range(len(self._tests)))
 
         def priority(i):
             if self._tests[i] is None:
                 return -np.inf
             mean = self._predict(self._tests[i])[0]
             return -mean if np.isfinite(mean) else np.inf
-        return sorted(range(len(self._candidates)), key=priority)
+        return sorted(range(len(self._tests)), key=priority)
 
     def _predict(self, test) -> tuple[float, float]:
         """The model's (mean, std) for a test, on its scale (once per test in a batch)."""
