@@ -13,13 +13,6 @@ from surrealist_gym.errors import SurrealistError, UnknownAgent
 BUDGET = 5
 
 
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        yield
-
-
 def _env(budget=BUDGET):
     return gym.make("Surrealist-Generate-v0", budget=budget, runs=1, executor="inline")
 

@@ -14,13 +14,6 @@ from surrealist_gym.errors import SurrealistError, UnknownAgent
 SETTINGS = dict(repetitions=2, budget=3, runs=1, executor="inline")
 
 
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        yield
-
-
 @pytest.fixture(scope="module")
 def compared(tmp_path_factory):
     out = tmp_path_factory.mktemp("compare")

@@ -1,5 +1,4 @@
 """The adaptive greedy on the real envs (tiny budgets), and the agent interface's checks."""
-import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -7,13 +6,6 @@ import pytest
 
 import surrealist_gym  # noqa: F401 - registers the envs
 from search import AdaptiveGreedy, GreedyConfig
-
-
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        yield
 
 
 def _env(budget=10):

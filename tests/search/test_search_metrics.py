@@ -12,13 +12,6 @@ from search.repetitions import run_repetition
 from surrealist_gym.outcomes import outcomes
 
 
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        yield
-
-
 def _env(store=None):
     return gym.make("Surrealist-Generate-v0", budget=3, runs=2, random_seed=0, store=store, executor="inline")
 
