@@ -65,15 +65,13 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         options = options_type.from_json(saved)
         flags = getattr(args, "_flags", frozenset())  # options typed on the command line, even at their defaults
         for f in dataclasses.fields(options_type):  # what the command line changes: where it runs, nothing else
-            given = getattr(args, f.name, f.default)
-            typed = "--" + f.name.replace("_", "-") in flags or given != f.default
+            given, flag = getattr(args, f.name, f.default), "--" + f.name.replace("_", "-")
             if f.name in ("workers", "dask_scheduler"):
                 if given is not None:  # where it runs now: --workers alone leaves the cluster it ran on before
                     other = {"workers": "dask_scheduler", "dask_scheduler": "workers"}[f.name]
                     moved = {other: None} if getattr(args, other, None) is None else {}
                     options = dataclasses.replace(options, **{f.name: given, **moved})
-            elif f.name != "agent" and typed and given != getattr(options, f.name):
-                flag = "--" + f.name.replace("_", "-")
+            elif f.name != "agent" and (flag in flags or given != f.default) and given != getattr(options, f.name):
                 raise SurrealistError(f"{flag}: the search in {out} was started with {getattr(options, f.name)!r}; "
                                       f"--resume keeps its options (only --workers and --dask-scheduler change)")
         module = options.agent.split(":", 1)[0] if ":" in (options.agent or "") else None
