@@ -52,11 +52,12 @@ def _params(items: list[str]) -> dict:
     for item in items:
         name, sep, value = item.partition("=")
         try:
-            out[name.strip()] = float(value) if sep else None
+            number = float(value) if sep else math.nan
         except ValueError:
-            out[name.strip()] = None
-        if out[name.strip()] is None or not math.isfinite(out[name.strip()]):
+            number = math.nan
+        if not math.isfinite(number):
             raise SimulationError(f"--param {item!r}: expected NAME=number (a finite number)")
+        out[name.strip()] = number
     return out
 
 
