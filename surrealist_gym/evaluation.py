@@ -278,14 +278,19 @@ def _to_stored(evaluation: Evaluation, seeds, common_noise: bool = False) -> Sto
                             sim_seconds=evaluation.sim_seconds)
 
 
+def stored_runs(stored: StoredEvaluation) -> tuple[RunSummary, ...]:
+    """The runs of a stored evaluation, with their trajectories when the store kept them (stores written before
+    runs kept their trajectories did not: None)."""
+    kept = (stored.info or {}).get("run_trajectories") or [None] * len(stored.runs)
+    return tuple(RunSummary(**r, trajectory=None if t is None else np.asarray(t, dtype=np.float64).reshape(-1, 3))
+                 for r, t in zip(stored.runs, kept))
+
+
 def _from_stored(test: TestCase, stored: StoredEvaluation) -> Evaluation:
     """A stored evaluation; its runs keep their trajectories when the store has them (stores before they were kept
     do not)."""
     trajectory = stored.info.get("trajectory")
     fitness = -np.inf if stored.fitness is None else stored.fitness
-    kept = stored.info.get("run_trajectories") or [None] * len(stored.runs)
-    runs = tuple(RunSummary(**r, trajectory=None if t is None else np.asarray(t, dtype=np.float64).reshape(-1, 3))
-                 for r, t in zip(stored.runs, kept))
-    return Evaluation(test, fitness, runs, stored.info.get("terms", {}),
+    return Evaluation(test, fitness, stored_runs(stored), stored.info.get("terms", {}),
                       None if trajectory is None else np.asarray(trajectory), cached=True,
                       sim_seconds=stored.sim_seconds)

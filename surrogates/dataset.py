@@ -78,8 +78,10 @@ class Featurizer:
             raise DatasetError(f"featurizer: the mission path needs at least 2 positions, got {len(path)}")
         object.__setattr__(self, "path", path)
         if self.reference is not None:
-            ref = np.asarray(self.reference, dtype=np.float64)
-            object.__setattr__(self, "reference", ref[:, :2].copy() if len(ref) else None)
+            ref = np.asarray(self.reference, dtype=np.float64)  # kept whole: the objective judges in 3-D
+            object.__setattr__(self, "reference", ref.copy() if len(ref) else None)
+        # the features measure the reference in the x-y plane
+        object.__setattr__(self, "_reference_xy", None if self.reference is None else self.reference[:, :2])
         dense = [np.linspace(a, b, max(2, int(np.ceil(np.linalg.norm(b - a) / 0.5)) + 1))
                  for a, b in zip(path[:-1], path[1:])]
         object.__setattr__(self, "_dense", np.concatenate(dense))
@@ -197,9 +199,9 @@ class Featurizer:
         if self.reference is None:
             dist_ref, near, ref_lateral = dist_path, 0.0, 0.0
         else:
-            d_ref = obstacle_distances(self.reference, [o])[:, 0]
+            d_ref = obstacle_distances(self._reference_xy, [o])[:, 0]
             dist_ref, near = float(d_ref.min()), float((d_ref < NEAR).sum())
-            r_along, r_lat = frame(self.reference)  # where the reference passed, across the path, beside the obstacle
+            r_along, r_lat = frame(self._reference_xy)  # where the reference passed, across the path, beside the obstacle
             beside = (r_along >= c_along.min() - 1.0) & (r_along <= c_along.max() + 1.0)
             ref_lateral = float(r_lat[beside].mean()) if beside.any() else 0.0
         return [1.0, o.l, o.w, o.h, o.x, o.y, o.z, math.sin(rad), math.cos(rad), math.sin(2 * rad),
@@ -313,8 +315,9 @@ def _objective(store: EvaluationStore, featurizer: Featurizer):
     from surrealist_gym.evaluation import GenerationObjective, ReplicationObjective
 
     problem = (store.identity or {}).get("problem") or {}
-    if featurizer.reference is not None:
-        return ReplicationObjective(featurizer.reference, problem.get("averaging", "dba"))
+    if featurizer.reference is not None:  # a model saved before the reference was kept in 3-D cannot judge
+        return (ReplicationObjective(featurizer.reference, problem.get("averaging", "dba"))
+                if featurizer.reference.shape[1] == 3 else None)
     return GenerationObjective(problem.get("aggregate", "riskiest"), problem.get("measure", "paper"))
 
 
@@ -323,13 +326,11 @@ def _first_runs_fitness(ev, objective) -> list[float]:
     runs' trajectories, or the term stores kept before runs kept their trajectories."""
     info = ev.info or {}
     kept = (info.get("terms") or {}).get("first_runs_fitness")
-    if kept is not None or not info.get("run_trajectories"):
+    if kept is not None or not info.get("run_trajectories") or objective is None:
         return kept or []
-    from surrealist_gym.evaluation import RunSummary
+    from surrealist_gym.evaluation import stored_runs
 
-    test = TestCase(obstacles=tuple(_obstacles_of(ev.test)))
-    runs = [RunSummary(**r, trajectory=None if t is None else np.asarray(t, dtype=np.float64).reshape(-1, 3))
-            for r, t in zip(ev.runs, info["run_trajectories"])]
+    test, runs = TestCase(obstacles=tuple(_obstacles_of(ev.test))), stored_runs(ev)
     return [objective(test, runs[:k]).fitness for k in range(1, len(runs))]
 
 

@@ -76,3 +76,23 @@ def test_a_dataset_knows_the_noise_mode_of_its_stores(rq2_store, generate_featur
     from surrealist_gym.evaluation import describe_noise
     assert describe_noise(None) == "a mix of both noise modes"  # as `surrogate train` prints a mixed dataset
     assert own.concat(common).common_noise is None and own.concat(own).common_noise is False
+
+
+def test_first_runs_of_a_store_written_now_are_scored_from_its_run_trajectories(tmp_path):
+    """A store written by today's evaluator keeps each run's trajectory instead of a first-runs term: the dataset
+    scores the first k runs with the problem's objective, as the evaluator does on demand (replication: in 3-D)."""
+    import gymnasium as gym
+
+    from surrogates.dataset import Featurizer, load_dataset
+
+    store = tmp_path / "r.sqlite"
+    env = gym.make("Surrealist-Replicate-v0", budget=2, runs=3, executor="inline", store=store).unwrapped
+    _, info = env.reset(seed=0)
+    expected = [env.evaluator.evaluate(info["test"], runs=k).fitness for k in (1, 2)]
+    featurizer = Featurizer.for_env(env)
+    env.close()
+    data = load_dataset([store], featurizer)
+    assert data.first_runs.shape == (1, 2) and np.allclose(data.first_runs[0], expected)
+    saved = Featurizer.from_dict(featurizer.to_dict())
+    assert saved.reference.shape[1] == 3  # saved to 0.1 mm: the features agree to that
+    assert np.allclose(saved.transform([info["test"]]), featurizer.transform([info["test"]]), atol=1e-3)
