@@ -218,11 +218,12 @@ def _write_reports(out: Path, settings: dict, records, summary, pairwise, agents
         writer.writeheader()
         writer.writerows(pairwise)
     with open(out / "searches.csv", "w", newline="") as f:
-        keys = sorted({k for r in records for k in r.metrics.figures()})
+        figures = [r.metrics.figures() for r in records]
+        keys = sorted({k for row in figures for k in row})
         writer = csv.writer(f)
         writer.writerow(["agent", "repetition"] + keys)
-        for r in records:
-            writer.writerow([r.agent, r.repetition] + [r.metrics.figures().get(k, "") for k in keys])
+        for r, row in zip(records, figures):
+            writer.writerow([r.agent, r.repetition] + [row.get(k, "") for k in keys])
     (out / "compare.md").write_text(_markdown(settings, summary, pairwise, present))
     _plot_convergence(out / "convergence.png", records, agents, settings["env_id"])
 
