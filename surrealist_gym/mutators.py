@@ -99,6 +99,68 @@ class Mutator:
             raise InvalidTestCase(f"mutator {self.name} by {value:+g}: {err}") from err
 
 
+@dataclass(frozen=True, slots=True)
+class UavMutator:
+    """An additive mutator of one UAV setting (paper section 3: the UAV's configuration is a test property too).
+
+    It sets the test's param ``uav.<setting>`` (``takeoff_delay_s``, ``planner.<field>``;
+    :data:`~surrealist_gym.sim.profiles.SETTINGS`) to its current value plus ``value``; the current value is the
+    test's own, else ``base`` (the profile's). Same interface as :class:`Mutator`.
+    """
+
+    setting: str
+    base: float
+    default_step: float
+    min_step: float
+    low: float
+    high: float
+    lowest: float
+    highest: float
+    default_value: float = 0.0
+
+    @property
+    def name(self) -> str:
+        return "uav." + self.setting
+
+    def current(self, test: TestCase) -> float:
+        return float(test.params.get(self.name, self.base))
+
+    def valid_range(self, test: TestCase) -> tuple[float, float]:
+        """The part of ``[low, high]`` that keeps the setting within ``[lowest, highest]`` on ``test``."""
+        now = self.current(test)
+        low, high = max(self.low, self.lowest - now), min(self.high, self.highest - now)
+        return (low, high) if low <= high else (self.low, self.high)
+
+    def apply(self, test: TestCase, value: float) -> TestCase:
+        """A new test case with the setting changed by ``value``; InvalidTestCase outside its range."""
+        if value == self.default_value:
+            return test
+        new = round(self.current(test) + value, 9)
+        if not self.lowest <= new <= self.highest:
+            raise InvalidTestCase(f"mutator {self.name} by {value:+g}: {new:g} is outside "
+                                  f"[{self.lowest:g}, {self.highest:g}]")
+        return replace(test, params={**test.params, self.name: new})
+
+
+def uav_mutators(profile, settings=None) -> tuple[UavMutator, ...]:
+    """Mutators of the profile's UAV settings (all of its avoidance model's, or those named), each ranging over
+    the setting's whole span."""
+    from .sim.profiles import SETTINGS
+
+    known = {s.name: s for s in SETTINGS[profile.avoidance_model]}
+    names = list(known) if settings is None else list(settings)
+    for name in names:
+        if name not in known:
+            raise InvalidTestCase(f"UAV setting {name!r}: not one of {sorted(known)} (avoidance model "
+                                  f"{profile.avoidance_model.value})")
+    out = []
+    for name in names:
+        s = known[name]
+        span = s.high - s.low
+        out.append(UavMutator(name, s.value(profile), s.step, s.min_step, -span, span, s.low, s.high))
+    return tuple(out)
+
+
 def default_mutators(test: TestCase, kinds=AUTHORS_ORDER, obstacles=None) -> tuple[Mutator, ...]:
     """Mutators of the given kinds for each obstacle (all by default), obstacle by obstacle, kinds in order."""
     indices = range(len(test.obstacles)) if obstacles is None else obstacles

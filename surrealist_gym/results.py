@@ -18,6 +18,7 @@ import numpy as np
 from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
 from .mission import write_plan
 from .store import EvaluationStore
+from .sim.profiles import save_profile, test_uav_settings
 from .testcase import save_test
 from .trajectory import Profile, profile
 
@@ -55,6 +56,13 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         "best_unsafe_rate": best_outcomes.unsafe_rate, "best_crash_rate": best_outcomes.crash_rate,
         "best_stuck_rate": best_outcomes.blocked_rate,
     }
+    settings = test_uav_settings(best_eval.test)
+    summary["best_uav_settings"] = settings
+    if settings and getattr(env, "uav_profile", None) is not None:  # the UAV configuration the search found
+        save_profile(env.uav_profile.with_settings(settings, name=f"{env.uav_profile.name}-found",
+                                                   description=f"{env.uav_profile.name} with the UAV settings of "
+                                                               f"the best test ({out.name})"),
+                     out / "best-uav.yaml")
     reference = getattr(env, "reference", None)
     goal = search_goal(seed_eval, reference)
     summary["goal"] = None if goal is None else [round(float(v), 3) for v in goal]

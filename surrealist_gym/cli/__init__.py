@@ -16,6 +16,8 @@ from ..errors import SurrealistError
 COMMANDS = {
     "inspect": ("surrealist_gym.cli.inspect", "describe a flight log (.ulg, .tlog, .bin) and plot it"),
     "simulate": ("surrealist_gym.cli.simulate", "fly a test case in the simulator and report each run"),
+    "calibrate": ("surrealist_gym.cli.calibrate", "fit a UAV profile to real flight logs (what PX4 parameters do "
+                                                  "not fix)"),
     "replicate": ("surrealist_gym.cli.replicate", "find obstacles that make the simulated flight match a real log"),
     "generate": ("surrealist_gym.cli.generate", "find nearby tests that make the UAV unsafe or crash"),
     "compare": ("surrealist_gym.cli.compare", "run several search agents on the same problems and compare them"),

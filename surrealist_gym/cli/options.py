@@ -53,8 +53,10 @@ class SearchOptions:
                                 "module:Class")
     random_seed: int = _opt(0, "base seed of the simulation noise", type=int)
     uav: str | None = _opt(None, "UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
-                                 "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a seed test "
-                                 "with a reference log, as the paper's, else px4-v1.12-sitl-iris)",
+                                 "px4-vision-case0, or a profile YAML (surrealist calibrate); default: replicate: "
+                                 "the log's vehicle (a PX4 Vision: px4-vision-case0, else px4-v1.12-sitl-iris, "
+                                 "on the ground as long as the log); generate: px4-vision-case0 for a seed test "
+                                 "with a reference log, as the paper's, else px4-v1.12-sitl-iris",
                            metavar="NAME_OR_YAML")
     common_noise: bool = _opt(False, "common random numbers: run i of every test flies with the same noise, so "
                                      "tests differ only by what they change (default: each test draws its own)",
@@ -158,6 +160,9 @@ class ReplicateOptions(SearchOptions):
                           choices=["dba", "soft_dtw"])
     allow_partial: bool = _opt(False, "replicate a damaged (truncated) log as far as it is readable",
                                action="store_true")
+    search_uav: bool = _opt(False, "search the UAV's settings as well as the obstacles (take-off delay and the "
+                                   "planner's pace, altitude and detour settings; best-uav.yaml names what it "
+                                   "found)", action="store_true")
 
 
 @dataclass(frozen=True)

@@ -50,13 +50,16 @@ class SurrealistEnv(gym.Env):
         if executor is None and workers is not None:
             from ..executors import LocalPoolExecutor
             executor = LocalPoolExecutor(workers)
+        self.uav_profile = None  # the UavProfile flown, None for a bare SimConfig
         if uav is not None:  # a UAV profile (preset name, YAML path or UavProfile) applied to sim_config
             from ..sim.config import SimConfig
             from ..sim.profiles import load_profile
-            sim_config = load_profile(uav).sim_config(SimConfig.coerce(sim_config))
+            self.uav_profile = load_profile(uav)
+            sim_config = self.uav_profile.sim_config(SimConfig.coerce(sim_config))
         elif sim_config is None:  # neither: the seed test's default UAV
             from ..sim.profiles import default_profile
-            sim_config = default_profile(seed_test).sim_config()
+            self.uav_profile = default_profile(seed_test)
+            sim_config = self.uav_profile.sim_config()
         self.evaluator = Evaluator(self._objective(), runs=runs, seed=random_seed, sim_config=sim_config,
                                    executor=executor, store=store)
         n = len(self._mutators)

@@ -11,7 +11,9 @@ from dataclasses import replace
 
 from ..errors import LogFormatError
 from ..evaluation import ReplicationObjective
-from ..mutators import AUTHORS_ORDER, default_mutators
+from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_mutators_of
+from ..sim.config import SimConfig
+from ..sim.profiles import default_profile, load_profile
 from ..testcase import Obstacle, TestCase, load_test
 from .base import SurrealistEnv
 
@@ -21,10 +23,17 @@ class ReplicateEnv(SurrealistEnv):
 
     def __init__(self, reference_log=None, seed_test=None, runs: int = 5, budget: int = 100, mutators=None,
                  averaging: str = "dba", executor=None, store=None, random_seed: int = 0, sim_config=None,
-                 workers: int | None = None, uav=None, reference_trajectory=None, allow_partial: bool = False):
+                 workers: int | None = None, uav=None, reference_trajectory=None, allow_partial: bool = False,
+                 uav_mutators=None):
         """``reference_trajectory`` (a Trajectory) replaces the log's, e.g. a simulated flight with hidden
         obstacles that plays the real one; the seed test then must be given. A damaged log (truncated, or with
-        corrupt data skipped) is refused unless ``allow_partial``: its flight may be cut short."""
+        corrupt data skipped) is refused unless ``allow_partial``: its flight may be cut short.
+
+        ``uav``: the UAV profile; by default the log's own (:func:`~surrealist_gym.calibration.profile_for_flight`:
+        its vehicle's preset, on the ground as long as the log) unless ``sim_config`` is a full
+        :class:`~surrealist_gym.sim.config.SimConfig`. ``uav_mutators``: search the UAV's settings as well as the
+        obstacles (paper section 3): True for all of the profile's :data:`~surrealist_gym.sim.profiles.SETTINGS`,
+        or their names, or :class:`~surrealist_gym.mutators.UavMutator` values; they come after the obstacles'."""
         from .. import data_path
         from ..logs import read_flight
 
@@ -47,7 +56,16 @@ class ReplicateEnv(SurrealistEnv):
             seed_test = replace(seed_test or seed_from_flight(self.flight), reference_log=str(self.flight.path))
             self.reference = self.flight.trajectory
         self.averaging = averaging
-        mutators = mutators or default_mutators(seed_test, AUTHORS_ORDER)
+        if uav is None and self.flight is not None and not isinstance(sim_config, SimConfig):
+            from ..calibration import profile_for_flight
+            uav = profile_for_flight(self.flight)
+        mutators = tuple(mutators or default_mutators(seed_test, AUTHORS_ORDER))
+        if uav_mutators:
+            if uav_mutators is True or all(isinstance(m, str) for m in uav_mutators):
+                profile = load_profile(uav) if uav is not None else default_profile(seed_test)
+                names = None if uav_mutators is True else list(uav_mutators)
+                uav_mutators = uav_mutators_of(profile, names)
+            mutators += tuple(uav_mutators)
         super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers, uav)
 
     def _objective(self):

@@ -204,14 +204,19 @@ def _log_params(path: str) -> Mapping[str, float]:
     return FrozenDict({k: float(v) for k, v in ulog.initial_parameters.items()})
 
 
+# A test's params named ``uav.<setting>`` set the simulated UAV rather than PX4 (sim/profiles.py: UAV settings)
+UAV_SETTING_PREFIX = "uav."
+
+
 def resolve_params(test, config: SimConfig) -> dict[str, float]:
-    """The PX4 parameters of a run: defaults < airframe < reference log < test params < config overrides."""
+    """The PX4 parameters of a run: defaults < airframe < reference log < test params < config overrides (a test's
+    ``uav.*`` settings are not PX4 parameters and are left out)."""
     params: dict[str, float] = dict(PX4_DEFAULTS)
     params.update(config.airframe_params)
     ref = getattr(test, "reference_log", None)
     if config.use_reference_params and ref and str(ref).lower().endswith(".ulg"):
         params.update(_log_params(str(ref)))
-    params.update(test.params)
+    params.update((k, v) for k, v in test.params.items() if not k.startswith(UAV_SETTING_PREFIX))
     params.update(config.params)
     return params
 

@@ -29,7 +29,8 @@ from ..errors import InvalidProfile, InvalidTestCase
 from ..frozendict import FrozenDict
 from .config import AvoidanceModel, SimConfig, VehicleModel
 
-__all__ = ["PRESETS", "UavProfile", "default_profile", "load_profile", "save_profile"]
+__all__ = ["PRESETS", "SETTINGS", "Setting", "UavProfile", "default_profile", "load_profile", "save_profile",
+           "test_uav_settings", "with_uav_settings"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +113,21 @@ class UavProfile:
                                    timeout_s=self.timeout_s, profile=self.name,
                                    obstacle_collision_scale=float(self.obstacle_collision_scale))
 
+    def with_settings(self, settings: Mapping[str, float], name: str | None = None,
+                      description: str | None = None) -> "UavProfile":
+        """This profile with UAV settings (``takeoff_delay_s``, ``planner.<field>``: what a test's ``uav.*`` params
+        or a calibration set) written into it."""
+        planner, delay = dict(self.planner), self.takeoff_delay_s
+        for key, value in settings.items():
+            if key == "takeoff_delay_s":
+                delay = float(value)
+            elif key.startswith("planner."):
+                planner[key.removeprefix("planner.")] = value
+            else:
+                raise InvalidProfile(f"profile {self.name!r}: unknown UAV setting {key!r}")
+        return dataclasses.replace(self, name=name or self.name, planner=planner, takeoff_delay_s=delay,
+                                   description=self.description if description is None else description)
+
     def to_dict(self) -> dict:
         """The profile as plain YAML-friendly values."""
         return {"name": self.name, "description": self.description, "vehicle": self.vehicle.value,
@@ -119,6 +135,100 @@ class UavProfile:
                 "planner": dict(self.planner), "sensor": dict(self.sensor), "noise": dict(self.noise),
                 "takeoff_delay_s": self.takeoff_delay_s, "timeout_s": self.timeout_s,
                 "obstacle_collision_scale": self.obstacle_collision_scale}
+
+
+@dataclass(frozen=True, slots=True)
+class Setting:
+    """A quantity of the simulated UAV that its log's PX4 parameters do not fix, and that calibration fits and
+    ``--search-uav`` searches: ``takeoff_delay_s`` or ``planner.<field>`` of the profile's planner.
+
+    Attributes:
+        name: the setting (a test sets it as the param ``uav.<name>``).
+        low, high: the range a search and a fit keep it in.
+        step: the first step of the greedy's line search; ``min_step`` the smallest worth trying.
+        shapes: what it shapes, for the docs and the printout.
+    """
+
+    name: str
+    low: float
+    high: float
+    step: float
+    min_step: float
+    shapes: str
+
+    def value(self, profile: "UavProfile", test=None) -> float:
+        """The setting's value for ``test`` (its ``uav.<name>`` param) on ``profile``, else the profile's."""
+        from .config import UAV_SETTING_PREFIX
+
+        if test is not None and UAV_SETTING_PREFIX + self.name in test.params:
+            return float(test.params[UAV_SETTING_PREFIX + self.name])
+        if self.name == "takeoff_delay_s":
+            return float(profile.takeoff_delay_s)
+        return float(getattr(profile.planner_config(), self.name.removeprefix("planner.")))
+
+
+# What a replication may fit and search, per avoidance model (ranges: the planner's own bounds, kept near the
+# flights seen; docs/calibration.md says which phase each one shapes)
+SETTINGS: Mapping[AvoidanceModel, tuple[Setting, ...]] = FrozenDict({
+    AvoidanceModel.PX4: (
+        Setting("takeoff_delay_s", 0.0, 30.0, 2.0, 0.1, "time from arming to lift-off"),
+        Setting("planner.heading_offset_deg", -30.0, 0.0, 8.0, 0.5, "cruise pace (through the field-of-view factor)"),
+        Setting("planner.pitch_cost_param", 0.5, 100.0, 10.0, 0.1, "altitude kept while cruising"),
+        Setting("planner.obstacle_cost_param", 2.0, 20.0, 3.0, 0.1, "width of a detour"),
+        Setting("planner.smoothing_speed_xy", 2.0, 20.0, 4.0, 0.1, "how sharply a detour turns"),
+    ),
+    AvoidanceModel.SIMPLE: (
+        Setting("takeoff_delay_s", 0.0, 30.0, 2.0, 0.1, "time from arming to lift-off"),
+        Setting("planner.avoid_speed", 0.2, 3.0, 0.4, 0.02, "speed with an obstacle near"),
+        Setting("planner.vertical_margin", 0.0, 3.0, 0.5, 0.05, "height kept above nearby obstacle tops"),
+        Setting("planner.safety_margin", 0.3, 4.0, 0.5, 0.05, "width of a detour"),
+        Setting("planner.slow_down_distance", 2.0, 15.0, 2.0, 0.1, "how early the UAV slows for an obstacle"),
+    ),
+})
+
+
+def test_uav_settings(test) -> dict[str, float]:
+    """The UAV settings a test sets: its params named ``uav.<setting>``, by setting."""
+    from .config import UAV_SETTING_PREFIX
+
+    return {k.removeprefix(UAV_SETTING_PREFIX): float(v) for k, v in test.params.items()
+            if k.startswith(UAV_SETTING_PREFIX)}
+
+
+def with_uav_settings(config: SimConfig, settings: Mapping[str, float]) -> SimConfig:
+    """``config`` flying with UAV settings (``takeoff_delay_s``, ``planner.<field>``); an unknown or invalid one
+    raises :class:`InvalidTestCase` naming the test's param."""
+    if not settings:
+        return config
+    changes: dict[str, Any] = {}
+    planner: dict[str, Any] = {}
+    for name, value in settings.items():
+        where = f"params.uav.{name}"
+        if not _number(value):
+            raise InvalidTestCase(f"{where}: expected a finite number, got {value!r}")
+        if name == "takeoff_delay_s":
+            if value < 0:
+                raise InvalidTestCase(f"{where}: expected a number >= 0, got {value!r}")
+            changes["takeoff_delay_s"] = float(value)
+        elif name.startswith("planner."):
+            planner[name.removeprefix("planner.")] = value
+        else:
+            raise InvalidTestCase(f"{where}: unknown UAV setting (expected takeoff_delay_s or planner.<field>)")
+    if planner:
+        base = config.avoidance_config
+        if base is None:
+            base = UavProfile("base", avoidance_model=config.avoidance_model).planner_config()
+        fields = {f.name: getattr(base, f.name) for f in dataclasses.fields(base)}
+        for key, value in planner.items():
+            if key not in fields or isinstance(fields[key], (bool, tuple, str)):
+                raise InvalidTestCase(f"params.uav.planner.{key}: not a numeric field of "
+                                      f"{type(base).__name__}")
+            planner[key] = int(round(value)) if isinstance(fields[key], int) else float(value)
+        try:
+            changes["avoidance_config"] = dataclasses.replace(base, **planner)
+        except (TypeError, ValueError) as err:
+            raise InvalidTestCase(f"params.uav.planner: {err}") from None
+    return dataclasses.replace(config, **changes)
 
 
 def _number(value) -> bool:

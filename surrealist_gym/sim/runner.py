@@ -142,7 +142,9 @@ def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None
 
 def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
     """Fly the runs with the given indices of a test case together (see :func:`simulate`)."""
-    cfg = config or SimConfig()
+    from .profiles import test_uav_settings, with_uav_settings
+
+    cfg = with_uav_settings(config or SimConfig(), test_uav_settings(test))  # the test's uav.* params
     indices = [int(i) for i in indices]
     mission = test.mission
     if mission is None or not any(it.has_position for it in mission.items):

@@ -1,0 +1,298 @@
+"""Identify a UAV from its flight logs: the settings its PX4 parameters do not fix, fitted phase by phase.
+
+A log fixes the PX4 parameters (cruise speed, take-off and landing speeds, ...), and the simulator reads them from it.
+What it does not fix is fitted here, each setting from the phase of the flight it shapes (:data:`FITS`):
+
+- ``takeoff_delay_s`` from the lift-off time (the first 0.5 s sample more than 0.3 m above the start);
+- the planner's pace setting from the median horizontal speed while the UAV moves (> 0.3 m/s, airborne);
+- the planner's altitude setting from the median altitude while it moves.
+
+Each fit flies the log's mission (no obstacles unless a seed test is given) on the profile, with the setting set
+through the test's ``uav.<setting>`` param, over a grid of the setting's range, interpolates the value that meets the
+real figure, and flies that value to measure the residual. Several logs of one UAV fit one value (their mean residual
+is zero). Climb, descent and touchdown are set by PX4 parameters the log holds; they are reported as checks.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .errors import DependencyNotInstalled, InvalidProfile, LogFormatError as InvalidLog, MissionError
+from .sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
+from .sim.profiles import SETTINGS, SITL_IRIS, VISION_CASE0, UavProfile
+from .testcase import TestCase
+from .trajectory import Trajectory, profile as time_profile
+
+__all__ = ["Calibration", "FITS", "Fit", "Phases", "calibrate", "phases", "profile_for_flight"]
+
+AIRBORNE_M = 0.3   # above the start: airborne [m]
+MOVING_MPS = 0.3   # horizontal speed: moving [m/s]
+LIFTOFF_LAG_S = 1.0  # measured: both vehicles' 0.5 s trajectories leave the ground ~1 s after the mission starts
+PX4_VISION_AIRFRAMES = (4016,)  # Holybro PX4 Vision DevKit
+
+
+@dataclass(frozen=True, slots=True)
+class Phases:
+    """The figures of a flight that calibration matches (from its 0.5 s trajectory, time from its first sample).
+
+    Attributes:
+        liftoff_s: first sample more than 0.3 m above the start [s].
+        touchdown_s: last such sample [s].
+        cruise_speed_mps: median horizontal speed while moving (airborne, > 0.3 m/s).
+        cruise_altitude_m: median altitude while moving.
+        climb_s: from lift-off to the first sample within 0.3 m of the altitude at which the UAV starts to move [s].
+        descent_s: from the last moving sample to touchdown [s].
+    """
+
+    liftoff_s: float
+    touchdown_s: float
+    cruise_speed_mps: float
+    cruise_altitude_m: float
+    climb_s: float
+    descent_s: float
+
+
+def phases(trajectory: Trajectory, where: str = "flight") -> Phases:
+    """The phases of a flight; a flight that never lifts off or never moves raises :class:`InvalidLog`."""
+    p = time_profile(trajectory)
+    z, v, t = p.altitude, p.horizontal_speed, p.t
+    air = np.nonzero(z > AIRBORNE_M)[0]
+    if len(air) < 4:
+        raise InvalidLog(f"{where}: the flight never rises {AIRBORNE_M} m above its start: no take-off to fit")
+    moving = np.nonzero((z > AIRBORNE_M) & (v > MOVING_MPS))[0]
+    if len(moving) < 4:
+        raise InvalidLog(f"{where}: the UAV never moves faster than {MOVING_MPS} m/s in the air: no cruise to fit")
+    first_move, last_move = moving[0], moving[-1]
+    at_height = np.nonzero(z[air[0]:] >= z[first_move] - 0.3)[0]
+    climb_end = air[0] + (at_height[0] if len(at_height) else 0)
+    return Phases(float(t[air[0]]), float(t[air[-1]]), float(np.median(v[moving])), float(np.median(z[moving])),
+                  float(t[climb_end] - t[air[0]]), float(max(t[air[-1]] - t[last_move], 0.0)))
+
+
+@dataclass(frozen=True, slots=True)
+class Fit:
+    """What one setting is fitted to: a figure of :class:`Phases`, and whether the figure grows with the setting."""
+
+    setting: str
+    figure: str
+    label: str
+
+
+# Per avoidance model: the settings fitted, in order (the take-off delay first: it shifts the whole flight)
+FITS = {
+    AvoidanceModel.PX4: (Fit("takeoff_delay_s", "liftoff_s", "lift-off [s]"),
+                         Fit("planner.heading_offset_deg", "cruise_speed_mps", "cruise speed [m/s]"),
+                         Fit("planner.pitch_cost_param", "cruise_altitude_m", "cruise altitude [m]")),
+    AvoidanceModel.SIMPLE: (Fit("takeoff_delay_s", "liftoff_s", "lift-off [s]"),
+                            Fit("planner.avoid_speed", "cruise_speed_mps", "cruise speed [m/s]"),
+                            Fit("planner.vertical_margin", "cruise_altitude_m", "cruise altitude [m]")),
+}
+CHECKS = (("climb_s", "climb [s]"), ("descent_s", "descent [s]"), ("touchdown_s", "touchdown [s]"))
+
+
+@dataclass(frozen=True, slots=True)
+class FittedSetting:
+    """One fitted setting: its value, and the real and simulated figure it was fitted to (mean over the logs)."""
+
+    setting: str
+    label: str
+    value: float
+    before: float
+    real: float
+    simulated: float
+    note: str = ""
+
+    @property
+    def residual(self) -> float:
+        return self.real - self.simulated
+
+
+@dataclass(frozen=True, slots=True)
+class Calibration:
+    """The fitted profile, each setting's fit, the checks, and the flights (real, before and after) per log."""
+
+    profile: UavProfile
+    fitted: tuple[FittedSetting, ...]
+    checks: tuple[tuple[str, float, float], ...]          # (label, real, simulated), means over the logs
+    flights: tuple[tuple[str, Trajectory, Trajectory, Trajectory, tuple], ...]  # (log, real, before, after, goal)
+    simulations: int
+
+
+def profile_for_flight(flight) -> UavProfile:
+    """The preset of the log's vehicle (a PX4 Vision airframe: the case0 PX4 Vision; else PX4 SITL Iris with
+    PX4-Avoidance), on the ground as long as the log is before it lifts off; no simulation."""
+    if not str(flight.vehicle_type).startswith("multirotor"):
+        raise InvalidProfile(f"{flight.path}: vehicle {flight.vehicle_type!r}: the simulated UAVs are multirotors")
+    airframe = int(flight.params.get("SYS_AUTOSTART", 0) or 0)
+    base = VISION_CASE0 if airframe in PX4_VISION_AIRFRAMES else SITL_IRIS
+    try:
+        liftoff = phases(flight.trajectory, str(flight.path)).liftoff_s
+    except InvalidLog:
+        return base
+    delay = round(max(liftoff - LIFTOFF_LAG_S, 0.0), 1)
+    if abs(delay - base.takeoff_delay_s) < 0.05:
+        return base
+    return replace(base, name=f"{base.name}@{Path(str(flight.path)).stem}",
+                   description=f"{base.description}; take-off delay from {Path(str(flight.path)).name}",
+                   takeoff_delay_s=delay)
+
+
+def _mission_test(flight, seed_test: TestCase | None) -> TestCase:
+    if flight.mission is None or sum(it.has_position for it in flight.mission.items) < 2:
+        raise MissionError(f"{flight.path}: the log holds no mission with two positions: nothing to fly to "
+                           f"calibrate")
+    if seed_test is not None:
+        return replace(seed_test, reference_log=str(flight.path))
+    return TestCase(mission=flight.mission, params=dict(flight.params), reference_log=str(flight.path))
+
+
+def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: TestCase | None = None, runs: int = 2,
+              executor=None, grid: int = 5, passes: int = 2, seed: int = 0,
+              progress: Callable[[str], None] | None = None) -> Calibration:
+    """Fit the settings of ``base`` (default: :func:`profile_for_flight` of the first log) that the logs' PX4
+    parameters do not fix, to the logs' phases.
+
+    Args:
+        flights: :class:`~surrealist_gym.logs.FlightLog` values of one UAV.
+        seed_test: the obstacles to fly the missions with (default none).
+        runs: runs per simulated figure (common noise, seeds 0..runs-1).
+        executor: where the runs fly (an executor of :mod:`surrealist_gym.executors`; default this process).
+        grid: values of each setting's range flown before interpolating.
+        passes: rounds over the settings (the pace moves the altitude a little, and back).
+    """
+    from .executors import InlineExecutor
+
+    if not flights:
+        raise InvalidLog("calibrate: no log given")
+    for flight in flights:
+        if not str(flight.vehicle_type).startswith("multirotor"):
+            raise InvalidLog(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be calibrated")
+    base = base or profile_for_flight(flights[0])
+    executor = executor or InlineExecutor()
+    real = [phases(f.trajectory, str(f.path)) for f in flights]
+    tests = [_mission_test(f, seed_test) for f in flights]
+    goals = [tuple(f.mission.waypoints[-1]) for f in flights]
+    config = base.sim_config(SimConfig(common_noise=True))
+    settings = {s.name: s for s in SETTINGS[base.avoidance_model]}
+    values = {fit.setting: settings[fit.setting].value(base) for fit in FITS[base.avoidance_model]}
+    count = [0]
+    cache: dict[tuple, tuple] = {}
+
+    def fly(vals: dict) -> tuple[list[Phases], list[Trajectory]]:
+        key = tuple(sorted((k, round(v, 6)) for k, v in vals.items()))
+        if key not in cache:
+            got, trajs = [], []
+            for flight, test in zip(flights, tests):
+                t = replace(test, params={**test.params, **{UAV_SETTING_PREFIX + k: v for k, v in vals.items()}})
+                results = executor.run(t, range(runs), seed, config)
+                count[0] += len(results)
+                flown = [r for r in results if len(r.trajectory) >= 4]
+                where = f"{flight.path} on profile {base.name!r} with {dict(vals)}"
+                figures = [phases(r.trajectory, where) for r in flown]
+                if not figures:
+                    raise InvalidLog(f"{where}: no simulated run flew")
+                got.append(Phases(*np.mean([[getattr(f, n) for n in Phases.__slots__] for f in figures], axis=0)))
+                trajs.append(flown[0].trajectory)
+            cache[key] = (got, trajs)
+        return cache[key]
+
+    def mean(figs: list[Phases], name: str) -> float:
+        return float(np.mean([getattr(f, name) for f in figs]))
+
+    before_figs, before_trajs = fly(values)
+    notes: dict[str, str] = {}
+    for _ in range(passes):
+        for fit in FITS[base.avoidance_model]:
+            s = settings[fit.setting]
+            target = mean(real, fit.figure)
+            if fit.setting == "takeoff_delay_s":  # a shift: lift-off moves one for one with the delay
+                for _ in range(2):
+                    got = mean(fly(values)[0], fit.figure)
+                    values[s.name] = float(np.clip(round(values[s.name] + target - got, 2), s.low, s.high))
+                continue
+            wide = s.low > 0 and s.high / s.low >= 10  # a cost weight: its effect is in its order of magnitude
+            xs = np.geomspace(s.low, s.high, grid) if wide else np.linspace(s.low, s.high, grid)
+            ys = np.array([mean(fly({**values, s.name: float(x)})[0], fit.figure) for x in xs])
+            if progress:
+                progress(f"{s.name}: {', '.join(f'{x:g}->{y:.2f}' for x, y in zip(xs, ys))}")
+            value = _solve(xs, ys, target)
+            if np.ptp(ys) < 0.02 * max(abs(target), 1e-6):
+                value, notes[s.name] = values[s.name], "no effect on these flights: kept"
+            elif value is None:
+                value = float(xs[int(np.argmin(np.abs(ys - target)))])
+                notes[s.name] = "the real figure is out of the setting's reach: the nearest end"
+            else:
+                notes.pop(s.name, None)
+            values[s.name] = round(float(value), 3)
+    after_figs, after_trajs = fly(values)
+    fitted = tuple(FittedSetting(f.setting, f.label, values[f.setting], settings[f.setting].value(base),
+                                 mean(real, f.figure), mean(after_figs, f.figure), notes.get(f.setting, ""))
+                   for f in FITS[base.avoidance_model])
+    checks = tuple((label, mean(real, name), mean(after_figs, name)) for name, label in CHECKS)
+    names = ", ".join(Path(str(f.path)).name for f in flights)
+    fitted_profile = base.with_settings(values, name=f"calibrated-{Path(str(flights[0].path)).stem}",
+                                        description=f"{base.name} calibrated on {names} (surrealist calibrate)")
+    flown = tuple((str(f.path), f.trajectory, b, a, g)
+                  for f, b, a, g in zip(flights, before_trajs, after_trajs, goals))
+    return Calibration(fitted_profile, fitted, checks, flown, count[0])
+
+
+def _solve(xs: np.ndarray, ys: np.ndarray, target: float) -> float | None:
+    """The x where the piecewise-linear ys(xs) meets target, nearest the best grid point; None if it never does."""
+    best = None
+    for i in range(len(xs) - 1):
+        y0, y1 = ys[i] - target, ys[i + 1] - target
+        if y0 == 0:
+            x = xs[i]
+        elif y0 * y1 < 0 or y1 == 0:
+            x = xs[i] + (xs[i + 1] - xs[i]) * y0 / (y0 - y1)
+        else:
+            continue
+        score = min(abs(ys[i] - target), abs(ys[i + 1] - target))
+        if best is None or score < best[0]:
+            best = (score, float(x))
+    return None if best is None else best[1]
+
+
+def format_calibration(cal: Calibration) -> str:
+    """The fitted values with their residuals, and the checks, as the command prints them."""
+    lines = [f"{'setting':28s} {'value':>8s} {'(was)':>8s}  {'fitted to':20s} {'real':>7s} {'sim':>7s} {'resid':>7s}"]
+    for f in cal.fitted:
+        lines.append(f"{f.setting:28s} {f.value:8.2f} {f.before:8.2f}  {f.label:20s} {f.real:7.2f} {f.simulated:7.2f} "
+                     f"{f.residual:+7.2f}" + (f"  ({f.note})" if f.note else ""))
+    lines.append("checks (set by the log's PX4 parameters):")
+    for label, r, s in cal.checks:
+        lines.append(f"  {label:46s} {r:7.2f} {s:7.2f} {r - s:+7.2f}")
+    return "\n".join(lines)
+
+
+def plot_calibration(cal: Calibration, path) -> None:
+    """Altitude, horizontal speed and distance to the goal over time, per log: real, the base profile, calibrated."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError as err:
+        raise DependencyNotInstalled("plots need matplotlib: pip install matplotlib") from err
+    n = len(cal.flights)
+    fig = Figure(figsize=(6 * n, 8))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(3, n, sharex="col", squeeze=False)
+    for j, (log, real, before, after, goal) in enumerate(cal.flights):
+        for label, traj, style in (("real", real, dict(color="black", lw=2.5)),
+                                   ("before", before, dict(color="tab:orange", lw=1.2)),
+                                   ("calibrated", after, dict(color="tab:blue", lw=1.5))):
+            p = time_profile(traj, goal)
+            for ax, y in zip(axes[:, j], (p.altitude, p.horizontal_speed, p.distance_to_goal)):
+                ax.plot(p.t, y, label=label, **style)
+        axes[0, j].set_title(log.rsplit("/", 1)[-1])
+        axes[2, j].set_xlabel("time [s]")
+        for ax, name in zip(axes[:, j], ("altitude [m]", "horizontal speed [m/s]", "distance to goal [m]")):
+            ax.set_ylabel(name)
+            ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(f"surrealist calibrate: {cal.profile.name}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)

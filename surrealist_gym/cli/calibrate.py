@@ -1,0 +1,66 @@
+"""``surrealist calibrate LOG... --out uav.yaml``: fit a UAV profile to real flights (docs/calibration.md).
+
+Example::
+
+    surrealist calibrate m0.ulg --out m0-uav.yaml      # prints each fitted value and residual; m0-uav.png
+    surrealist replicate m0.ulg --uav m0-uav.yaml
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ..errors import SurrealistError
+from .options import check_at_least
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``surrealist calibrate``."""
+    parser.add_argument("logs", metavar="LOG", nargs="+", help="flight logs of one UAV (.ulg, .tlog, .bin)")
+    parser.add_argument("--out", metavar="YAML", required=True, help="the fitted UAV profile to write")
+    parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
+                        help="profile to start from (default: the first log's vehicle: px4-vision-case0 for a "
+                             "PX4 Vision, else px4-v1.12-sitl-iris)")
+    parser.add_argument("--seed", metavar="TEST.yaml", default=None,
+                        help="fly the missions with this test's obstacles (default: none)")
+    parser.add_argument("--runs", type=int, default=2, help="runs per simulated figure (default 2)")
+    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    parser.add_argument("--plot", metavar="PNG", default=None,
+                        help="real vs simulated phases over time (default: the profile's path with .png)")
+
+
+def run(args) -> int:
+    from ..calibration import calibrate, format_calibration, plot_calibration
+    from ..executors import LocalPoolExecutor
+    from ..logs import read_flight
+    from ..sim.profiles import load_profile, save_profile
+    from ..testcase import load_test
+
+    check_at_least(args, runs=1, workers=1)
+    out = Path(args.out)
+    if out.suffix.lower() not in (".yaml", ".yml"):
+        raise SurrealistError(f"--out {out}: expected a .yaml file for the profile")
+    flights = []
+    for log in args.logs:
+        flight = read_flight(log)
+        if flight.damage:
+            raise SurrealistError(f"{flight.path}: {flight.damage}; a flight cut short cannot be calibrated on")
+        flights.append(flight)
+    base = load_profile(args.uav) if args.uav else None
+    seed = load_test(args.seed) if args.seed else None
+    start = time.perf_counter()
+    executor = LocalPoolExecutor(args.workers)
+    try:
+        cal = calibrate(flights, base, seed, runs=args.runs, executor=executor,
+                        progress=lambda line: print(f"  {line}", flush=True))
+    finally:
+        executor.close()
+    print(format_calibration(cal))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    save_profile(cal.profile, out)
+    plot = Path(args.plot) if args.plot else out.with_suffix(".png")
+    plot_calibration(cal, plot)
+    print(f"profile {cal.profile.name} -> {out} ({cal.simulations} simulations, "
+          f"{time.perf_counter() - start:.1f} s); phases plotted in {plot}")
+    return 0
