@@ -38,24 +38,29 @@ PAPER = {  # the paper's figures, by SearchMetrics name (eval_s: seconds per eva
 
 
 def paper_env(problem: str, rep: int, store=None, common_noise: bool = False, workers: int | None = None,
-              executor=None):
+              executor=None, uav=None, search_uav: bool = False):
     """The env of a paper problem (case0 seeds: budget 100, 5 runs; RQ2: budget 50, 10 runs), noise of repetition
-    ``rep``."""
+    ``rep``; RQ1 flies ``uav`` (a profile: ``surrealist calibrate``) when given, and searches its settings with
+    ``search_uav``."""
     options = dict(store=store, random_seed=rep, workers=workers, executor=executor,
                    sim_config=SimConfig(common_noise=common_noise))
     if problem == "rq2":
         return GenerateEnv(budget=50, runs=10, **options)
-    return ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, **options)
+    if uav is not None:
+        options.update(uav=uav, sim_config={"common_noise": common_noise})
+    return ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, uav_mutators=search_uav,
+                        **options)
 
 
 def paper_agent(problem: str) -> AdaptiveGreedy:
     return AdaptiveGreedy("paper" if problem == "rq2" else "authors")
 
 
-def run_one(problem: str, rep: int, out: Path, workers: int, common_noise: bool = False) -> SearchMetrics:
+def run_one(problem: str, rep: int, out: Path, workers: int, common_noise: bool = False, uav=None,
+            search_uav: bool = False) -> SearchMetrics:
     """One repetition, cached in OUT/<problem>-rep<N>.json (its evaluations in OUT/<problem>-rep<N>.sqlite)."""
     def make_env(store):
-        return paper_env(problem, rep, store, common_noise, workers)
+        return paper_env(problem, rep, store, common_noise, workers, uav=uav, search_uav=search_uav)
 
     return run_repetition(out / f"{problem}-rep{rep}", make_env, lambda: paper_agent(problem), rep).metrics
 
@@ -128,6 +133,9 @@ def main() -> None:
     parser.add_argument("--only", choices=["rq1-seed1", "rq1-seed2", "rq2"], action="append")
     parser.add_argument("--common-noise", action="store_true",
                         help="common random numbers: run i of every test flies with the same noise")
+    parser.add_argument("--uav", default=None, help="RQ1: fly this UAV profile (e.g. surrealist calibrate case0.ulg "
+                                                    "--seed rq1-seed1.yaml --out case0-uav.yaml)")
+    parser.add_argument("--search-uav", action="store_true", help="RQ1: search the UAV's settings too")
     args = parser.parse_args()
     warnings.simplefilter("ignore", UserWarning)
     out = Path(args.out or ("results/paper-crn" if args.common_noise else "results/paper"))
@@ -135,7 +143,7 @@ def main() -> None:
     for problem in args.only or ["rq1-seed1", "rq1-seed2", "rq2"]:
         rows = []
         for rep in range(args.repetitions):
-            rows.append(run_one(problem, rep, out, args.workers, args.common_noise))
+            rows.append(run_one(problem, rep, out, args.workers, args.common_noise, args.uav, args.search_uav))
             print(f"{problem} rep {rep}: " + ", ".join(f"{k}={v:.3g}" for k, v in rows[-1].figures().items()),
                   flush=True)
         print()

@@ -42,6 +42,8 @@ class SearchMetrics:
     best_min_distance: float | None = None  # [m]
     crash_rate: float | None = None
     unsafe_rate: float | None = None
+    real_duration_s: float | None = None  # replication: the real flight's 0.5 s trajectory [s]
+    best_duration_s: float | None = None  # replication: the best's averaged trajectory [s]
 
     @property
     def dtw_reduction(self) -> float | None:
@@ -87,6 +89,9 @@ def search_metrics(env, result, trace: Sequence[Point] = (), wall_seconds: float
     if "dtw" in best.terms:
         extra = {f"{which}_{key}": float(evaluation.terms[key]) for key in ("dtw", "frechet")
                  for which, evaluation in (("seed", seed), ("best", best))}
+        reference = getattr(env, "reference", None)
+        if reference is not None and best.trajectory is not None:
+            extra.update(real_duration_s=float(reference.duration), best_duration_s=0.5 * (len(best.trajectory) - 1))
     if "min_dist" in best.terms or "sum_dist" in best.terms:
         measure = getattr(env, "distance_measure", Measure.PAPER)
         best_o, seed_o = outcomes(best.runs, measure), outcomes(seed.runs, measure)

@@ -154,8 +154,10 @@ class ReplicateOptions(SearchOptions):
 
     log: str | None = _opt(None, "real flight log (.ulg); default: the bundled case0.ulg of the paper",
                            positional=True)
-    seed: str | None = _opt(None, "seed test case (default: the paper's seed 1 for case0, else a 3x3x3 m box near "
-                                  "the middle of the straight path, turned along it)", metavar="TEST.yaml")
+    seed: str | None = _opt(None, "seed test case, or: paper (default for a log other than case0: a 3x3x3 m box "
+                                  "in the middle of the mission line, as the paper), detours (a box taller than "
+                                  "the flight where the real flight leaves its mission line, one per detour); "
+                                  "default for case0: the paper's seed 1", metavar="TEST.yaml|detours|paper")
     averaging: str = _opt("dba", "how the runs of a test are averaged before the DTW (default dba)",
                           choices=["dba", "soft_dtw"])
     allow_partial: bool = _opt(False, "replicate a damaged (truncated) log as far as it is readable",
@@ -163,6 +165,13 @@ class ReplicateOptions(SearchOptions):
     search_uav: bool = _opt(False, "search the UAV's settings as well as the obstacles (take-off delay and the "
                                    "planner's pace, altitude and detour settings; best-uav.yaml names what it "
                                    "found)", action="store_true")
+
+    def check(self, where=lambda name: "--" + name.replace("_", "-")) -> "ReplicateOptions":
+        super().check(where)
+        if self.search_uav and self.prescreened:
+            raise SurrealistError(f"{where('search_uav')}: not with pre-screening (--surrogate, --first-runs, ...): "
+                                  f"the surrogate's features describe obstacles, not the UAV's settings")
+        return self
 
 
 @dataclass(frozen=True)

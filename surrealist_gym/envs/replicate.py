@@ -9,7 +9,9 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from ..errors import LogFormatError
+import numpy as np
+
+from ..errors import InvalidTestCase, LogFormatError
 from ..evaluation import ReplicationObjective
 from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_mutators_of
 from ..sim.config import SimConfig
@@ -37,7 +39,10 @@ class ReplicateEnv(SurrealistEnv):
         from .. import data_path
         from ..logs import read_flight
 
-        if seed_test is not None and not isinstance(seed_test, TestCase):
+        seed_kind = "paper"
+        if isinstance(seed_test, str) and seed_test in SEEDS:
+            seed_kind, seed_test = seed_test, None
+        elif seed_test is not None and not isinstance(seed_test, TestCase):
             seed_test = load_test(seed_test)
         self.flight = None
         if reference_trajectory is not None:
@@ -53,7 +58,7 @@ class ReplicateEnv(SurrealistEnv):
             if self.flight.damage and not allow_partial:
                 raise LogFormatError(f"{self.flight.path}: {self.flight.damage}; replicating it would replicate a "
                                      f"flight cut short (allow it with --allow-partial)")
-            seed_test = replace(seed_test or seed_from_flight(self.flight), reference_log=str(self.flight.path))
+            seed_test = replace(seed_test or seed_for(self.flight, seed_kind), reference_log=str(self.flight.path))
             self.reference = self.flight.trajectory
         self.averaging = averaging
         if uav is None and self.flight is not None and not isinstance(sim_config, SimConfig):
@@ -72,14 +77,83 @@ class ReplicateEnv(SurrealistEnv):
         return ReplicationObjective(self.reference, self.averaging)
 
 
+SEEDS = ("paper", "detours")  # the seeds a log without a seed test can start from (seed_test="detours" etc.)
+CLEARANCE_M = 2.0   # the gap a detour keeps to what it flies around (about PX4-Avoidance's, as case0 and m0 fly)
+FAR_SIDE_M = 8.0    # how much further a seed box reaches on the side the flight did not take: that side is long
+DETOUR_PEAK_M = 2.0  # a deviation from the mission line smaller than this is not taken for a detour
+
+
+def seed_for(flight, kind: str = "paper") -> TestCase:
+    """The seed test of a log without one: ``paper`` (:func:`seed_from_flight`, default) or ``detours``
+    (:func:`seed_from_detours`)."""
+    if kind == "paper":
+        return seed_from_flight(flight)
+    if kind == "detours":
+        return seed_from_detours(flight)
+    raise InvalidTestCase(f"seed {kind!r}: expected a test YAML or one of {SEEDS}")
+
+
 def seed_from_flight(flight, size: float = 3.0) -> TestCase:
     """The paper's seed for a log without one: a size^3 box near the middle of the straight path, turned along it."""
-    if flight.mission is None or len(flight.mission.waypoints) < 2:
-        from ..errors import InvalidTestCase
-        raise InvalidTestCase(f"{flight.path}: the log holds no mission with two positions to place a seed obstacle "
-                              f"on; give a seed test (--seed TEST.yaml)")
-    (x0, y0, _), (x1, y1, _) = flight.mission.waypoints[0], flight.mission.waypoints[-1]
+    x0, y0, x1, y1 = _mission_ends(flight)
     yaw = math.degrees(math.atan2(y1 - y0, x1 - x0))
     box = Obstacle(size, size, size, (x0 + x1) / 2, (y0 + y1) / 2, 0.0, yaw)
     return TestCase(mission=flight.mission, obstacles=(box,), params=dict(flight.params),
                     reference_log=str(flight.path))
+
+
+def seed_from_detours(flight, max_obstacles: int = 3) -> TestCase:
+    """A seed whose boxes stand where the real flight leaves its mission line (the straight line from the first to
+    the last position of the mission), one per detour (up to ``max_obstacles``, largest first).
+
+    A detour is a peak of the flight's distance from the line, at least :data:`DETOUR_PEAK_M` high and standing
+    1.5 m above what is around it (``scipy.signal.find_peaks``). Its box is as long, along the line, as the part of
+    the detour above half its prominence; its near edge leaves :data:`CLEARANCE_M` to the detour's widest point;
+    it reaches :data:`FAR_SIDE_M` further on the other side of the line than on the detour's side, so that going
+    round the detour's side is the short way; it is 2 m taller than the flight, so it is flown around, not over.
+    The paper's box (:func:`seed_from_flight`) when the flight keeps to its line.
+    """
+    from scipy.signal import find_peaks, peak_widths
+
+    x0, y0, x1, y1 = _mission_ends(flight)
+    xyz = np.asarray(flight.trajectory.xyz)
+    start, end = np.array([x0, y0]), np.array([x1, y1])
+    unit = (end - start) / max(float(np.hypot(*(end - start))), 1e-9)
+    rel = xyz[:, :2] - start
+    along = rel @ unit
+    across = rel @ np.array([-unit[1], unit[0]])  # left of the line positive
+    boxes = []
+    for side in (1.0, -1.0):
+        signed = side * across
+        peaks, props = find_peaks(signed, height=DETOUR_PEAK_M, prominence=1.5)
+        if len(peaks) == 0:
+            continue
+        _, _, left, right = peak_widths(signed, peaks, rel_height=0.5)
+        for peak, lo, hi in zip(peaks, left, right):
+            span = np.interp([lo, hi], np.arange(len(along)), along)
+            boxes.append((float(signed[peak]), side, float(along[peak]), float(abs(span[1] - span[0]))))
+    height = round(float(xyz[:, 2].max()) + 2.0, 2)
+    yaw = math.degrees(math.atan2(unit[1], unit[0]))
+    obstacles = []
+    for width, side, centre, length in sorted(boxes, reverse=True)[:max_obstacles]:
+        near = max(width - CLEARANCE_M, 0.5)            # from the line to the box's edge on the detour's side
+        across_size = 2 * near + FAR_SIDE_M
+        offset = side * (near - across_size / 2)
+        point = start + unit * centre + offset * np.array([-unit[1], unit[0]])
+        obstacles.append(Obstacle(round(min(max(length, 2.0), 20.0), 2), round(across_size, 2), height,
+                                  round(float(point[0]), 2), round(float(point[1]), 2), 0.0, round(yaw, 1)))
+    paper = seed_from_flight(flight)
+    for n in range(len(obstacles), 0, -1):  # detours too close to hold a box each: the largest ones
+        try:
+            return replace(paper, obstacles=tuple(obstacles[:n]))
+        except InvalidTestCase:
+            continue
+    return paper
+
+
+def _mission_ends(flight) -> tuple[float, float, float, float]:
+    if flight.mission is None or len(flight.mission.waypoints) < 2:
+        raise InvalidTestCase(f"{flight.path}: the log holds no mission with two positions to place a seed obstacle "
+                              f"on; give a seed test (--seed TEST.yaml)")
+    (x0, y0, _), (x1, y1, _) = flight.mission.waypoints[0], flight.mission.waypoints[-1]
+    return x0, y0, x1, y1

@@ -101,6 +101,8 @@ class SimConfig:
         params: PX4 parameter overrides (highest priority).
         use_reference_params: read the parameters of the test's reference log, below the test's own.
         takeoff_delay_s: time on the ground between arming (start of the log) and the mission start [s].
+        takeoff_hold_s: time at the take-off altitude, once the take-off is accepted, before the next item starts
+            [s] (0 in the code as read; a calibrated UAV may measure one: docs/calibration.md).
         timeout_s: simulated-time limit [s]; None = 90 s + 4 s per metre of the mission's path.
         stuck_window_s / stuck_distance_m: early stopping, off by default (None): the run ends as STUCK when
             its distance to the current goal has not shrunk by stuck_distance_m [m] during the last
@@ -132,6 +134,7 @@ class SimConfig:
     params: Mapping[str, float] = field(default_factory=dict)
     use_reference_params: bool = True
     takeoff_delay_s: float = 4.0
+    takeoff_hold_s: float = 0.0
     timeout_s: float | None = None
     stuck_window_s: float | None = None
     stuck_distance_m: float = 0.5

@@ -50,12 +50,14 @@ class Navigator:
         mission: the mission (items in the local frame, metres).
         params: PX4 parameters (resolved).
         start_time: mission start after arming [s].
+        takeoff_hold_s: time at the take-off altitude before the next item [s] (SimConfig.takeoff_hold_s).
     """
 
-    def __init__(self, mission: Mission, params: dict, start_time: float):
+    def __init__(self, mission: Mission, params: dict, start_time: float, takeoff_hold_s: float = 0.0):
         self.items = [it for it in mission.items]
         self.p = params
         self.start_time = start_time
+        self.takeoff_hold_s = float(takeoff_hold_s)
         self.cruise = params["MPC_XY_CRUISE"]
         self.phase = Phase.IDLE
         self.index = -1
@@ -167,6 +169,9 @@ class Navigator:
                 self.prev = (pos[0], pos[1], self.target[2])
                 if ph == Phase.CLIMB:
                     self._go(t, Phase.CRUISE, (self.target[3], self.target[4], self.target[2]), pos)
+                elif self.takeoff_hold_s > 0:
+                    self._go(t, Phase.HOLD, self.target, pos)
+                    self.hold_until = t + self.takeoff_hold_s
                 else:
                     self._next_item(t, pos)
         elif ph == Phase.CRUISE:

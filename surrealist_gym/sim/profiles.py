@@ -11,6 +11,7 @@ A profile is saved as YAML (every key optional except ``name``)::
     sensor: {fov_h_deg: 59}            # fields of DepthSensorConfig
     noise: {turbulence_std: 0}         # fields of NoiseConfig (estimator errors, ambient turbulence)
     takeoff_delay_s: 15.0              # on the ground between arming and the mission start [s]
+    takeoff_hold_s: 0.0                # at the take-off altitude before the first leg [s]
     timeout_s: 500                     # simulated-time limit [s]; null = the mission's default
     obstacle_collision_scale: 0.8      # obstacles collide at this share of their footprint (Gazebo boxes: 0.8)
 
@@ -46,6 +47,7 @@ class UavProfile:
     sensor: Mapping[str, Any] = field(default_factory=dict)
     noise: Mapping[str, Any] = field(default_factory=dict)
     takeoff_delay_s: float = 4.0
+    takeoff_hold_s: float = 0.0
     timeout_s: float | None = None
     obstacle_collision_scale: float = 1.0
 
@@ -74,6 +76,9 @@ class UavProfile:
         if not _number(self.takeoff_delay_s) or self.takeoff_delay_s < 0:
             raise InvalidProfile(f"{where}: field 'takeoff_delay_s': expected a number >= 0, got "
                                  f"{self.takeoff_delay_s!r}")
+        if not _number(self.takeoff_hold_s) or self.takeoff_hold_s < 0:
+            raise InvalidProfile(f"{where}: field 'takeoff_hold_s': expected a number >= 0, got "
+                                 f"{self.takeoff_hold_s!r}")
         if self.timeout_s is not None and (not _number(self.timeout_s) or self.timeout_s <= 0):
             raise InvalidProfile(f"{where}: field 'timeout_s': expected a positive number or null, got "
                                  f"{self.timeout_s!r}")
@@ -110,22 +115,23 @@ class UavProfile:
                                    airframe_params=self.params, avoidance_config=self.planner_config(),
                                    sensor_config=self.sensor_config(), noise=self.noise_config(),
                                    takeoff_delay_s=float(self.takeoff_delay_s),
+                                   takeoff_hold_s=float(self.takeoff_hold_s),
                                    timeout_s=self.timeout_s, profile=self.name,
                                    obstacle_collision_scale=float(self.obstacle_collision_scale))
 
     def with_settings(self, settings: Mapping[str, float], name: str | None = None,
                       description: str | None = None) -> "UavProfile":
-        """This profile with UAV settings (``takeoff_delay_s``, ``planner.<field>``: what a test's ``uav.*`` params
-        or a calibration set) written into it."""
-        planner, delay = dict(self.planner), self.takeoff_delay_s
+        """This profile with UAV settings (``takeoff_delay_s``, ``takeoff_hold_s``, ``planner.<field>``: what a
+        test's ``uav.*`` params or a calibration set) written into it."""
+        planner, timing = dict(self.planner), {}
         for key, value in settings.items():
-            if key == "takeoff_delay_s":
-                delay = float(value)
+            if key in TIMING_SETTINGS:
+                timing[key] = float(value)
             elif key.startswith("planner."):
                 planner[key.removeprefix("planner.")] = value
             else:
                 raise InvalidProfile(f"profile {self.name!r}: unknown UAV setting {key!r}")
-        return dataclasses.replace(self, name=name or self.name, planner=planner, takeoff_delay_s=delay,
+        return dataclasses.replace(self, name=name or self.name, planner=planner, **timing,
                                    description=self.description if description is None else description)
 
     def to_dict(self) -> dict:
@@ -133,14 +139,18 @@ class UavProfile:
         return {"name": self.name, "description": self.description, "vehicle": self.vehicle.value,
                 "avoidance_model": self.avoidance_model.value, "params": dict(self.params),
                 "planner": dict(self.planner), "sensor": dict(self.sensor), "noise": dict(self.noise),
-                "takeoff_delay_s": self.takeoff_delay_s, "timeout_s": self.timeout_s,
+                "takeoff_delay_s": self.takeoff_delay_s, "takeoff_hold_s": self.takeoff_hold_s, "timeout_s": self.timeout_s,
                 "obstacle_collision_scale": self.obstacle_collision_scale}
+
+
+TIMING_SETTINGS = ("takeoff_delay_s", "takeoff_hold_s")  # UAV settings that are profile fields, not the planner's
 
 
 @dataclass(frozen=True, slots=True)
 class Setting:
     """A quantity of the simulated UAV that its log's PX4 parameters do not fix, and that calibration fits and
-    ``--search-uav`` searches: ``takeoff_delay_s`` or ``planner.<field>`` of the profile's planner.
+    ``--search-uav`` searches: ``takeoff_delay_s``, ``takeoff_hold_s`` or ``planner.<field>`` of the profile's
+    planner.
 
     Attributes:
         name: the setting (a test sets it as the param ``uav.<name>``).
@@ -162,8 +172,8 @@ class Setting:
 
         if test is not None and UAV_SETTING_PREFIX + self.name in test.params:
             return float(test.params[UAV_SETTING_PREFIX + self.name])
-        if self.name == "takeoff_delay_s":
-            return float(profile.takeoff_delay_s)
+        if self.name in TIMING_SETTINGS:
+            return float(getattr(profile, self.name))
         return float(getattr(profile.planner_config(), self.name.removeprefix("planner.")))
 
 
@@ -172,13 +182,15 @@ class Setting:
 SETTINGS: Mapping[AvoidanceModel, tuple[Setting, ...]] = FrozenDict({
     AvoidanceModel.PX4: (
         Setting("takeoff_delay_s", 0.0, 30.0, 2.0, 0.1, "time from arming to lift-off"),
+        Setting("takeoff_hold_s", 0.0, 10.0, 1.0, 0.1, "pause at the take-off altitude before the first leg"),
         Setting("planner.heading_offset_deg", -30.0, 0.0, 8.0, 0.5, "cruise pace (through the field-of-view factor)"),
-        Setting("planner.pitch_cost_param", 0.5, 100.0, 10.0, 0.1, "altitude kept while cruising"),
+        Setting("planner.pitch_cost_param", 5.0, 100.0, 10.0, 0.5, "altitude kept while cruising"),
         Setting("planner.obstacle_cost_param", 2.0, 20.0, 3.0, 0.1, "width of a detour"),
         Setting("planner.smoothing_speed_xy", 2.0, 20.0, 4.0, 0.1, "how sharply a detour turns"),
     ),
     AvoidanceModel.SIMPLE: (
         Setting("takeoff_delay_s", 0.0, 30.0, 2.0, 0.1, "time from arming to lift-off"),
+        Setting("takeoff_hold_s", 0.0, 10.0, 1.0, 0.1, "pause at the take-off altitude before the first leg"),
         Setting("planner.avoid_speed", 0.2, 3.0, 0.4, 0.02, "speed with an obstacle near"),
         Setting("planner.vertical_margin", 0.0, 3.0, 0.5, 0.05, "height kept above nearby obstacle tops"),
         Setting("planner.safety_margin", 0.3, 4.0, 0.5, 0.05, "width of a detour"),
@@ -196,7 +208,8 @@ def test_uav_settings(test) -> dict[str, float]:
 
 
 def with_uav_settings(config: SimConfig, settings: Mapping[str, float]) -> SimConfig:
-    """``config`` flying with UAV settings (``takeoff_delay_s``, ``planner.<field>``); an unknown or invalid one
+    """``config`` flying with UAV settings (``takeoff_delay_s``, ``takeoff_hold_s``, ``planner.<field>``); an unknown
+    or invalid one
     raises :class:`InvalidTestCase` naming the test's param."""
     if not settings:
         return config
@@ -206,14 +219,15 @@ def with_uav_settings(config: SimConfig, settings: Mapping[str, float]) -> SimCo
         where = f"params.uav.{name}"
         if not _number(value):
             raise InvalidTestCase(f"{where}: expected a finite number, got {value!r}")
-        if name == "takeoff_delay_s":
+        if name in TIMING_SETTINGS:
             if value < 0:
                 raise InvalidTestCase(f"{where}: expected a number >= 0, got {value!r}")
-            changes["takeoff_delay_s"] = float(value)
+            changes[name] = float(value)
         elif name.startswith("planner."):
             planner[name.removeprefix("planner.")] = value
         else:
-            raise InvalidTestCase(f"{where}: unknown UAV setting (expected takeoff_delay_s or planner.<field>)")
+            raise InvalidTestCase(f"{where}: unknown UAV setting (expected one of {list(TIMING_SETTINGS)} or "
+                                  f"planner.<field>)")
     if planner:
         base = config.avoidance_config
         if base is None:

@@ -173,7 +173,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
                                  (vehicle.drag_xy, vehicle.drag_z, vehicle.drag_quad))
             r.ks = np.zeros(10)
             r.wind = (0.0, 0.0, 0.0)
-            r.nav = Navigator(mission, params, cfg.takeoff_delay_s)
+            r.nav = Navigator(mission, params, cfg.takeoff_delay_s, cfg.takeoff_hold_s)
             r.planner = make_planner() if avoidance else None
             r.noise = NoiseSource(run_seed_sequence(noise_key, seed, index), cfg.noise, test.wind, outer_dt)
             r.q_sp, r.thrust = (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)), 0.0
