@@ -157,6 +157,7 @@ class Setting:
         low, high: the range a search and a fit keep it in.
         step: the first step of the greedy's line search; ``min_step`` the smallest worth trying.
         shapes: what it shapes, for the docs and the printout.
+        log_scale: a weight whose effect is in its order of magnitude: calibration flies its range geometrically.
     """
 
     name: str
@@ -165,6 +166,7 @@ class Setting:
     step: float
     min_step: float
     shapes: str
+    log_scale: bool = False
 
     def value(self, profile: "UavProfile", test=None) -> float:
         """The setting's value for ``test`` (its ``uav.<name>`` param) on ``profile``, else the profile's."""
@@ -184,14 +186,16 @@ SETTINGS: Mapping[AvoidanceModel, tuple[Setting, ...]] = FrozenDict({
         Setting("takeoff_delay_s", 0.0, 30.0, 2.0, 0.1, "time from arming to lift-off"),
         Setting("takeoff_hold_s", 0.0, 10.0, 1.0, 0.1, "pause at the take-off altitude before the first leg"),
         Setting("planner.heading_offset_deg", -30.0, 0.0, 8.0, 0.5, "cruise pace (through the field-of-view factor)"),
-        Setting("planner.pitch_cost_param", 5.0, 100.0, 10.0, 0.5, "altitude kept while cruising"),
+        Setting("planner.pitch_cost_param", 5.0, 100.0, 10.0, 0.5, "altitude kept while cruising", True),
         Setting("planner.obstacle_cost_param", 2.0, 20.0, 3.0, 0.1, "width of a detour"),
         Setting("planner.smoothing_speed_xy", 2.0, 20.0, 4.0, 0.1, "how sharply a detour turns"),
     ),
     AvoidanceModel.SIMPLE: (
         Setting("takeoff_delay_s", 0.0, 30.0, 2.0, 0.1, "time from arming to lift-off"),
         Setting("takeoff_hold_s", 0.0, 10.0, 1.0, 0.1, "pause at the take-off altitude before the first leg"),
-        Setting("planner.avoid_speed", 0.2, 3.0, 0.4, 0.02, "speed with an obstacle near"),
+        Setting("planner.avoid_speed", 0.3, 3.0, 0.4, 0.02, "speed with an obstacle near"),
+        Setting("planner.vertical_radius", 0.0, 12.0, 2.0, 0.1, "how far ahead of an obstacle the UAV starts to "
+                                                               "rise over it (altitude while avoiding)"),
         Setting("planner.vertical_margin", 0.0, 3.0, 0.5, 0.05, "height kept above nearby obstacle tops"),
         Setting("planner.safety_margin", 0.3, 4.0, 0.5, 0.05, "width of a detour"),
         Setting("planner.slow_down_distance", 2.0, 15.0, 2.0, 0.1, "how early the UAV slows for an obstacle"),
