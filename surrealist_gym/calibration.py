@@ -27,7 +27,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .errors import DependencyNotInstalled, InvalidProfile, LogFormatError as InvalidLog, MissionError
-from .sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
+from .sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig, VehicleModel
 from .sim.profiles import SETTINGS, SITL_IRIS, TIMING_SETTINGS, VISION_CASE0, UavProfile
 from .testcase import TestCase
 from .trajectory import Trajectory, profile as time_profile
@@ -38,6 +38,15 @@ AIRBORNE_M = 0.3   # above the start: airborne [m]
 MOVING_MPS = 0.3   # horizontal speed: moving [m/s]
 LIFTOFF_LAG_S = 1.0  # measured: both vehicles' 0.5 s trajectories leave the ground ~1 s after the mission starts
 PX4_VISION_AIRFRAMES = (4016,)  # Holybro PX4 Vision DevKit
+IRIS_AIRFRAMES = tuple(range(1010, 1020)) + tuple(range(10015, 10020))  # PX4 SITL Gazebo Iris variants
+
+
+def vehicle_of(flight) -> VehicleModel | None:
+    """The vehicle preset of the log's PX4 airframe (SYS_AUTOSTART), None when the airframe is not one we know."""
+    airframe = int(flight.params.get("SYS_AUTOSTART", 0) or 0)
+    if airframe in PX4_VISION_AIRFRAMES:
+        return VehicleModel.PX4_VISION
+    return VehicleModel.IRIS if airframe in IRIS_AIRFRAMES else None
 
 
 @dataclass(frozen=True, slots=True)
@@ -138,8 +147,7 @@ def profile_for_flight(flight) -> UavProfile:
     PX4-Avoidance), on the ground as long as the log is before it lifts off; no simulation."""
     if not str(flight.vehicle_type).startswith("multirotor"):
         raise InvalidProfile(f"{flight.path}: vehicle {flight.vehicle_type!r}: the simulated UAVs are multirotors")
-    airframe = int(flight.params.get("SYS_AUTOSTART", 0) or 0)
-    base = VISION_CASE0 if airframe in PX4_VISION_AIRFRAMES else SITL_IRIS
+    base = VISION_CASE0 if vehicle_of(flight) == VehicleModel.PX4_VISION else SITL_IRIS
     try:
         liftoff = phases(flight.trajectory, str(flight.path)).liftoff_s
     except InvalidLog:
@@ -183,6 +191,12 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
         if not str(flight.vehicle_type).startswith("multirotor"):
             raise InvalidLog(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be calibrated")
     base = base or profile_for_flight(flights[0])
+    for flight in flights:
+        vehicle = vehicle_of(flight)
+        if vehicle is not None and vehicle != base.vehicle:
+            raise InvalidProfile(f"{flight.path}: flown by {vehicle.value} (PX4 airframe "
+                                 f"{int(flight.params['SYS_AUTOSTART'])}), but profile {base.name!r} flies "
+                                 f"{base.vehicle.value}: calibrate a profile of the log's vehicle")
     executor = executor or InlineExecutor()
     tests = [_mission_test(f, seed_test) for f in flights]
     real = [phases(f.trajectory, str(f.path)) for f in flights]

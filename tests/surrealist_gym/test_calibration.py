@@ -156,3 +156,11 @@ def test_search_uav_is_refused_with_pre_screening(tmp_path, capsys):
     assert main(["replicate", "--search-uav", "--surrogate", "online", "--out", str(tmp_path / "r")]) == 2
     assert "--search-uav: not with pre-screening" in capsys.readouterr().err
     assert not (tmp_path / "r").exists()
+
+
+def test_calibrate_refuses_a_profile_of_another_vehicle(tmp_path, capsys):
+    out = tmp_path / "uav.yaml"
+    assert main(["calibrate", str(M0_ULG), "--uav", "px4-vision-case0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "m0.ulg: flown by iris (PX4 airframe 1015)" in err and "px4-vision-case0" in err
+    assert not out.exists()
