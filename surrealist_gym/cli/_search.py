@@ -92,7 +92,7 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         if options.uav not in PRESETS:
             changes["uav"] = str(Path(options.uav).resolve())
     for key in ("log", "test", "seed"):
-        if getattr(options, key, None) and not (key == "seed" and options.seed in ("detours", "paper")):
+        if getattr(options, key, None) and not (key == "seed" and options.seed in ("tall", "paper", "detours")):
             changes[key] = str(Path(getattr(options, key)).resolve())
     options = measured_prescreen(dataclasses.replace(options, **changes))
     out = Path(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}")

@@ -154,10 +154,10 @@ class ReplicateOptions(SearchOptions):
 
     log: str | None = _opt(None, "real flight log (.ulg); default: the bundled case0.ulg of the paper",
                            positional=True)
-    seed: str | None = _opt(None, "seed test case, or: paper (default for a log other than case0: a 3x3x3 m box "
-                                  "in the middle of the mission line, as the paper), detours (a box taller than "
-                                  "the flight where the real flight leaves its mission line, one per detour); "
-                                  "default for case0: the paper's seed 1", metavar="TEST.yaml|detours|paper")
+    seed: str | None = _opt(None, "seed test case, or: tall (default for a log other than case0: a 3 x 3 m box in "
+                                  "the middle of the mission line, 2 m taller than the flight), paper (the same "
+                                  "box 3 m tall, as the paper), detours (a tall box where the real flight leaves its "
+                                  "mission line, one per detour); default for case0: the paper's seed 1", metavar="TEST.yaml|tall|paper|detours")
     averaging: str = _opt("dba", "how the runs of a test are averaged before the DTW (default dba)",
                           choices=["dba", "soft_dtw"])
     allow_partial: bool = _opt(False, "replicate a damaged (truncated) log as far as it is readable",

@@ -44,6 +44,6 @@ def log_profile(args):
 
     log = args.log
     if log is None:
-        seed = load_test(args.seed) if args.seed and args.seed not in ("detours", "paper") else None
+        seed = load_test(args.seed) if args.seed and args.seed not in ("tall", "paper", "detours") else None
         log = (seed.reference_log if seed is not None else None) or data_path("case0.ulg")
     return profile_for_flight(read_flight(log))

@@ -39,7 +39,7 @@ class ReplicateEnv(SurrealistEnv):
         from .. import data_path
         from ..logs import read_flight
 
-        seed_kind = "paper"
+        seed_kind = "tall"
         if isinstance(seed_test, str) and seed_test in SEEDS:
             seed_kind, seed_test = seed_test, None
         elif seed_test is not None and not isinstance(seed_test, TestCase):
@@ -77,15 +77,21 @@ class ReplicateEnv(SurrealistEnv):
         return ReplicationObjective(self.reference, self.averaging)
 
 
-SEEDS = ("paper", "detours")  # the seeds a log without a seed test can start from (seed_test="detours" etc.)
+SEEDS = ("tall", "paper", "detours")  # the seeds a log without a seed test can start from (seed_test="paper" etc.)
+TALLER_M = 2.0      # how much taller than the flight a seed box is that the UAV must fly around
 CLEARANCE_M = 2.0   # the gap a detour keeps to what it flies around (about PX4-Avoidance's, as case0 and m0 fly)
 FAR_SIDE_M = 8.0    # how much further a seed box reaches on the side the flight did not take: that side is long
 DETOUR_PEAK_M = 2.0  # a deviation from the mission line smaller than this is not taken for a detour
 
 
-def seed_for(flight, kind: str = "paper") -> TestCase:
-    """The seed test of a log without one: ``paper`` (:func:`seed_from_flight`, default) or ``detours``
-    (:func:`seed_from_detours`)."""
+def seed_for(flight, kind: str = "tall") -> TestCase:
+    """The seed test of a log without one: ``tall`` (default: the paper's box in the middle of the mission line,
+    :data:`TALLER_M` taller than the flight, so it is flown around, not over), ``paper`` (:func:`seed_from_flight`:
+    3 x 3 x 3 m) or ``detours`` (:func:`seed_from_detours`)."""
+    if kind == "tall":
+        paper = seed_from_flight(flight)
+        height = round(max(float(np.max(flight.trajectory.xyz[:, 2])) + TALLER_M, paper.obstacles[0].h), 2)
+        return replace(paper, obstacles=(replace(paper.obstacles[0], h=height),))
     if kind == "paper":
         return seed_from_flight(flight)
     if kind == "detours":
@@ -110,7 +116,7 @@ def seed_from_detours(flight, max_obstacles: int = 3) -> TestCase:
     1.5 m above what is around it (``scipy.signal.find_peaks``). Its box is as long, along the line, as the part of
     the detour above half its prominence; its near edge leaves :data:`CLEARANCE_M` to the detour's widest point;
     it reaches :data:`FAR_SIDE_M` further on the other side of the line than on the detour's side, so that going
-    round the detour's side is the short way; it is 2 m taller than the flight, so it is flown around, not over.
+    round the detour's side is the short way; it is :data:`TALLER_M` taller than the flight.
     The paper's box (:func:`seed_from_flight`) when the flight keeps to its line.
     """
     from scipy.signal import find_peaks, peak_widths
@@ -132,7 +138,7 @@ def seed_from_detours(flight, max_obstacles: int = 3) -> TestCase:
         for peak, lo, hi in zip(peaks, left, right):
             span = np.interp([lo, hi], np.arange(len(along)), along)
             boxes.append((float(signed[peak]), side, float(along[peak]), float(abs(span[1] - span[0]))))
-    height = round(float(xyz[:, 2].max()) + 2.0, 2)
+    height = round(float(xyz[:, 2].max()) + TALLER_M, 2)
     yaw = math.degrees(math.atan2(unit[1], unit[0]))
     obstacles = []
     for width, side, centre, length in sorted(boxes, reverse=True)[:max_obstacles]:

@@ -136,6 +136,8 @@ def test_the_detour_seed_stands_a_tall_box_where_m0_leaves_its_mission_line():
     assert obstacle_distances(peak[None, :], [box]).min() == pytest.approx(2.0, abs=0.3)  # the detour's gap
     paper, = seed_for(flight, "paper").obstacles
     assert (paper.l, paper.w, paper.h) == (3.0, 3.0, 3.0)
+    tall, = seed_for(flight).obstacles          # the default: the paper's box, taller than the flight
+    assert (tall.x, tall.y, tall.l) == (paper.x, paper.y, 3.0) and tall.h == pytest.approx(7.68, abs=0.01)
     with pytest.raises(InvalidTestCase, match="expected a test YAML or one of"):
         seed_for(flight, "middle")
 
