@@ -26,7 +26,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .errors import DependencyNotInstalled, InvalidProfile, LogFormatError as InvalidLog, MissionError
+from .errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
+from .frozendict import FrozenDict
 from .sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig, VehicleModel
 from .sim.profiles import SETTINGS, SITL_IRIS, TIMING_SETTINGS, VISION_CASE0, UavProfile
 from .testcase import TestCase
@@ -73,25 +74,26 @@ class Phases:
 
 
 def phases(trajectory: Trajectory, where: str = "flight") -> Phases:
-    """The phases of a flight; a flight that never lifts off or never moves raises :class:`InvalidLog`."""
+    """The phases of a flight; a flight that never lifts off or never moves raises :class:`LogFormatError`."""
     p = time_profile(trajectory)
     z, v, t = p.altitude, p.horizontal_speed, p.t
     air = np.nonzero(z > AIRBORNE_M)[0]
     if len(air) < 4:
-        raise InvalidLog(f"{where}: the flight never rises {AIRBORNE_M} m above its start: no take-off to fit")
+        raise LogFormatError(f"{where}: the flight never rises {AIRBORNE_M} m above its start: no take-off to fit")
     moving = np.nonzero((z > AIRBORNE_M) & (v > MOVING_MPS))[0]
     if len(moving) < 4:
-        raise InvalidLog(f"{where}: the UAV never moves faster than {MOVING_MPS} m/s in the air: no cruise to fit")
+        raise LogFormatError(f"{where}: the UAV never moves faster than {MOVING_MPS} m/s in the air: no cruise to fit")
     first_move, last_move = moving[0], moving[-1]
     at_height = np.nonzero(z[air[0]:] >= z[first_move] - 0.3)[0]
     climb_end = air[0] + (at_height[0] if len(at_height) else 0)
-    return Phases(float(t[air[0]]), float(t[air[-1]]), float(t[first_move]), float(np.median(v[moving])), float(np.median(z[moving])),
-                  float(t[climb_end] - t[air[0]]), float(max(t[air[-1]] - t[last_move], 0.0)))
+    return Phases(float(t[air[0]]), float(t[air[-1]]), float(t[first_move]), float(np.median(v[moving])),
+                  float(np.median(z[moving])), float(t[climb_end] - t[air[0]]),
+                  float(max(t[air[-1]] - t[last_move], 0.0)))
 
 
 @dataclass(frozen=True, slots=True)
 class Fit:
-    """What one setting is fitted to: a figure of :class:`Phases`, and whether the figure grows with the setting."""
+    """What one setting is fitted to: a figure of :class:`Phases`, and how the printout names it."""
 
     setting: str
     figure: str
@@ -99,7 +101,7 @@ class Fit:
 
 
 # Per avoidance model: the settings fitted, in order (the timings first: they shift the rest of the flight)
-FITS = {
+FITS = FrozenDict({
     AvoidanceModel.PX4: (Fit("takeoff_delay_s", "liftoff_s", "lift-off [s]"),
                          Fit("takeoff_hold_s", "leg_start_s", "first leg starts [s]"),
                          Fit("planner.heading_offset_deg", "cruise_speed_mps", "cruise speed [m/s]")),
@@ -107,11 +109,11 @@ FITS = {
                             Fit("takeoff_hold_s", "leg_start_s", "first leg starts [s]"),
                             Fit("planner.avoid_speed", "cruise_speed_mps", "cruise speed [m/s]"),
                             Fit("planner.vertical_radius", "cruise_altitude_m", "cruise altitude [m]")),
-}
-CHECKS = {AvoidanceModel.PX4: (("cruise_altitude_m", "cruise altitude [m]"), ("climb_s", "climb [s]"),
+})
+CHECKS = FrozenDict({AvoidanceModel.PX4: (("cruise_altitude_m", "cruise altitude [m]"), ("climb_s", "climb [s]"),
                                ("descent_s", "descent [s]"), ("touchdown_s", "touchdown [s]")),
           AvoidanceModel.SIMPLE: (("climb_s", "climb [s]"), ("descent_s", "descent [s]"),
-                                  ("touchdown_s", "touchdown [s]"))}
+                                  ("touchdown_s", "touchdown [s]"))})
 
 
 @dataclass(frozen=True, slots=True)
@@ -150,7 +152,7 @@ def profile_for_flight(flight) -> UavProfile:
     base = VISION_CASE0 if vehicle_of(flight) == VehicleModel.PX4_VISION else SITL_IRIS
     try:
         liftoff = phases(flight.trajectory, str(flight.path)).liftoff_s
-    except InvalidLog:
+    except LogFormatError:
         return base
     delay = round(max(liftoff - LIFTOFF_LAG_S, 0.0), 1)
     if abs(delay - base.takeoff_delay_s) < 0.05:
@@ -186,10 +188,10 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
     from .executors import InlineExecutor
 
     if not flights:
-        raise InvalidLog("calibrate: no log given")
+        raise LogFormatError("calibrate: no log given")
     for flight in flights:
         if not str(flight.vehicle_type).startswith("multirotor"):
-            raise InvalidLog(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be calibrated")
+            raise LogFormatError(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be calibrated")
     base = base or profile_for_flight(flights[0])
     for flight in flights:
         vehicle = vehicle_of(flight)
@@ -219,7 +221,7 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
                 where = f"{flight.path} on profile {base.name!r} with {dict(vals)}"
                 figures = [phases(r.trajectory, where) for r in flown]
                 if not figures:
-                    raise InvalidLog(f"{where}: no simulated run flew")
+                    raise LogFormatError(f"{where}: no simulated run flew")
                 got.append(Phases(*np.mean([[getattr(f, n) for n in Phases.__slots__] for f in figures], axis=0)))
                 trajs.append(flown[0].trajectory)
             cache[key] = (got, trajs)
