@@ -147,8 +147,7 @@ class Calibration:
 def profile_for_flight(flight) -> UavProfile:
     """The preset of the log's vehicle (a PX4 Vision airframe: the case0 PX4 Vision; else PX4 SITL Iris with
     PX4-Avoidance), on the ground as long as the log is before it lifts off; no simulation."""
-    if not str(flight.vehicle_type).startswith("multirotor"):
-        raise InvalidProfile(f"{flight.path}: vehicle {flight.vehicle_type!r}: the simulated UAVs are multirotors")
+    _check_multirotor(flight)
     base = VISION_CASE0 if vehicle_of(flight) == VehicleModel.PX4_VISION else SITL_IRIS
     try:
         liftoff = phases(flight.trajectory, str(flight.path)).liftoff_s
@@ -160,6 +159,21 @@ def profile_for_flight(flight) -> UavProfile:
     return replace(base, name=f"{base.name}@{Path(str(flight.path)).stem}",
                    description=f"{base.description}; take-off delay from {Path(str(flight.path)).name}",
                    takeoff_delay_s=delay)
+
+
+def _check_multirotor(flight) -> None:
+    if not str(flight.vehicle_type).startswith("multirotor"):
+        raise LogFormatError(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be flown "
+                             f"and calibrated")
+
+
+def _check_vehicle(flight, profile: UavProfile) -> None:
+    """A log is calibrated on a profile of its own vehicle (when its airframe tells which)."""
+    vehicle = vehicle_of(flight)
+    if vehicle is not None and vehicle != profile.vehicle:
+        raise InvalidProfile(f"{flight.path}: flown by {vehicle.value} (PX4 airframe "
+                             f"{int(flight.params['SYS_AUTOSTART'])}), but profile {profile.name!r} flies "
+                             f"{profile.vehicle.value}: calibrate a profile of the log's vehicle")
 
 
 def _mission_test(flight, seed_test: TestCase | None) -> TestCase:
@@ -190,15 +204,10 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
     if not flights:
         raise LogFormatError("calibrate: no log given")
     for flight in flights:
-        if not str(flight.vehicle_type).startswith("multirotor"):
-            raise LogFormatError(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be calibrated")
+        _check_multirotor(flight)
     base = base or profile_for_flight(flights[0])
     for flight in flights:
-        vehicle = vehicle_of(flight)
-        if vehicle is not None and vehicle != base.vehicle:
-            raise InvalidProfile(f"{flight.path}: flown by {vehicle.value} (PX4 airframe "
-                                 f"{int(flight.params['SYS_AUTOSTART'])}), but profile {base.name!r} flies "
-                                 f"{base.vehicle.value}: calibrate a profile of the log's vehicle")
+        _check_vehicle(flight, base)
     executor = executor or InlineExecutor()
     tests = [_mission_test(f, seed_test) for f in flights]
     real = [phases(f.trajectory, str(f.path)) for f in flights]

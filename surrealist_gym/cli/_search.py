@@ -91,8 +91,10 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         load_profile(options.uav)  # a bad profile fails here, before any folder exists
         if options.uav not in PRESETS:
             changes["uav"] = str(Path(options.uav).resolve())
+    from ..envs.replicate import SEEDS
+
     for key in ("log", "test", "seed"):
-        if getattr(options, key, None) and not (key == "seed" and options.seed in ("tall", "paper", "detours")):
+        if getattr(options, key, None) and not (key == "seed" and options.seed in SEEDS):
             changes[key] = str(Path(getattr(options, key)).resolve())
     options = measured_prescreen(dataclasses.replace(options, **changes))
     out = Path(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}")

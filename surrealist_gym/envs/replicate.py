@@ -131,7 +131,7 @@ def seed_from_detours(flight, max_obstacles: int = 3) -> TestCase:
     boxes = []
     for side in (1.0, -1.0):
         signed = side * across
-        peaks, props = find_peaks(signed, height=DETOUR_PEAK_M, prominence=1.5)
+        peaks, _ = find_peaks(signed, height=DETOUR_PEAK_M, prominence=1.5)
         if len(peaks) == 0:
             continue
         _, _, left, right = peak_widths(signed, peaks, rel_height=0.5)

@@ -123,15 +123,10 @@ class UavProfile:
                       description: str | None = None) -> "UavProfile":
         """This profile with UAV settings (``takeoff_delay_s``, ``takeoff_hold_s``, ``planner.<field>``: what a
         test's ``uav.*`` params or a calibration set) written into it."""
-        planner, timing = dict(self.planner), {}
-        for key, value in settings.items():
-            if key in TIMING_SETTINGS:
-                timing[key] = float(value)
-            elif key.startswith("planner."):
-                planner[key.removeprefix("planner.")] = value
-            else:
-                raise InvalidProfile(f"profile {self.name!r}: unknown UAV setting {key!r}")
-        return dataclasses.replace(self, name=name or self.name, planner=planner, **timing,
+        timing, planner = _split_settings(
+            settings, lambda key: InvalidProfile(f"profile {self.name!r}: unknown UAV setting {key!r}"))
+        return dataclasses.replace(self, name=name or self.name, planner={**self.planner, **planner},
+                                   **{k: float(v) for k, v in timing.items()},
                                    description=self.description if description is None else description)
 
     def to_dict(self) -> dict:
@@ -139,8 +134,8 @@ class UavProfile:
         return {"name": self.name, "description": self.description, "vehicle": self.vehicle.value,
                 "avoidance_model": self.avoidance_model.value, "params": dict(self.params),
                 "planner": dict(self.planner), "sensor": dict(self.sensor), "noise": dict(self.noise),
-                "takeoff_delay_s": self.takeoff_delay_s, "takeoff_hold_s": self.takeoff_hold_s, "timeout_s": self.timeout_s,
-                "obstacle_collision_scale": self.obstacle_collision_scale}
+                "takeoff_delay_s": self.takeoff_delay_s, "takeoff_hold_s": self.takeoff_hold_s,
+                "timeout_s": self.timeout_s, "obstacle_collision_scale": self.obstacle_collision_scale}
 
 
 TIMING_SETTINGS = ("takeoff_delay_s", "takeoff_hold_s")  # UAV settings that are profile fields, not the planner's
@@ -168,12 +163,8 @@ class Setting:
     shapes: str
     log_scale: bool = False
 
-    def value(self, profile: "UavProfile", test=None) -> float:
-        """The setting's value for ``test`` (its ``uav.<name>`` param) on ``profile``, else the profile's."""
-        from .config import UAV_SETTING_PREFIX
-
-        if test is not None and UAV_SETTING_PREFIX + self.name in test.params:
-            return float(test.params[UAV_SETTING_PREFIX + self.name])
+    def value(self, profile: "UavProfile") -> float:
+        """The setting's value on ``profile``."""
         if self.name in TIMING_SETTINGS:
             return float(getattr(profile, self.name))
         return float(getattr(profile.planner_config(), self.name.removeprefix("planner.")))
@@ -213,25 +204,19 @@ def test_uav_settings(test) -> dict[str, float]:
 
 def with_uav_settings(config: SimConfig, settings: Mapping[str, float]) -> SimConfig:
     """``config`` flying with UAV settings (``takeoff_delay_s``, ``takeoff_hold_s``, ``planner.<field>``); an unknown
-    or invalid one
-    raises :class:`InvalidTestCase` naming the test's param."""
+    or invalid one raises :class:`InvalidTestCase` naming the test's param."""
     if not settings:
         return config
-    changes: dict[str, Any] = {}
-    planner: dict[str, Any] = {}
     for name, value in settings.items():
-        where = f"params.uav.{name}"
         if not _number(value):
-            raise InvalidTestCase(f"{where}: expected a finite number, got {value!r}")
-        if name in TIMING_SETTINGS:
-            if value < 0:
-                raise InvalidTestCase(f"{where}: expected a number >= 0, got {value!r}")
-            changes[name] = float(value)
-        elif name.startswith("planner."):
-            planner[name.removeprefix("planner.")] = value
-        else:
-            raise InvalidTestCase(f"{where}: unknown UAV setting (expected one of {list(TIMING_SETTINGS)} or "
-                                  f"planner.<field>)")
+            raise InvalidTestCase(f"params.uav.{name}: expected a finite number, got {value!r}")
+    timing, planner = _split_settings(settings, lambda name: InvalidTestCase(
+        f"params.uav.{name}: unknown UAV setting (expected one of {list(TIMING_SETTINGS)} or planner.<field>)"))
+    changes: dict[str, Any] = {}
+    for name, value in timing.items():
+        if value < 0:
+            raise InvalidTestCase(f"params.uav.{name}: expected a number >= 0, got {value!r}")
+        changes[name] = float(value)
     if planner:
         base = config.avoidance_config
         if base is None:
@@ -247,6 +232,20 @@ def with_uav_settings(config: SimConfig, settings: Mapping[str, float]) -> SimCo
         except (TypeError, ValueError) as err:
             raise InvalidTestCase(f"params.uav.planner: {err}") from None
     return dataclasses.replace(config, **changes)
+
+
+def _split_settings(settings: Mapping[str, float], unknown) -> tuple[dict[str, float], dict[str, float]]:
+    """UAV settings as (profile timings, planner fields without their ``planner.`` prefix); ``unknown(name)`` is
+    the error raised for anything else."""
+    timing, planner = {}, {}
+    for name, value in settings.items():
+        if name in TIMING_SETTINGS:
+            timing[name] = value
+        elif name.startswith("planner."):
+            planner[name.removeprefix("planner.")] = value
+        else:
+            raise unknown(name)
+    return timing, planner
 
 
 def _number(value) -> bool:
