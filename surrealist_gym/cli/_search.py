@@ -93,6 +93,9 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
             changes["uav"] = str(Path(options.uav).resolve())
     from ..envs.replicate import SEEDS
 
+    seed = getattr(options, "seed", None)
+    if seed and seed not in SEEDS and not Path(seed).is_file():
+        raise SurrealistError(f"--seed {seed}: not a test YAML file nor one of {', '.join(SEEDS)}")
     for key in ("log", "test", "seed"):
         if getattr(options, key, None) and not (key == "seed" and options.seed in SEEDS):
             changes[key] = str(Path(getattr(options, key)).resolve())

@@ -16,13 +16,20 @@ def run(args) -> int:
     from ..envs.replicate import ReplicateEnv
     from ..sim.profiles import PRESETS, save_profile
 
+    from ..errors import InvalidTestCase
+
     with new_search_folder(args, ReplicateOptions) as (out, options):
-        env = ReplicateEnv(reference_log=options.log, seed_test=options.seed, runs=options.runs,
-                           budget=options.budget, averaging=options.averaging, executor=options.dask_scheduler,
-                           store=out / "evaluations.sqlite", random_seed=options.random_seed,
-                           workers=options.workers, uav=options.uav,
-                           sim_config={"common_noise": options.common_noise},
-                           allow_partial=options.allow_partial, uav_mutators=options.search_uav)
+        try:
+            env = ReplicateEnv(reference_log=options.log, seed_test=options.seed, runs=options.runs,
+                               budget=options.budget, averaging=options.averaging, executor=options.dask_scheduler,
+                               store=out / "evaluations.sqlite", random_seed=options.random_seed,
+                               workers=options.workers, uav=options.uav,
+                               sim_config={"common_noise": options.common_noise},
+                               allow_partial=options.allow_partial, uav_mutators=options.search_uav)
+        except InvalidTestCase as err:  # a field of the seed test: name its file
+            if options.seed and str(err).startswith("params."):
+                raise InvalidTestCase(f"{options.seed}: {err}") from None
+            raise
         if options.uav is None and env.uav_profile is not None:  # the log's own vehicle, recorded for --resume
             profile = env.uav_profile
             uav = profile.name

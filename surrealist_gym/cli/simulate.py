@@ -87,6 +87,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         from ..sim.profiles import default_profile, load_profile
         config = (load_profile(args.uav) if args.uav is not None else default_profile(test)).sim_config(config)
+    from ..errors import InvalidTestCase
+    from ..sim.profiles import test_uav_settings, with_uav_settings
+
+    try:  # the test's uav.* settings, checked before anything flies
+        with_uav_settings(config, test_uav_settings(test))
+    except InvalidTestCase as err:
+        raise InvalidTestCase(f"{args.test}: {err}") from None
     start = time.perf_counter()
     results = simulate(test, runs=args.runs, seed=args.seed, config=config)
     wall = time.perf_counter() - start

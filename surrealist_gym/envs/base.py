@@ -60,6 +60,11 @@ class SurrealistEnv(gym.Env):
             from ..sim.profiles import default_profile
             self.uav_profile = default_profile(seed_test)
             sim_config = self.uav_profile.sim_config()
+        from ..sim.config import SimConfig
+        from ..sim.profiles import test_uav_settings, with_uav_settings
+
+        # a seed whose uav.* settings are invalid fails here in one line, not as error runs in the workers
+        with_uav_settings(SimConfig.coerce(sim_config), test_uav_settings(seed_test))
         self.evaluator = Evaluator(self._objective(), runs=runs, seed=random_seed, sim_config=sim_config,
                                    executor=executor, store=store)
         n = len(self._mutators)

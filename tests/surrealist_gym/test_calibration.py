@@ -166,3 +166,19 @@ def test_calibrate_refuses_a_profile_of_another_vehicle(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "m0.ulg: flown by iris (PX4 airframe 1015)" in err and "px4-vision-case0" in err
     assert not out.exists()
+
+
+def test_a_seed_with_an_invalid_uav_setting_is_one_line_naming_its_file(tmp_path, capsys):
+    from surrealist_gym import data_path
+    from surrealist_gym.testcase import load_test, save_test
+
+    seed = tmp_path / "seed.yaml"
+    save_test(replace(load_test(data_path("rq1-seed1.yaml")), params={"uav.planner.nope": 3.0}), seed)
+    assert main(["simulate", str(seed), "--runs", "1", "--out", str(tmp_path / "sim")]) == 2
+    assert main(["replicate", "--seed", str(seed), "--budget", "1", "--runs", "1", "--out", str(tmp_path / "r")]) == 2
+    assert main(["replicate", "--seed", "middle", "--out", str(tmp_path / "r")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines[0].startswith(f"error: {seed}: params.uav.planner.nope: not a numeric field")
+    assert lines[1].startswith(f"error: {seed.resolve()}: params.uav.planner.nope")
+    assert lines[2] == "error: --seed middle: not a test YAML file nor one of tall, paper, detours"
+    assert not (tmp_path / "r").exists()
