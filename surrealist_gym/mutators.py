@@ -4,16 +4,18 @@
 (additive mutators; the default value 0 leaves the test unchanged). Moves are along the world axes (x north,
 y east); resizes keep the footprint centre and the base; rotations are in degrees, positive from north toward east.
 An invalid result (non-positive size, overlapping obstacles) raises :class:`InvalidTestCase`: never simulate it.
+:class:`UavMutator` and :class:`WindMutator` change a UAV setting or the test's wind with the same interface.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from enum import Enum
 
 import numpy as np
 
 from .errors import InvalidTestCase
-from .testcase import TestCase
+from .testcase import MAX_WIND_SPEED_MS, TestCase, Wind
 
 
 class MutatorKind(str, Enum):
@@ -158,6 +160,110 @@ def uav_mutators(profile, settings=None) -> tuple[UavMutator, ...]:
         s = known[name]
         span = s.high - s.low
         out.append(UavMutator(name, s.value(profile), s.step, s.min_step, -span, span, s.low, s.high))
+    return tuple(out)
+
+
+class WindKind(str, Enum):
+    """What a wind mutator changes: the mean speed [m/s] or the horizontal direction [degrees]."""
+
+    SPEED = "speed"
+    DIRECTION = "direction"
+
+
+@dataclass(frozen=True, slots=True)
+class WindMutator:
+    """An additive mutator of the test's wind (Aerialist's wind plugin fields, :class:`~surrealist_gym.testcase.Wind`).
+
+    ``speed`` adds ``value`` [m/s] to ``velocity_mean`` and raises ``velocity_max`` to the new mean when a given
+    maximum would fall below it; the mean must stay in ``[0, MAX_WIND_SPEED_MS]``. ``direction`` turns the
+    horizontal part of ``direction`` by ``value`` [degrees], positive from north toward east, and keeps its vertical
+    part. A test without wind starts from ``Wind()`` (calm, blowing toward north), so the two kinds commute. Same
+    interface as :class:`Mutator`.
+
+    Attributes:
+        kind: what is changed (``"speed"`` or ``"direction"``).
+        default_step / min_step: the line search's first and smallest steps (2 / 0.1 m/s, 30 / 0.5 degrees).
+        low, high: the range of the mutator value (-10 to 10 m/s, -180 to 180 degrees by default).
+
+    Example::
+
+        speed, direction = wind_mutators()
+        windy = direction.apply(speed.apply(test, 8.0), 90.0)  # 8 m/s toward east
+    """
+
+    kind: WindKind
+    default_step: float = 0.0
+    min_step: float = 0.0
+    low: float = 0.0
+    high: float = 0.0
+    default_value: float = 0.0
+
+    def __post_init__(self):
+        kind = _wind_kind(self.kind)
+        object.__setattr__(self, "kind", kind)
+        speed = kind == WindKind.SPEED
+        if self.default_step == 0.0:
+            object.__setattr__(self, "default_step", 2.0 if speed else 30.0)
+        if self.min_step == 0.0:
+            object.__setattr__(self, "min_step", 0.1 if speed else 0.5)
+        if (self.low, self.high) == (0.0, 0.0):
+            object.__setattr__(self, "low", -10.0 if speed else -180.0)
+            object.__setattr__(self, "high", 10.0 if speed else 180.0)
+        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low < self.high):
+            raise InvalidTestCase(f"mutator {self.name}: expected a range low < high, got [{self.low:g}, "
+                                  f"{self.high:g}]")
+
+    @property
+    def name(self) -> str:
+        return "wind." + self.kind.value
+
+    def valid_range(self, test: TestCase) -> tuple[float, float]:
+        """The part of ``[low, high]`` that keeps the mean speed within ``[0, MAX_WIND_SPEED_MS]`` on ``test``."""
+        if self.kind != WindKind.SPEED:
+            return self.low, self.high
+        now = (test.wind or Wind()).velocity_mean
+        low, high = max(self.low, 0.0 - now), min(self.high, MAX_WIND_SPEED_MS - now)
+        return (low, high) if low <= high else (self.low, self.high)
+
+    def apply(self, test: TestCase, value: float) -> TestCase:
+        """A new test case with the wind changed by ``value``; InvalidTestCase outside the physical range."""
+        if value == self.default_value:
+            return test
+        wind = test.wind or Wind()
+        try:
+            if self.kind == WindKind.SPEED:
+                mean = round(wind.velocity_mean + value, 9)
+                if not 0 <= mean <= MAX_WIND_SPEED_MS:
+                    raise InvalidTestCase(f"mean speed {mean:g} m/s is outside [0, {MAX_WIND_SPEED_MS:g}]")
+                vmax = wind.velocity_max if wind.velocity_max == 0 else max(wind.velocity_max, mean)
+                wind = replace(wind, velocity_mean=mean, velocity_max=vmax)
+            else:
+                north, east, down = wind.direction
+                c, s = math.cos(math.radians(value)), math.sin(math.radians(value))
+                # + 0.0: -0.0 and 0.0 are one direction, so one key
+                wind = replace(wind, direction=(round(c * north - s * east, 12) + 0.0,
+                                                round(s * north + c * east, 12) + 0.0, down))
+        except InvalidTestCase as err:
+            raise InvalidTestCase(f"mutator {self.name} by {value:+g}: {err}") from err
+        return replace(test, wind=wind)
+
+
+def _wind_kind(value) -> WindKind:
+    try:
+        return WindKind(value)
+    except ValueError:
+        raise InvalidTestCase(f"wind mutator kind {value!r}: expected one of "
+                              f"{[k.value for k in WindKind]}") from None
+
+
+def wind_mutators(speed_range: tuple[float, float] = (-10.0, 10.0),
+                  kinds=(WindKind.SPEED, WindKind.DIRECTION)) -> tuple[WindMutator, ...]:
+    """Mutators of the test's wind: mean speed [m/s] over ``speed_range`` and direction [degrees] over a full turn,
+    in the order of ``kinds`` (``"speed"``, ``"direction"``)."""
+    out = []
+    for kind in map(_wind_kind, kinds):
+        out.append(WindMutator(kind, low=speed_range[0], high=speed_range[1]) if kind == WindKind.SPEED
+                   else WindMutator(kind))
     return tuple(out)
 
 

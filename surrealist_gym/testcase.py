@@ -137,9 +137,34 @@ class RuntimeCommand:
         return {"timestamp": self.timestamp, "mode": self.mode, "x": self.x, "y": self.y, "z": self.z, "r": self.r}
 
 
+# Physical range of a test's wind. 30 m/s is Beaufort force 11 ("violent storm", 28.5-32.6 m/s) and well past what a
+# ~1.5 kg Iris can hold: even at PX4's 45 degree tilt limit (MPC_TILTMAX_AIR) its horizontal thrust, m g = 14.7 N,
+# only balances the modelled Iris' drag (sim/vehicle.py: 0.21 v + 0.02 v^2 N) at ~22 m/s, and the simulated SITL Iris
+# already drifts ~70 m off mission1's track in a 15 m/s crosswind. A larger speed is a typo or a unit mix-up (km/h
+# for m/s), not a test; up to the bound, a test may still probe winds the vehicle cannot hold.
+MAX_WIND_SPEED_MS = 30.0  # [m/s] bound of every wind speed (means and maxima)
+# The speed's standard deviation may reach the bound itself, so a variance up to its square [m^2/s^2].
+MAX_WIND_SPEED_VARIANCE = MAX_WIND_SPEED_MS ** 2
+# The plugin adds N(0, variance) to each component of the (normalised) mean direction. At a standard deviation of 1
+# the noise is as large as the mean direction, so the direction is close to uniform, and Gazebo, which does not
+# renormalise the drawn vector, already doubles the mean speed; a larger variance no longer describes a direction.
+MAX_WIND_DIRECTION_VARIANCE = 1.0
+_WIND_SPEED_VARIANCES = ("velocity_variance", "gust_velocity_variance")
+_WIND_DIRECTION_VARIANCES = ("direction_variance", "gust_direction_variance")
+_WIND_TIMES = ("gust_start", "gust_duration")
+
+
 @dataclass(frozen=True, slots=True)
 class Wind:
-    """Wind in Aerialist's (Gazebo wind plugin) terms; speeds m/s, times s, directions as unit 3-vectors (NED)."""
+    """Wind in Aerialist's (Gazebo wind plugin) terms; speeds m/s, times s, directions as 3-vectors (NED).
+
+    Checked against a physical range (one-line :class:`InvalidTestCase` naming the field): every number finite and
+    >= 0; speeds at most :data:`MAX_WIND_SPEED_MS`; speed variances at most :data:`MAX_WIND_SPEED_VARIANCE`,
+    direction variances at most :data:`MAX_WIND_DIRECTION_VARIANCE`; directions not all zero (the plugin normalises
+    them); a maximum speed, when given (non-zero), at least its mean. A maximum of 0 means "not given" (the default,
+    as when an Aerialist file leaves it out): the simulator then caps the speed at its mean. Gazebo itself would
+    take an explicit 0 literally and blow no wind at all.
+    """
 
     velocity_mean: float = 0.0
     velocity_max: float = 0.0
@@ -160,13 +185,38 @@ class Wind:
             if f.name.endswith("direction"):
                 if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(_finite(c) for c in v)):
                     raise InvalidTestCase(f"wind field {f.name!r}: expected 3 finite numbers, got {v!r}")
+                if not any(c != 0 for c in v):
+                    raise InvalidTestCase(f"wind field {f.name!r}: expected a direction (not all zero), got {v!r}")
                 object.__setattr__(self, f.name, tuple(float(c) for c in v))
-            elif not _finite(v) or v < 0:
+                continue
+            if not _finite(v) or v < 0:
                 raise InvalidTestCase(f"wind field {f.name!r}: expected a finite number >= 0, got {v!r}")
+            bound, expected = _wind_bound(f.name)
+            if v > bound:
+                raise InvalidTestCase(f"wind field {f.name!r}: expected {expected}, got {v:g}")
+            object.__setattr__(self, f.name, float(v))  # 8 and 8.0 are one wind, so one key
+        for prefix in ("", "gust_"):
+            mean, vmax = getattr(self, prefix + "velocity_mean"), getattr(self, prefix + "velocity_max")
+            if vmax != 0 and vmax < mean:
+                raise InvalidTestCase(f"wind field {prefix + 'velocity_max'!r}: expected 0 (not given) or at least "
+                                      f"{prefix}velocity_mean ({mean:g} m/s), got {vmax:g}")
 
     def to_dict(self) -> dict:
         return {f.name: (list(getattr(self, f.name)) if f.name.endswith("direction") else getattr(self, f.name))
                 for f in fields(self)}
+
+
+def _wind_bound(name: str) -> tuple[float, str]:
+    """The largest physical value of a scalar wind field, and the range as a message states it."""
+    if name in _WIND_TIMES:
+        return math.inf, "a finite number >= 0 [s]"
+    if name in _WIND_SPEED_VARIANCES:
+        return MAX_WIND_SPEED_VARIANCE, f"at most {MAX_WIND_SPEED_VARIANCE:g} m^2/s^2 (a standard deviation of " \
+                                        f"{MAX_WIND_SPEED_MS:g} m/s)"
+    if name in _WIND_DIRECTION_VARIANCES:
+        return MAX_WIND_DIRECTION_VARIANCE, f"at most {MAX_WIND_DIRECTION_VARIANCE:g} (a standard deviation as " \
+                                            f"large as the unit direction)"
+    return MAX_WIND_SPEED_MS, f"at most {MAX_WIND_SPEED_MS:g} m/s (Beaufort 11, a violent storm)"
 
 
 @dataclass(frozen=True, slots=True)
