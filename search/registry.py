@@ -2,7 +2,7 @@
 
 Names:
     ``greedy`` (the adaptive greedy with the authors' preset), ``greedy-paper`` (paper Table 1), ``random``,
-    ``cmaes``, ``ppo:POLICY.zip`` / ``sac:POLICY.zip`` (a policy trained by ``surrealist train-ppo``), any name
+    ``cmaes``, ``suite`` (suites of distinct failures), ``ppo:POLICY.zip`` / ``sac:POLICY.zip`` (a policy trained by ``surrealist train-ppo``), any name
     added with :func:`register_agent`, and ``module:Class`` or ``path/to/file.py:Class`` for an Agent subclass
     of your own (built as ``Class(seed=seed, **options)``).
 
@@ -46,11 +46,17 @@ def _cmaes(seed=None, **options):
     return CMAES(seed=seed, **options)
 
 
+def _suite(seed=None, **options):
+    from .novelty import SuiteSearch
+    return SuiteSearch(seed=seed, **options)
+
+
 _REGISTRY: dict[str, Callable[..., Agent]] = {
     "greedy": _greedy("authors"),
     "greedy-paper": _greedy("paper"),
     "random": _random,
     "cmaes": _cmaes,
+    "suite": _suite,
 }
 
 

@@ -26,7 +26,8 @@ def _register_envs() -> None:
     from gymnasium.envs.registration import register, registry
 
     for env_id, entry_point in (("Surrealist-Replicate-v0", "surrealist_gym.envs.replicate:ReplicateEnv"),
-                                ("Surrealist-Generate-v0", "surrealist_gym.envs.generate:GenerateEnv")):
+                                ("Surrealist-Generate-v0", "surrealist_gym.envs.generate:GenerateEnv"),
+                                ("Surrealist-CaseStudy-v0", "surrealist_gym.envs.case_study:CaseStudyEnv")):
         if env_id not in registry:
             register(id=env_id, entry_point=entry_point)
 

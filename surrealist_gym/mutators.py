@@ -46,6 +46,8 @@ class Mutator:
         default_step: the first step of the adaptive line search (4 m, or 30 degrees for rotations).
         min_step: the smallest step worth trying (0.1 m / 0.5 degrees in the authors' run).
         low, high: the range of the mutator value (used by agents that sample it, e.g. random search).
+        lowest, highest: bounds on the property's value itself (e.g. the competition's rules); a mutation beyond
+            them is invalid, and ``valid_range`` leaves it out.
     """
 
     obstacle: int
@@ -55,6 +57,8 @@ class Mutator:
     low: float = -20.0
     high: float = 20.0
     default_value: float = 0.0
+    lowest: float = -math.inf
+    highest: float = math.inf
 
     def __post_init__(self):
         kind = MutatorKind(self.kind)
@@ -78,11 +82,14 @@ class Mutator:
         Resizes by less than ``min_step - size`` are invalid whatever the other mutators do; agents that sample
         the range (random search, CMA-ES) draw from this part. Overlaps with other obstacles are still possible.
         """
-        resize = self.kind in (MutatorKind.RESIZE_L, MutatorKind.RESIZE_W, MutatorKind.RESIZE_H)
-        if not resize or not 0 <= self.obstacle < len(test.obstacles):
+        if not 0 <= self.obstacle < len(test.obstacles):
             return self.low, self.high
-        size = getattr(test.obstacles[self.obstacle], _FIELD[self.kind])
-        return min(max(self.low, self.min_step - size), self.high), self.high
+        now = getattr(test.obstacles[self.obstacle], _FIELD[self.kind])
+        lowest = self.lowest
+        if self.kind in (MutatorKind.RESIZE_L, MutatorKind.RESIZE_W, MutatorKind.RESIZE_H):
+            lowest = max(lowest, self.min_step)
+        low, high = max(self.low, lowest - now), min(self.high, self.highest - now)
+        return (min(low, self.high), high) if low <= high else (self.low, self.high)
 
     def apply(self, test: TestCase, value: float) -> TestCase:
         """A new test case with this mutator applied by ``value``; raises InvalidTestCase if the result is invalid."""
@@ -91,12 +98,21 @@ class Mutator:
         if value == self.default_value:
             return test
         obstacles = list(test.obstacles)
-        old = obstacles[self.obstacle]
-        attr = _FIELD[self.kind]
-        new_value = getattr(old, attr) + value
+        obstacles[self.obstacle] = self.mutate(obstacles[self.obstacle], value)
         try:
-            obstacles[self.obstacle] = replace(old, **{attr: new_value})
             return test.with_obstacles(obstacles)
+        except InvalidTestCase as err:
+            raise InvalidTestCase(f"mutator {self.name} by {value:+g}: {err}") from err
+
+    def mutate(self, obstacle, value: float):
+        """The obstacle changed by ``value`` (checked on its own; overlaps are the test's to check)."""
+        attr = _FIELD[self.kind]
+        new_value = getattr(obstacle, attr) + value
+        if not self.lowest - 1e-9 <= new_value <= self.highest + 1e-9:
+            raise InvalidTestCase(f"mutator {self.name} by {value:+g}: obstacles[{self.obstacle}].{attr} "
+                                  f"{new_value:g} is outside [{self.lowest:g}, {self.highest:g}]")
+        try:
+            return replace(obstacle, **{attr: new_value})
         except InvalidTestCase as err:
             raise InvalidTestCase(f"mutator {self.name} by {value:+g}: {err}") from err
 
@@ -275,9 +291,21 @@ def default_mutators(test: TestCase, kinds=AUTHORS_ORDER, obstacles=None) -> tup
 
 def apply_action(test: TestCase, mutators, action) -> TestCase:
     """The test that an action stands for: one value in [-1, 1] per mutator, scaled to the mutator's range
-    (centre + value x half range) and applied in order (values rounded to 1e-9, so equal actions give equal keys).
-    Raises InvalidTestCase for an invalid result."""
+    (centre + value x half range; values rounded to 1e-9, so equal actions give equal keys). The obstacle mutators
+    change their obstacles first and the layout is checked once, as a whole (a box may pass through another on the
+    way); then the others (UAV settings, wind) apply in order. Raises InvalidTestCase for an invalid result."""
+    obstacles, rest = list(test.obstacles), []
     for mutator, a in zip(mutators, np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)):
         centre, half_range = (mutator.high + mutator.low) / 2, (mutator.high - mutator.low) / 2
-        test = mutator.apply(test, float(np.round(centre + a * half_range, 9)))
+        value = float(np.round(centre + a * half_range, 9))
+        if not isinstance(mutator, Mutator):
+            rest.append((mutator, value))
+        elif not 0 <= mutator.obstacle < len(obstacles):
+            raise InvalidTestCase(f"mutator {mutator.name}: the test has {len(obstacles)} obstacle(s)")
+        elif value != mutator.default_value:
+            obstacles[mutator.obstacle] = mutator.mutate(obstacles[mutator.obstacle], value)
+    if obstacles != list(test.obstacles):
+        test = test.with_obstacles(obstacles)
+    for mutator, value in rest:
+        test = mutator.apply(test, value)
     return test

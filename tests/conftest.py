@@ -11,9 +11,10 @@ EXPERIMENTS = SHARED_DATA / "surrealist" / "experiments"
 FORMATS = SHARED_DATA / "formats"
 CASE0_ULG = EXPERIMENTS / "case0.ulg"
 REFERENCE_CSV = SHARED_DATA / "reference" / "case0_reference_trajectory.csv"
+CASE_STUDIES = SHARED_DATA / "competition" / "case_studies"
 
 
-_SHARED_PATHS = (SHARED_DATA, EXPERIMENTS, FORMATS, CASE0_ULG, REFERENCE_CSV)
+_SHARED_PATHS = (SHARED_DATA, EXPERIMENTS, FORMATS, CASE0_ULG, REFERENCE_CSV, CASE_STUDIES)
 _MISSING = f"needs the shared data folder {SHARED_DATA} (clone the project beside ../shared)"
 
 

@@ -187,6 +187,25 @@ class GenerateOptions(SearchOptions):
                           choices=["riskiest", "mean"])
     all_mutators: bool = _opt(False, "move, resize and rotate every obstacle (default: move the first obstacle "
                                      "only)", action="store_true")
+    case_study: str | None = _opt(None, "generate a suite of distinct failures for a UAV Testing Competition case "
+                                        "study (mission1, mission2, mission3 or its YAML) under the competition's "
+                                        "rules; then the defaults are --budget 200 --runs 1 --agent suite",
+                                  metavar="NAME|YAML")
+    obstacles: int = _opt(3, "with --case-study: boxes per test (1-3; default {default})", type=int)
+    wind: bool = _opt(False, "with --case-study: search the wind's speed and direction too", action="store_true")
+    confirm: int = _opt(5, "with --case-study: re-fly each failure of the suite this many times with fresh noise and "
+                           "report its failure probability (default {default}; 0: do not)", type=int)
+
+    def check(self, where=lambda name: "--" + name.replace("_", "-")) -> "GenerateOptions":
+        super().check(where)
+        if self.confirm < 0 or isinstance(self.confirm, bool):
+            raise SurrealistError(f"{where('confirm')}: expected a whole number >= 0, got {self.confirm!r}")
+        if self.case_study is not None and self.test is not None:
+            raise SurrealistError(f"{where('case_study')}: a case study brings its own mission; give it or a seed "
+                                  f"test, not both")
+        if self.case_study is not None and not 1 <= self.obstacles <= 3:
+            raise SurrealistError(f"{where('obstacles')}: the competition allows 1 to 3 boxes, got {self.obstacles}")
+        return self
 
 
 def check_at_least(args: argparse.Namespace, **lowest) -> None:

@@ -36,6 +36,7 @@ class SurrealistEnv(gym.Env):
     """Base of Surrealist-Replicate-v0 and Surrealist-Generate-v0."""
 
     metadata = {"render_modes": []}
+    steps_per_budget = INVALID_STEPS_FACTOR  # the episode also ends after this many steps per evaluation budgeted
 
     def __init__(self, seed_test: TestCase, mutators, budget: int, runs: int, executor=None, store=None,
                  random_seed: int = 0, sim_config=None, workers: int | None = None, uav=None):
@@ -187,7 +188,7 @@ class SurrealistEnv(gym.Env):
             if evaluation.fitness > self._best.fitness:
                 self._best = evaluation
         fitness = self._penalty() if evaluation is None or not np.isfinite(evaluation.fitness) else evaluation.fitness
-        truncated = self.budget_left <= 0 or self._steps >= INVALID_STEPS_FACTOR * self._budget
+        truncated = self.budget_left <= 0 or self._steps >= self.steps_per_budget * self._budget
         terminated = evaluation is not None and self._terminated(evaluation)
         info = self._info(evaluation, invalid, memo)
         return self._observation(fitness), float(fitness), terminated, truncated, info

@@ -1,0 +1,149 @@
+"""The UAV Testing Competition (SBFT 2024, ICST/SBFT 2025): its case studies, its rules on obstacles and its points.
+
+Sources: the competition's README and case studies (skhatiri/UAV-Testing-Competition, ``snippets/case_studies``) as
+summarised in ``shared/PX4-AVOIDANCE.md`` section 1: at most 3 boxes standing on the ground (z = 0), x in [-40, 30],
+y in [10, 40], l and w in [2, 20], h in [10, 25] (taller than the 10 m flight), r in [0, 90] degrees, no overlap; a
+run is a soft failure below 1.5 m (the 2-D competition distance, :func:`~surrealist_gym.geometry.competition_distance`)
+and scores 5 points below 0.25 m, 2 below 1 m, 1 below 1.5 m.
+
+Example:
+    >>> points(0.9), points(1.6)
+    (2, 0)
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from .errors import InvalidTestCase
+from .outcomes import UNSAFE_DISTANCE_M
+from .testcase import Obstacle, Shape, TestCase
+
+#: Points of a run by its competition distance [m]: (below this distance, points), checked in order.
+POINTS = ((0.25, 5), (1.0, 2), (UNSAFE_DISTANCE_M, 1))
+
+#: Where case-study names are looked up, in order (the competition repository keeps them in snippets/case_studies).
+CASE_STUDY_ENV = "SURREALIST_CASE_STUDIES"
+CASE_STUDY_FOLDERS = ("case_studies", "snippets/case_studies", "../shared/data/competition/case_studies")
+
+
+@dataclass(frozen=True, slots=True)
+class Rules:
+    """The competition's bounds on a test's obstacles (metres, degrees; inclusive)."""
+
+    max_obstacles: int = 3
+    x: tuple[float, float] = (-40.0, 30.0)
+    y: tuple[float, float] = (10.0, 40.0)
+    l: tuple[float, float] = (2.0, 20.0)
+    w: tuple[float, float] = (2.0, 20.0)
+    h: tuple[float, float] = (10.0, 25.0)
+    r: tuple[float, float] = (0.0, 90.0)
+
+    def bounds(self, field: str) -> tuple[float, float]:
+        return getattr(self, field)
+
+
+RULES = Rules()
+LAYOUT_FIELDS = ("x", "y", "l", "w", "h", "r")  # what a case-study test chooses of each box
+
+
+def points(distance: float) -> int:
+    """The competition's points of one run with this competition distance [m] (0 when not a soft failure)."""
+    if not math.isfinite(distance):
+        return 0
+    return next((p for limit, p in POINTS if distance < limit), 0)
+
+
+def violations(test: TestCase, rules: Rules = RULES) -> tuple[str, ...]:
+    """Every way the test's obstacles break the competition's rules, one line each naming the field (empty: valid).
+    Overlaps are refused when the test is made (:class:`TestCase`)."""
+    out = []
+    if len(test.obstacles) > rules.max_obstacles:
+        out.append(f"obstacles: {len(test.obstacles)} boxes, the competition allows at most {rules.max_obstacles}")
+    for i, o in enumerate(test.obstacles):
+        if o.shape != Shape.BOX:
+            out.append(f"obstacles[{i}].shape: {o.shape.value}, the competition allows boxes only")
+        if o.z != 0:
+            out.append(f"obstacles[{i}].z: {o.z:g}, the competition's boxes stand on the ground (z = 0)")
+        for name in LAYOUT_FIELDS:
+            low, high = rules.bounds(name)
+            value = getattr(o, name)
+            if not low - 1e-9 <= value <= high + 1e-9:
+                out.append(f"obstacles[{i}].{name}: {value:g} is outside the competition's [{low:g}, {high:g}]")
+    return tuple(out)
+
+
+def check_rules(test: TestCase, rules: Rules = RULES) -> None:
+    """Raise InvalidTestCase with the first rule the test breaks."""
+    broken = violations(test, rules)
+    if broken:
+        raise InvalidTestCase(broken[0])
+
+
+# --- case studies ---------------------------------------------------------------------------------------------------
+def case_study_path(name) -> Path:
+    """The YAML of a case study: a path to an Aerialist YAML, or a name (``mission2``) looked up in
+    ``$SURREALIST_CASE_STUDIES``, then ``case_studies/``, ``snippets/case_studies/`` and
+    ``../shared/data/competition/case_studies/`` under the current folder."""
+    given = Path(os.fspath(name))
+    if given.suffix in (".yaml", ".yml"):
+        if not given.is_file():
+            raise InvalidTestCase(f"case study {os.fspath(name)!r}: no such file")
+        return given
+    folders = [Path(p) for p in os.environ.get(CASE_STUDY_ENV, "").split(os.pathsep) if p]
+    folders += [Path(p) for p in CASE_STUDY_FOLDERS]
+    for folder in folders:
+        if (folder / f"{given.name}.yaml").is_file():
+            return folder / f"{given.name}.yaml"
+    known = sorted({p.stem for folder in folders if folder.is_dir() for p in folder.glob("*.yaml")})
+    where = ", ".join(os.fspath(f) for f in folders)
+    raise InvalidTestCase(f"case study {os.fspath(name)!r}: not found in {where}"
+                          + (f" (known: {', '.join(known)})" if known else f"; set {CASE_STUDY_ENV} to the "
+                             f"competition's case_studies folder"))
+
+
+def load_case_study(name) -> TestCase:
+    """The case study's mission, parameters and commands as a test without obstacles (its own obstacles dropped)."""
+    import warnings
+
+    from .testcase import load_test
+
+    path = case_study_path(name)
+    with warnings.catch_warnings():  # the case studies' first item (MAV_CMD 530, camera mode) is skipped as known
+        warnings.filterwarnings("ignore", message=r".*MAV_CMD 530 is not supported")
+        test = load_test(path)
+    if test.mission is None:
+        raise InvalidTestCase(f"{path}: field 'mission_file': a case study needs a mission")
+    return test.with_obstacles(())
+
+
+def seed_layout(count: int = 3, rules: Rules = RULES) -> tuple[Obstacle, ...]:
+    """``count`` mid-sized boxes spread along the x bounds at mid y, side by side: a valid start (action 0) from
+    which the env's mutators reach every layout within the rules (:func:`layout_mutators`)."""
+    if not 1 <= count <= rules.max_obstacles:
+        raise InvalidTestCase(f"obstacles: {count}, the competition allows 1 to {rules.max_obstacles}")
+    (x0, x1), y = rules.x, sum(rules.y) / 2
+    xs = [x0 + (x1 - x0) * (i + 0.5) / count for i in range(count)]
+    mid = {name: sum(rules.bounds(name)) / 2 for name in ("w", "h")}
+    side = min(sum(rules.l) / 2, 0.9 * (x1 - x0) / count)  # boxes of the seed never touch
+    return tuple(Obstacle(side, mid["w"], mid["h"], x, y, 0.0, rules.r[0]) for x in xs)
+
+
+def layout_mutators(seed: TestCase, rules: Rules = RULES):
+    """One mutator per box and field that moves it by up to the whole width of the rule's bounds either way, within
+    those bounds (``lowest``/``highest``): ``env.action_bounds()`` is exactly the rules, action 0 the seed."""
+    from .mutators import Mutator, MutatorKind
+
+    kinds = {"x": MutatorKind.MOVE_X, "y": MutatorKind.MOVE_Y, "r": MutatorKind.ROTATE,
+             "l": MutatorKind.RESIZE_L, "w": MutatorKind.RESIZE_W, "h": MutatorKind.RESIZE_H}
+    out = []
+    for i in range(len(seed.obstacles)):
+        for name in LAYOUT_FIELDS:
+            low, high = rules.bounds(name)
+            rotation = name == "r"
+            out.append(Mutator(i, kinds[name], default_step=15.0 if rotation else 4.0,
+                               min_step=0.5 if rotation else 0.1, low=low - high, high=high - low,
+                               lowest=low, highest=high))
+    return tuple(out)

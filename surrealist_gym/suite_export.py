@@ -1,0 +1,104 @@
+"""A suite of distinct failures as files: Aerialist YAMLs ready to re-run on PX4, a table, and a top view of each.
+
+``export_suite(suite, folder)`` writes each member twice, with the current Aerialist keys (``robot``/``mission``) in
+``folder/`` and with the competition's keys (``drone``/``test``, Aerialist before 2024) in ``folder/legacy/``. The
+mission, parameter and command files are copied into ``folder/case_studies/`` (and ``legacy/case_studies/``), so
+each YAML names them by the relative path the competition's own YAMLs use and the folder can be moved as a whole.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+from .suite import Member, Suite, layout_distance, trajectory_distance
+from .testcase import TestCase, save_test
+
+FILES_FOLDER = "case_studies"
+
+
+def _with_copied_files(test: TestCase, folder: Path) -> TestCase:
+    """The test naming copies of its mission/params/commands files in ``folder/case_studies``."""
+    files = folder / FILES_FOLDER
+    changes = {}
+    for key in ("mission_file", "params_file", "commands_file"):
+        source = getattr(test, key)
+        if source:
+            files.mkdir(parents=True, exist_ok=True)
+            target = files / Path(source).name
+            if not target.exists():
+                shutil.copyfile(source, target)
+            changes[key] = str(target.resolve())
+    return replace(test, **changes)
+
+
+def member_name(index: int) -> str:
+    return f"failure-{index + 1:02d}"
+
+
+def export_suite(suite: Suite, folder) -> list[Path]:
+    """Write every member as ``failure-NN.yaml`` (robot/mission keys) and ``legacy/failure-NN.yaml`` (drone/test
+    keys), plus ``suite.csv``; returns the current-key YAMLs in member order."""
+    folder = Path(folder)
+    legacy = folder / "legacy"
+    legacy.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i, member in enumerate(suite.members):
+        name = member_name(i) + ".yaml"
+        save_test(_with_copied_files(member.test, folder), folder / name)
+        save_test(_with_copied_files(member.test, legacy), legacy / name, legacy=True)
+        paths.append(folder / name)
+    with open(folder / "suite.csv", "w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f)
+        writer.writerow(["test", "evaluation", "status", "distance_m", "points", "obstacles",
+                         "nearest_flight_m", "nearest_layout_m"])
+        for i, member in enumerate(suite.members):
+            flight, layout = _nearest(member, suite.members)
+            writer.writerow([member_name(i), member.evaluation, member.status, f"{member.distance:.3f}",
+                             member.points, len(member.test.obstacles), _fmt(flight), _fmt(layout)])
+    return paths
+
+
+def _nearest(member: Member, members) -> tuple[float, float]:
+    """The member's smallest flight and layout distances to the other members [m] (inf when it is alone)."""
+    others = [m for m in members if m is not member]
+    if not others:
+        return math.inf, math.inf
+    return (min(trajectory_distance(member.trajectory, m.trajectory) for m in others),
+            min(layout_distance(member.test.obstacles, m.test.obstacles) for m in others))
+
+
+def _fmt(value: float) -> str:
+    return "" if not math.isfinite(value) else f"{value:.2f}"
+
+
+def plot_suite(suite: Suite, path, columns: int = 4) -> None:
+    """A top view of each member: its boxes and the flight that came closest (x north up, y east right)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon
+
+    n = max(1, len(suite.members))
+    rows = math.ceil(n / columns)
+    fig, axes = plt.subplots(rows, min(columns, n), figsize=(3.2 * min(columns, n), 3.4 * rows), squeeze=False)
+    for ax in axes.flat:
+        ax.set_visible(False)
+    for i, (member, ax) in enumerate(zip(suite.members, axes.flat)):
+        ax.set_visible(True)
+        for o in member.test.obstacles:
+            ax.add_patch(Polygon([(y, x) for x, y in o.footprint()], closed=True, facecolor="0.75",
+                                 edgecolor="0.3"))
+        xyz = member.trajectory
+        ax.plot(xyz[:, 1], xyz[:, 0], color="tab:red", linewidth=1.2)
+        ax.set_title(f"{member_name(i)}: {member.distance:.2f} m, {member.points} pt", fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xlabel("y east [m]", fontsize=8)
+        ax.set_ylabel("x north [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
