@@ -37,6 +37,7 @@ class CaseStudyEnv(SurrealistEnv):
         self.rules = rules
         self.feasibility = feasibility
         self.aggregate = aggregate
+        self.distance_measure = Measure.COMPETITION
         seed = self.case_study.with_obstacles(seed_layout(obstacles, rules))
         mutators = layout_mutators(seed, rules)
         if wind:
