@@ -24,6 +24,7 @@ COMMANDS = {
     "train-ppo": ("surrealist_gym.cli.train_ppo", "train an RL policy (PPO/SAC) across generated problems"),
     "surrogate": ("surrealist_gym.cli.surrogate", "train or evaluate a surrogate model on evaluation stores"),
     "fidelity": ("surrealist_gym.cli.fidelity", "fly a labelled set of tests and report how far our UAV agrees"),
+    "evaluate": ("surrealist_gym.cli.evaluate", "re-fly a suite of tests N times: failure odds, points, diversity"),
 }
 
 

@@ -1,0 +1,409 @@
+"""Re-evaluation of a suite of Aerialist tests: fly each test N times and report how often and how badly it fails.
+
+Any folder of Aerialist YAMLs (a generator's output, the competition's) is flown ``runs`` times per test; run i of a
+test draws its noise from (test key, seed, i). A run **fails** when it collides or its competition distance
+(:attr:`~surrealist_gym.sim.runner.RunResult.competition_distance`) is below 1.5 m. Per test
+(:class:`TestStats`): the failure probability with its 95% Clopper-Pearson interval, the competition's points
+(:func:`~surrealist_gym.competition.points`; a collision scores 5) as a mean per run and for the median run, and the
+closest approach. Per suite (:class:`Evaluation`): the failing tests' closest runs offered in turn to a
+:class:`~surrealist_gym.suite.Suite` (distinct failures) and their :func:`~surrealist_gym.suite.diversity`.
+
+The tests are flown on a process pool several at a time, so every core stays busy: whole tests (their runs in one
+world) first, the last round split run by run so that no worker idles at the end.
+
+Example::
+
+    >>> tests = load_tests(["../shared/data/competition/camba-collection"])     # doctest: +SKIP
+    >>> ev = evaluate(tests, runs=5, workers=2)                                  # doctest: +SKIP
+    >>> write_report(ev, "results/camba")                                        # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import csv
+import math
+import os
+import time
+from collections import Counter
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable, Sequence
+
+import numpy as np
+
+from .errors import InvalidTestCase, SurrealistError, one_line
+from .frozendict import FrozenDict
+from .outcomes import UNSAFE_DISTANCE_M
+from .testcase import Obstacle, TestCase
+
+if TYPE_CHECKING:
+    from .suite import Suite
+
+__all__ = ["CONFIDENCE", "Evaluation", "RunRecord", "TestStats", "evaluate", "find_tests", "fly_tests",
+           "load_tests", "summarise_test", "write_report"]
+
+CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
+_SUFFIXES = (".yaml", ".yml")
+
+
+# --- input ---------------------------------------------------------------------------------------------------------
+def find_tests(paths: Sequence) -> list[Path]:
+    """The YAML files named by ``paths``: files as given, folders' ``*.yaml``/``*.yml`` (not recursive), each once."""
+    out, seen = [], set()
+    for given in paths:
+        path = Path(os.fspath(given))
+        if path.is_dir():
+            found = sorted(p for p in path.iterdir() if p.suffix.lower() in _SUFFIXES and p.is_file())
+            if not found:
+                raise SurrealistError(f"{os.fspath(given)}: no test YAML (*.yaml, *.yml) in this folder")
+        elif path.is_file():
+            found = [path]
+        else:
+            raise SurrealistError(f"{os.fspath(given)}: no such file or folder")
+        for p in found:
+            if p.resolve() not in seen:
+                seen.add(p.resolve())
+                out.append(p)
+    return out
+
+
+def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, TestCase]]:
+    """Load the tests named by ``paths`` (see :func:`find_tests`) and check them; unless ``any_layout``, against
+    the competition's rules (:func:`~surrealist_gym.competition.violations`). Raises a one-line
+    :class:`~surrealist_gym.errors.InvalidTestCase` naming the file and field of the first bad test."""
+    import warnings
+
+    from .competition import violations
+    from .testcase import load_test
+
+    out = []
+    for path in find_tests(paths):
+        with warnings.catch_warnings():  # the case studies' first item (MAV_CMD 530, camera mode) is skipped as known
+            warnings.filterwarnings("ignore", message=r".*MAV_CMD 530 is not supported")
+            test = load_test(path)
+        if test.mission is None or not any(item.has_position for item in test.mission.items):
+            raise InvalidTestCase(f"{path}: mission_file: no mission item with a position to fly to")
+        if not any_layout:
+            broken = violations(replace(test, obstacles=tuple(_canonical(o) for o in test.obstacles)))
+            if broken:
+                more = f" (and {len(broken) - 1} more)" if len(broken) > 1 else ""
+                raise InvalidTestCase(f"{path}: {broken[0]}{more}; --any-layout skips the competition's rules")
+        out.append((path, test))
+    return out
+
+
+def _canonical(o: Obstacle) -> Obstacle:
+    """The same box with r in [0, 90]: a box turned by r + 180 is the box turned by r, and one turned by r + 90 is
+    the box turned by r with l and w swapped (the competition's own CAMBA tests use r up to 360)."""
+    r = o.r % 180.0
+    return replace(o, r=r - 90.0, l=o.w, w=o.l) if r > 90.0 else replace(o, r=r)
+
+
+# --- flying --------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True, eq=False)
+class RunRecord:
+    """One run: index, status, competition distance [m] (inf without obstacles or a flight), duration since arming
+    [s], its trajectory (N, 3) [m] (x north, y east, z up; 0.5 s means) and the end's message."""
+
+    index: int
+    status: str
+    distance: float
+    duration: float
+    trajectory: np.ndarray
+    message: str = ""
+
+    @property
+    def failed(self) -> bool:
+        """A collision, or a competition distance below 1.5 m."""
+        return self.status == "collision" or self.distance < UNSAFE_DISTANCE_M
+
+    @property
+    def points(self) -> int:
+        """The competition's points of the run (a collision scores 5, as a distance of 0 does)."""
+        from .competition import points
+
+        return 5 if self.status == "collision" else points(self.distance)
+
+
+def _records(test, indices, seed, config) -> list[RunRecord]:
+    """Fly runs of one test together and keep what the report needs (the function the workers call)."""
+    from .sim.runner import simulate_runs
+
+    return [RunRecord(int(r.index), str(getattr(r.status, "value", r.status)), float(r.competition_distance),
+                      float(r.duration), np.asarray(r.trajectory.xyz, dtype=np.float64), r.message)
+            for r in simulate_runs(test, list(indices), seed, config)]
+
+
+def _guarded(test, indices, seed, config) -> list[RunRecord]:
+    """Fly again in this process, run by run; a run that raises again ends in ``error`` with the exception."""
+    out = []
+    for i in indices:
+        try:
+            out.extend(_records(test, [i], seed, config))
+        except Exception as err:  # noqa: BLE001 - one broken test must not end the evaluation
+            out.append(RunRecord(i, "error", math.inf, 0.0, np.zeros((0, 3)), f"{type(err).__name__}: {one_line(err)}"))
+    return out
+
+
+def _jobs(tests: int, runs: int, workers: int) -> list[tuple[int, list[int]]]:
+    """(test, run indices) to submit: whole tests first (flying runs in one world is cheaper), then the last
+    ``2 * workers`` tests run by run, so the pool's last round is made of short jobs."""
+    tail = min(tests, 2 * workers) if workers > 1 else 0
+    return ([(i, list(range(runs))) for i in range(tests - tail)]
+            + [(i, [k]) for i in range(tests - tail, tests) for k in range(runs)])
+
+
+def fly_tests(tests: Sequence[TestCase], configs: Sequence, runs: int, seed: int = 0, workers: int | None = None,
+              progress: Callable[[int, int], None] | None = None) -> list[tuple[RunRecord, ...]]:
+    """Fly ``runs`` runs of every test (``configs[i]``: the SimConfig of test i) on ``workers`` processes (default:
+    all cores, at most 8; 1: in this process). Returns the runs of each test, in order; ``progress`` is called with
+    (runs done, runs). A job that raises is flown again here, run by run."""
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from .executors import _die_with_parent
+
+    workers = workers or max(1, min(os.cpu_count() or 1, 8))
+    jobs = _jobs(len(tests), runs, workers)
+    got: list[dict] = [{} for _ in tests]
+    total = len(tests) * runs
+
+    def collect(i: int, records: list[RunRecord]) -> None:
+        got[i].update((r.index, r) for r in records)
+        if progress:
+            progress(sum(map(len, got)), total)
+
+    if workers == 1:
+        for i, chunk in jobs:
+            try:
+                collect(i, _records(tests[i], chunk, seed, configs[i]))
+            except Exception:  # noqa: BLE001 - retried run by run
+                collect(i, _guarded(tests[i], chunk, seed, configs[i]))
+    elif jobs:
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), initializer=_die_with_parent)
+        try:
+            futures = {pool.submit(_records, tests[i], chunk, seed, configs[i]): (i, chunk) for i, chunk in jobs}
+            for future in as_completed(futures):
+                i, chunk = futures[future]
+                try:
+                    collect(i, future.result())
+                except Exception:  # noqa: BLE001 - retried in this process
+                    collect(i, _guarded(tests[i], chunk, seed, configs[i]))
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+    return [tuple(g[k] for k in range(runs)) for g in got]
+
+
+# --- statistics ----------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True, eq=False)
+class TestStats:
+    """One test's runs and what they come to.
+
+    Attributes:
+        file: the YAML. uav: the UAV profile flown. runs: the runs, in run order.
+        failures: failing runs; p: their share; ci_low, ci_high: its 95% Clopper-Pearson interval.
+        points_mean: the competition's points per run; points_median_run: the points of the median run (runs
+            ordered by distance, collisions first; of an even number, the farther of the two middle runs).
+        min_distance, median_distance: the closest approach over the runs [m] (nan without a finite distance).
+        suite: what the failure suite said when offered the test's closest failing run ("" for a passing test).
+    """
+
+    __test__ = False  # not a pytest class
+
+    file: str
+    test: TestCase
+    uav: str
+    runs: tuple[RunRecord, ...]
+    failures: int
+    p: float
+    ci_low: float
+    ci_high: float
+    points_mean: float
+    points_median_run: int
+    min_distance: float
+    median_distance: float
+    suite: str = ""
+
+    @property
+    def name(self) -> str:
+        return Path(self.file).stem
+
+    @property
+    def statuses(self) -> str:
+        """How the runs ended, e.g. ``success:4 collision:1``."""
+        return " ".join(f"{s}:{n}" for s, n in Counter(r.status for r in self.runs).items())
+
+    @property
+    def closest_failure(self) -> RunRecord | None:
+        """The failing run that came closest (a collision first), or None."""
+        return next((r for r in _by_risk(self.runs) if r.failed), None)
+
+    def to_row(self) -> dict:
+        """The row of ``evaluation.csv``."""
+        return {"file": self.file, "runs": len(self.runs), "failures": self.failures, "p": _r(self.p),
+                "ci_low": _r(self.ci_low), "ci_high": _r(self.ci_high), "points_mean": _r(self.points_mean),
+                "points_median_run": self.points_median_run, "min_distance": _r(self.min_distance),
+                "median_distance": _r(self.median_distance), "statuses": self.statuses, "uav": self.uav,
+                "suite": self.suite}
+
+
+def _by_risk(runs: Sequence[RunRecord]) -> list[RunRecord]:
+    """The runs, collisions first, then by distance (closest first), then by index."""
+    return sorted(runs, key=lambda r: (r.status != "collision", r.distance, r.index))
+
+
+def summarise_test(file, test: TestCase, runs: Sequence[RunRecord], uav: str = "") -> TestStats:
+    """The statistics of one test's runs."""
+    from scipy.stats import binomtest
+
+    n, k = len(runs), sum(r.failed for r in runs)
+    ci = binomtest(k, n).proportion_ci(confidence_level=CONFIDENCE, method="exact")
+    ordered = _by_risk(runs)
+    finite = [r.distance for r in runs if math.isfinite(r.distance)]
+    return TestStats(os.fspath(file), test, uav, tuple(runs), k, k / n, float(ci.low), float(ci.high),
+                     float(np.mean([r.points for r in runs])), ordered[n // 2].points,
+                     float(np.min(finite)) if finite else math.nan, float(np.median(finite)) if finite else math.nan)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Evaluation:
+    """A suite re-evaluated: its tests' statistics, the distinct failures and their diversity.
+
+    Attributes:
+        runs, seed: runs per test and base seed; uav: the profile given (None: each test's default).
+        tests: per-test statistics, in input order. suite: the distinct failures (a
+        :class:`~surrealist_gym.suite.Suite` of the failing tests' closest runs). diversity: their
+        :func:`~surrealist_gym.suite.diversity` over all failing tests. workers, wall_s: processes and flying time [s].
+    """
+
+    runs: int
+    seed: int
+    uav: str | None
+    tests: tuple[TestStats, ...]
+    suite: "Suite"
+    diversity: FrozenDict
+    workers: int
+    wall_s: float
+
+    @property
+    def failing(self) -> tuple[TestStats, ...]:
+        """The tests with at least one failing run."""
+        return tuple(t for t in self.tests if t.failures)
+
+
+def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 0, uav=None,
+             workers: int | None = None, progress: Callable[[int, int], None] | None = None) -> Evaluation:
+    """Fly ``runs`` runs of each (file, test) (from :func:`load_tests`) and compute the report's figures.
+
+    ``uav``: a profile name, YAML or :class:`~surrealist_gym.sim.profiles.UavProfile` for every test (default: each
+    test's :func:`~surrealist_gym.sim.profiles.default_profile`)."""
+    from .sim.profiles import default_profile, load_profile
+    from .suite import Member, Suite, diversity
+
+    if runs < 1:
+        raise SurrealistError(f"runs: expected a whole number >= 1, got {runs!r}")
+    given = None if uav is None else load_profile(uav)
+    profiles = [given or default_profile(test) for _, test in tests]
+    configs = [p.sim_config() for p in profiles]
+    workers = workers or max(1, min(os.cpu_count() or 1, 8))
+    start = time.perf_counter()
+    flown = fly_tests([t for _, t in tests], configs, runs, seed, workers, progress)
+    wall = time.perf_counter() - start
+    stats = [summarise_test(path, test, records, profile.name)
+             for (path, test), records, profile in zip(tests, flown, profiles)]
+    suite, members = Suite(), []
+    for i, st in enumerate(stats):
+        if (run := st.closest_failure) is not None:
+            members.append(Member(st.test, run.distance, run.trajectory, evaluation=i + 1, status=run.status))
+            suite, what = suite.offer(members[-1])
+            stats[i] = replace(st, suite=what)
+    return Evaluation(runs, seed, None if given is None else given.name, tuple(stats), suite,
+                      FrozenDict(diversity(members)), workers, wall)
+
+
+# --- report --------------------------------------------------------------------------------------------------------
+def _r(value, digits: int = 4):
+    return "" if value is None or not math.isfinite(value) else round(float(value), digits)
+
+
+def _f(value, digits: int = 2) -> str:
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def _write_csv(path: Path, rows: list[dict]) -> None:
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def suite_lines(ev: Evaluation) -> list[str]:
+    """The suite's figures, one per line (the CLI's summary and the report share them)."""
+    d = ev.diversity
+    failing_runs = sum(t.failures for t in ev.tests)
+    return [f"tests failing at least once: {len(ev.failing)} of {len(ev.tests)}; failing runs: {failing_runs} of "
+            f"{len(ev.tests) * ev.runs}",
+            f"points: {sum(t.points_mean for t in ev.tests):.1f} expected per round of the suite (sum of the mean "
+            f"points per run), {sum(t.points_median_run for t in ev.tests)} for the median runs",
+            f"distinct failures: {len(ev.suite)} of {len(ev.failing)} failing tests (alike: flights < "
+            f"{ev.suite.min_flight_m:g} m apart and layouts < {ev.suite.min_layout_m:g} m apart)",
+            f"diversity of the failing tests' closest runs: flight mean {_f(d['flight_mean_m'])} m (min "
+            f"{_f(d['flight_min_m'])} m), layout mean {_f(d['layout_mean_m'])} m (min {_f(d['layout_min_m'])} m)"
+            if d["members"] > 1 else "diversity: needs two failing tests"]
+
+
+def write_report(ev: Evaluation, out) -> dict[str, Path]:
+    """Write ``evaluation.csv`` (one row per test), ``runs.csv`` (one row per run), the figures
+    (:mod:`surrealist_gym.report_plots`) and ``report.md`` to the folder ``out``; returns their paths."""
+    from .report_plots import plot_distances, plot_suite_map, plot_top_views
+
+    out = Path(out)
+    paths = {"report": out / "report.md", "evaluation": out / "evaluation.csv", "runs": out / "runs.csv",
+             "distances": out / "distances.png", "top_views": out / "top-views.png",
+             "suite_map": out / "suite-map.png"}
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        _write_csv(paths["evaluation"], [t.to_row() for t in ev.tests])
+        _write_csv(paths["runs"], [{"file": t.file, "run": r.index, "status": r.status, "distance": _r(r.distance),
+                                    "failed": int(r.failed), "points": r.points, "duration_s": _r(r.duration, 2),
+                                    "message": r.message} for t in ev.tests for r in t.runs])
+        plot_distances(ev, paths["distances"])
+        plot_top_views(ev, paths["top_views"])
+        plot_suite_map(ev, paths["suite_map"])
+        paths["report"].write_text(report_text(ev), encoding="utf-8")
+    except OSError as err:
+        raise SurrealistError(f"{out}: cannot write the report ({err.strerror or err})") from err
+    return paths
+
+
+def report_text(ev: Evaluation) -> str:
+    """The Markdown report (the figures are read from beside it)."""
+    uav = ev.uav or ", ".join(sorted({t.uav for t in ev.tests})) + " (each test's default)"
+    lines = [f"# Re-evaluation of {len(ev.tests)} tests", "",
+             f"{ev.runs} runs per test, base seed {ev.seed}, UAV profile {uav}; flown on {ev.workers} worker(s) in "
+             f"{ev.wall_s:.1f} s.", "",
+             f"A run **fails** when it collides or its competition distance (box footprint to the 0.5 s flight "
+             f"polyline, 2-D) is below {UNSAFE_DISTANCE_M:g} m. Points as the competition scores a run: 5 below "
+             f"0.25 m (and for a collision), 2 below 1 m, 1 below 1.5 m.", "", "## Suite", ""]
+    lines += [f"- {line}" for line in suite_lines(ev)]
+    lines += ["", "## Tests", "",
+              "p is the failure probability (failing runs / runs) with its 95% Clopper-Pearson interval; "
+              "points per run is the mean over the runs, median run the points of the run in the middle when "
+              "ordered by distance; suite says what the archive of distinct failures did with the test's closest "
+              "failing run (added, alike N: the same failure as member N, replaced N).", "",
+              "| test | failures | p [95% CI] | points per run | median run | min distance [m] | "
+              "median distance [m] | statuses | suite |", "|---|---|---|---|---|---|---|---|---|"]
+    for t in ev.tests:
+        lines.append(f"| {t.name} | {t.failures}/{len(t.runs)} | {t.p:.2f} [{t.ci_low:.2f}, {t.ci_high:.2f}] | "
+                     f"{t.points_mean:.1f} | {t.points_median_run} | {_f(t.min_distance)} | "
+                     f"{_f(t.median_distance)} | {t.statuses} | {t.suite or '-'} |")
+    lines += ["", "## Figures", "",
+              "**Closest approach per run** (`distances.png`): one row per test, each dot a run's competition "
+              "distance (red: failing, a cross: a collision), a box of the runs' quartiles behind; the dashed line "
+              "is the 1.5 m threshold. A test whose dots straddle the line fails by chance.", "",
+              "![distances](distances.png)", "",
+              "**Top view per test** (`top-views.png`): the boxes' footprints (grey) and every run's flight, east "
+              "to the right and north up (red: failing runs).", "", "![top views](top-views.png)", "",
+              "**Map of the suite** (`suite-map.png`): all the tests' boxes on one top view (faint) and the closest "
+              "failing flight of each failing test (thick: a distinct failure the suite kept). Flights that lie on "
+              "each other near the same boxes are the same failure.", "", "![suite map](suite-map.png)", "",
+              "Per test: `evaluation.csv`; per run: `runs.csv`.", ""]
+    return "\n".join(lines)

@@ -1,0 +1,134 @@
+"""The figures of a re-evaluation report (:mod:`surrealist_gym.reevaluation`): distances per test, a top view per
+test and a map of the suite.
+
+Top views follow the local frame (x north, y east): east (y) on the horizontal axis, north (x) up. matplotlib is
+imported inside each function (the ``Figure`` API, no pyplot state).
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from .outcomes import UNSAFE_DISTANCE_M
+
+__all__ = ["plot_distances", "plot_suite_map", "plot_top_views"]
+
+_PASS, _FAIL, _BOX = "tab:blue", "tab:red", "0.55"
+
+
+def _figure(width: float, height: float):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height))
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _boxes(ax, obstacles, **style) -> None:
+    """Draw the footprints of ``obstacles`` on a top view (y east horizontal, x north vertical)."""
+    from matplotlib.patches import Polygon
+
+    for o in obstacles:
+        corners = np.array(o.footprint())
+        ax.add_patch(Polygon(corners[:, ::-1], closed=True, **style))
+
+
+def _top_axes(ax) -> None:
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, linewidth=0.3)
+
+
+def plot_distances(ev, path) -> None:
+    """Each run's competition distance, one row per test: a box of the quartiles, the runs as dots (red when they
+    fail, a cross for a collision) and the 1.5 m line. Infinite distances (no obstacles, an error) are left out."""
+    tests = ev.tests
+    fig = _figure(9, 1.4 + 0.32 * len(tests))
+    ax = fig.subplots()
+    rng = np.random.default_rng(0)  # jitter only
+    finite = [[r.distance for r in t.runs if math.isfinite(r.distance)] for t in tests]
+    rows = np.arange(len(tests))[::-1]  # the first test on top
+    ax.boxplot([d if d else [math.nan] for d in finite], positions=rows, vert=False, widths=0.6, showfliers=False,
+               medianprops={"color": "0.2"}, boxprops={"color": "0.6"}, whiskerprops={"color": "0.6"},
+               capprops={"color": "0.6"})
+    dots = [(r.distance, row + rng.uniform(-0.18, 0.18), r.failed, r.status == "collision")
+            for row, t in zip(rows, tests) for r in t.runs if math.isfinite(r.distance)]
+    for failed, crash in ((False, False), (True, False), (True, True), (False, True)):
+        xy = np.array([(x, y) for x, y, f, c in dots if f == failed and c == crash]).reshape(-1, 2)
+        ax.scatter(xy[:, 0], xy[:, 1], s=28 if crash else 14, zorder=3, marker="x" if crash else "o",
+                   color=_FAIL if failed else _PASS)
+    ax.axvline(UNSAFE_DISTANCE_M, color="darkred", linestyle="--", linewidth=1, label=f"{UNSAFE_DISTANCE_M:g} m")
+    ax.set_yticks(rows, [f"{t.name}  ({t.failures}/{len(t.runs)})" for t in tests], fontsize="small")
+    ax.set_ylim(-0.7, len(tests) - 0.3)
+    ax.set_xlim(left=0)
+    ax.set_xlabel("competition distance [m] (2-D, footprint to the flight polyline)")
+    ax.set_title(f"closest approach per run ({ev.runs} runs per test; red: failing, x: collision)")
+    ax.grid(True, axis="x", linewidth=0.3)
+    ax.legend(loc="lower right", fontsize="small")
+    fig.tight_layout()
+    fig.savefig(os.fspath(path), dpi=100)
+
+
+def plot_top_views(ev, path, columns: int = 4) -> None:
+    """One top view per test: the boxes' footprints and every run's x-y flight (red: failing runs)."""
+    tests = ev.tests
+    cols = max(1, min(columns, len(tests)))
+    rows = math.ceil(len(tests) / cols)
+    fig = _figure(3.6 * cols, 3.4 * rows)
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    for ax, t in zip(axes, tests):
+        _boxes(ax, t.test.obstacles, facecolor="0.8", edgecolor=_BOX)
+        for r in sorted(t.runs, key=lambda r: r.failed):  # failing flights on top
+            if len(r.trajectory):
+                ax.plot(r.trajectory[:, 1], r.trajectory[:, 0], color=_FAIL if r.failed else _PASS, linewidth=0.8,
+                        alpha=0.8)
+        _top_axes(ax)
+        closest = "-" if math.isnan(t.min_distance) else f"{t.min_distance:.2f} m"
+        ax.set_title(f"{t.name}\np {t.p:.2f}, closest {closest}", fontsize="small")
+        ax.tick_params(labelsize="x-small")
+    for ax in axes[len(tests):]:
+        ax.axis("off")
+    fig.supxlabel("y east [m]")
+    fig.supylabel("x north [m]")
+    fig.subplots_adjust(left=0.06, right=0.98, bottom=0.6 / fig.get_figheight(), top=1 - 0.5 / fig.get_figheight(),
+                        wspace=0.25, hspace=0.45)  # tight_layout costs a draw per axes
+    fig.savefig(os.fspath(path), dpi=80)
+
+
+def plot_suite_map(ev, path) -> None:
+    """All the tests' boxes on one top view (faint) and the closest failing flight of each failing test; the
+    distinct failures the suite kept are drawn thick."""
+    fig = _figure(10, 8)
+    ax = fig.subplots()
+    for t in ev.tests:
+        _boxes(ax, t.test.obstacles, facecolor="0.5", edgecolor="none", alpha=0.08)
+    kept = {m.evaluation for m in ev.suite.members}
+    colours = _colours(len(ev.failing))
+    for colour, (i, t) in zip(colours, [(i, t) for i, t in enumerate(ev.tests, start=1) if t.failures]):
+        run = t.closest_failure
+        if run is None or not len(run.trajectory):
+            continue
+        if i in kept:
+            _boxes(ax, t.test.obstacles, facecolor="none", edgecolor=colour, linewidth=1)
+        ax.plot(run.trajectory[:, 1], run.trajectory[:, 0], color=colour, linewidth=2.2 if i in kept else 0.9,
+                alpha=0.9, label=f"{t.name} ({run.distance:.2f} m" + (", kept)" if i in kept else ")"))
+    if not ev.failing:
+        ax.text(0.5, 0.5, "no failing test", transform=ax.transAxes, ha="center", color="0.4")
+    _top_axes(ax)
+    ax.set_xlabel("y east [m]")
+    ax.set_ylabel("x north [m]")
+    ax.set_title(f"suite map: {len(ev.tests)} layouts, {len(ev.failing)} failing tests, {len(ev.suite)} distinct "
+                 f"failures (thick, with their boxes outlined)")
+    if ev.failing:
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small", title="closest failing run")
+    fig.tight_layout()
+    fig.savefig(os.fspath(path), dpi=100)
+
+
+def _colours(n: int) -> list:
+    from matplotlib import colormaps
+
+    cmap = colormaps["tab20" if n > 10 else "tab10"]
+    return [cmap(i % cmap.N) for i in range(n)]
