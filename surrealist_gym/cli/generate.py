@@ -29,10 +29,13 @@ def run(args) -> int:
     with new_search_folder(args, GenerateOptions) as (out, options):
         if options.case_study:
             return _case_study_search(out, options)
+        seed = load_test(options.test or data_path("rq2-seed.yaml"))
         mutators = None
         if options.all_mutators:
-            seed = load_test(options.test or data_path("rq2-seed.yaml"))
             mutators = default_mutators(seed, AUTHORS_ORDER)
+        if options.wind:
+            from ..mutators import MOVE_KINDS, wind_mutators
+            mutators = (mutators or default_mutators(seed, MOVE_KINDS, obstacles=[0])) + wind_mutators()
         env = GenerateEnv(seed_test=options.test, runs=options.runs, budget=options.budget, mutators=mutators,
                           aggregate=options.aggregate, executor=options.dask_scheduler,
                           store=out / "evaluations.sqlite", random_seed=options.random_seed,

@@ -192,7 +192,8 @@ class GenerateOptions(SearchOptions):
                                         "rules; then the defaults are --budget 200 --runs 1 --agent suite",
                                   metavar="NAME|YAML")
     obstacles: int = _opt(3, "with --case-study: boxes per test (1-3; default {default})", type=int)
-    wind: bool = _opt(False, "with --case-study: search the wind's speed and direction too", action="store_true")
+    wind: bool = _opt(False, "search the wind's speed (0-10 m/s) and direction as well as the obstacles",
+                      action="store_true")
     confirm: int = _opt(5, "with --case-study: re-fly each failure of the suite this many times with fresh noise and "
                            "report its failure probability (default {default}; 0: do not)", type=int)
 

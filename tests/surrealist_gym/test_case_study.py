@@ -139,3 +139,15 @@ def test_a_search_keeps_a_suite_of_real_failures():
         for b in suite.members[i + 1:]:
             assert not suite.alike(a, b)
     env.close()
+
+
+def test_wind_mutators_join_the_layout():
+    env = gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission1.yaml", budget=3, wind=True,
+                   obstacles=1, executor="inline").unwrapped
+    assert [m.name for m in env.mutators][-2:] == ["wind.speed", "wind.direction"]
+    values = np.zeros(len(env.mutators))
+    values[-2:] = [6.0, 90.0]  # 6 m/s, turned from north to east
+    test = env.test_for(env.action_for(values))
+    assert test.wind.velocity_mean == pytest.approx(6.0)
+    assert test.wind.direction[:2] == pytest.approx((0.0, 1.0), abs=1e-9)
+    assert test.obstacles == env.seed_test.obstacles
