@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .errors import InvalidTestCase
@@ -56,13 +56,23 @@ def points(distance: float) -> int:
     return next((p for limit, p in POINTS if distance < limit), 0)
 
 
+def canonical_box(o: Obstacle) -> Obstacle:
+    """The same box turned by r in [0, 90]: a box turned by r + 180 is the box turned by r, and one turned by r + 90
+    is the box turned by r with l and w swapped (the competition scored CAMBA's tests, which turn boxes up to 360)."""
+    r = o.r % 180.0
+    return replace(o, r=r - 90.0, l=o.w, w=o.l) if r > 90.0 else replace(o, r=r)
+
+
 def violations(test: TestCase, rules: Rules = RULES) -> tuple[str, ...]:
     """Every way the test's obstacles break the competition's rules, one line each naming the field (empty: valid).
-    Overlaps are refused when the test is made (:class:`TestCase`)."""
+    A box is checked as its :func:`canonical_box`; overlaps are refused when the test is made (:class:`TestCase`)."""
     out = []
     if len(test.obstacles) > rules.max_obstacles:
         out.append(f"obstacles: {len(test.obstacles)} boxes, the competition allows at most {rules.max_obstacles}")
-    for i, o in enumerate(test.obstacles):
+    for i, given in enumerate(test.obstacles):
+        o = canonical_box(given)
+        note = "" if o.r == given.r else f" (checked as the same box turned by r = {o.r:g}" + (
+            ", l and w swapped)" if o.l != given.l else ")")
         if o.shape != Shape.BOX:
             out.append(f"obstacles[{i}].shape: {o.shape.value}, the competition allows boxes only")
         if o.z != 0:
@@ -71,7 +81,8 @@ def violations(test: TestCase, rules: Rules = RULES) -> tuple[str, ...]:
             low, high = rules.bounds(name)
             value = getattr(o, name)
             if not low - 1e-9 <= value <= high + 1e-9:
-                out.append(f"obstacles[{i}].{name}: {value:g} is outside the competition's [{low:g}, {high:g}]")
+                out.append(f"obstacles[{i}].{name}: {value:g} is outside the competition's [{low:g}, {high:g}]"
+                           + note)
     return tuple(out)
 
 

@@ -83,19 +83,12 @@ def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, Te
         if test.mission is None or not any(item.has_position for item in test.mission.items):
             raise InvalidTestCase(f"{path}: mission_file: no mission item with a position to fly to")
         if not any_layout:
-            broken = violations(replace(test, obstacles=tuple(_canonical(o) for o in test.obstacles)))
+            broken = violations(test)
             if broken:
                 more = f" (and {len(broken) - 1} more)" if len(broken) > 1 else ""
                 raise InvalidTestCase(f"{path}: {broken[0]}{more}; --any-layout skips the competition's rules")
         out.append((path, test))
     return out
-
-
-def _canonical(o: Obstacle) -> Obstacle:
-    """The same box with r in [0, 90]: a box turned by r + 180 is the box turned by r, and one turned by r + 90 is
-    the box turned by r with l and w swapped (the competition's own CAMBA tests use r up to 360)."""
-    r = o.r % 180.0
-    return replace(o, r=r - 90.0, l=o.w, w=o.l) if r > 90.0 else replace(o, r=r)
 
 
 # --- flying --------------------------------------------------------------------------------------------------------

@@ -33,11 +33,16 @@ def test_points_follow_the_competition():
 
 
 def test_rules_name_the_field_and_bound():
-    test = mission().with_obstacles([Obstacle(25, 5, 20, -10, 20), Obstacle(5, 5, 8, 20, 35, 0, 120)])
+    test = mission().with_obstacles([Obstacle(25, 5, 20, -10, 20), Obstacle(5, 5, 8, 20, 35, 0, 60)])
     broken = violations(test)
     assert "obstacles[0].l: 25 is outside the competition's [2, 20]" in broken
     assert "obstacles[1].h: 8 is outside the competition's [10, 25]" in broken
-    assert "obstacles[1].r: 120 is outside the competition's [0, 90]" in broken
+    assert len(broken) == 2  # r = 60 is within the rules
+    turned = mission().with_obstacles([Obstacle(20, 4, 20, -10, 20, 0, 300)])  # = a 4 x 20 box turned by 30
+    assert violations(turned) == ()
+    assert violations(mission().with_obstacles([Obstacle(30, 4, 20, -10, 20, 0, 120)]))[0] == \
+        "obstacles[0].w: 30 is outside the competition's [2, 20] (checked as the same box turned by r = 30, l and w " \
+        "swapped)"
     four = mission().with_obstacles([Obstacle(2, 2, 20, -35 + 15 * i, 20) for i in range(4)])
     assert violations(four)[0].startswith("obstacles: 4 boxes")
     assert violations(mission().with_obstacles(seed_layout(3))) == ()
