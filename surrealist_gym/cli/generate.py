@@ -94,11 +94,24 @@ def _write_suite(out, suite, options) -> None:
         print(f"suite in {folder}/: failure-NN.yaml (robot/mission keys), legacy/ (drone/test keys), suite.csv, "
               f"suite.png")
         return
+    import sys
+
+    from tqdm import tqdm
+
     from ..reevaluation import evaluate, load_tests, write_report
 
-    # fresh noise: the re-runs draw from another base seed than the search's runs
-    ev = evaluate(load_tests(paths), runs=options.confirm, seed=options.random_seed + 1, uav=options.uav,
-                  workers=options.workers)
+    bar = tqdm(total=len(paths) * options.confirm, unit="run", desc="confirm", dynamic_ncols=True, file=sys.stderr,
+               disable=None)
+
+    def progress(done: int, total: int) -> None:
+        bar.n = done
+        bar.refresh()
+
+    try:  # fresh noise: the re-runs draw from another base seed than the search's runs
+        ev = evaluate(load_tests(paths), runs=options.confirm, seed=options.random_seed + 1, uav=options.uav,
+                      workers=options.workers, progress=progress)
+    finally:
+        bar.close()
     write_report(ev, folder / "confirmation")
     confirmed = sum(s.p >= CONFIRMED_P for s in ev.tests)
     print(f"confirmation: {confirmed} of {len(suite)} fail in >= {CONFIRMED_P:.0%} of {options.confirm} re-runs "
