@@ -18,13 +18,15 @@ CASES = {
     "prescreen_greedy.py": ["--budget", "3", "--runs", "2", "--first-runs", "1", "--kind", "knn"],
     "calibrate_and_replicate.py": [str(ROOT.parent / "shared" / "data" / "surrealist" / "experiments" / "m0.ulg"),
                                    "--budget", "3", "--runs", "1", "--inline"],
+    "competition_suite.py": [str(ROOT.parent / "shared" / "data" / "competition" / "case_studies" / "mission1.yaml"),
+                             "--budget", "6", "--confirm", "2", "--inline", "--out", "{tmp}/suite"],
 }
 
 
 @pytest.mark.parametrize("script", sorted(CASES))
 def test_example_runs(script, tmp_path):
     args = [a.replace("{tmp}", str(tmp_path)) for a in CASES[script]]
-    if any(a.endswith(".ulg") and not Path(a).is_file() for a in args):
+    if any(a.endswith((".ulg", ".yaml")) and not Path(a).is_file() for a in args):
         pytest.skip("needs the shared data folder beside the project")
     env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONWARNINGS": "ignore"}
     done = subprocess.run([sys.executable, str(ROOT / "examples" / script), *args], cwd=tmp_path, env=env,
