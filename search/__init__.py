@@ -7,12 +7,13 @@ from .cmaes import CMAES, CMAESConfig
 from .compare import CompareResult, compare
 from .greedy import AdaptiveGreedy, GreedyConfig
 from .metrics import SearchMetrics, search_metrics
+from .novelty import SuiteSearch, SuiteSearchConfig
 from .random import RandomConfig, RandomSearch
 from .registry import agent_names, make_agent, register_agent
 from .repetitions import Repetition, run_repetition
 from .rl import PPOAgent, ProceduralEnv, train_policy
 
 __all__ = ["Agent", "AdaptiveGreedy", "CMAES", "CMAESConfig", "CompareResult", "GreedyConfig", "PPOAgent",
-           "ProceduralEnv", "RandomConfig", "RandomSearch", "Repetition", "SearchMetrics", "SearchResult",
+           "ProceduralEnv", "RandomConfig", "RandomSearch", "Repetition", "SearchMetrics", "SearchResult", "SuiteSearch", "SuiteSearchConfig",
            "agent_names", "compare", "make_agent", "register_agent", "run_repetition", "search_metrics",
            "train_policy"]

@@ -49,8 +49,8 @@ class SearchOptions:
                                       metavar="ADDRESS")
     preset: str = _opt("authors", "greedy hyper-parameters: paper Table 1, or the authors' own run (default)",
                        choices=["paper", "authors"])
-    agent: str = _opt("greedy", "search agent: greedy (default), greedy-paper, random, cmaes, ppo:POLICY.zip, "
-                                "module:Class")
+    agent: str = _opt("greedy", "search agent: greedy (default), greedy-paper, random, cmaes, suite (the default "
+                                "with --case-study), ppo:POLICY.zip, module:Class")
     random_seed: int = _opt(0, "base seed of the simulation noise", type=int)
     uav: str | None = _opt(None, "UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
                                  "px4-vision-case0, or a profile YAML (surrealist calibrate); default: replicate: "
