@@ -86,6 +86,25 @@ def violations(test: TestCase, rules: Rules = RULES) -> tuple[str, ...]:
     return tuple(out)
 
 
+def endpoint_failure(test: TestCase) -> str | None:
+    """Why every run of the test would fail before it flew (None: it would not): a box within the 1.5 m safety
+    distance of the take-off point (the origin) or of the landing point, where the UAV climbs or descends vertically
+    whatever the planner does. Such a test is a failure of its layout, not of the UAV."""
+    if test.mission is None:
+        return None
+    points = {"take-off point": (0.0, 0.0)}
+    positioned = [item for item in test.mission.items if item.has_position]
+    if positioned:
+        points["landing point"] = (positioned[-1].x, positioned[-1].y)
+    for name, (x, y) in points.items():
+        for i, o in enumerate(test.obstacles):
+            gap = o.distance_2d(x, y)
+            if gap < UNSAFE_DISTANCE_M:
+                return (f"the {name} is {gap:.2f} m from obstacles[{i}], within the {UNSAFE_DISTANCE_M:g} m safety "
+                        f"distance: every run would fail before flying")
+    return None
+
+
 def check_rules(test: TestCase, rules: Rules = RULES) -> None:
     """Raise InvalidTestCase with the first rule the test breaks."""
     broken = violations(test, rules)

@@ -1,14 +1,16 @@
 """Suites of distinct failures: how far apart two failing tests are, and the archive that keeps a suite.
 
-Two failures are the same failure when both their flights and their obstacle layouts are alike:
+Two failures are the same failure when their flights are alike and the UAV failed at the same obstacle:
 - **flight**: the mean distance between matched points of the two trajectories in the x-y plane, along DTW's
   optimal warping path (:func:`trajectory_distance`; the paper's DTW divided by the path's length, so it does not
   grow with the flight's length);
-- **layout**: the Hausdorff distance between the union of the two layouts' footprints (:func:`layout_distance`).
+- **the failing obstacle**: the Hausdorff distance between the footprints of the box each flight came closest to
+  (:func:`layout_distance` of those boxes). The other boxes of a layout do not count: moving a box the UAV never
+  came near does not make a new failure.
 
 :class:`Suite` keeps a failing test only if it differs from every member by at least ``min_flight_m`` in flight AND
-``min_layout_m`` in layout; a failure alike to exactly one member replaces it when it comes closer to an obstacle
-(the elite of its niche, as MAP-Elites keeps one per cell). Members are frozen values.
+``min_layout_m`` in its failing obstacle; a failure alike to exactly one member replaces it when it comes closer to
+an obstacle (the elite of its niche, as MAP-Elites keeps one per cell). Members are frozen values.
 
 Example:
     >>> from surrealist_gym.testcase import Obstacle
@@ -28,7 +30,7 @@ from .outcomes import UNSAFE_DISTANCE_M
 from .testcase import Obstacle, Shape, TestCase
 
 MIN_FLIGHT_M = 1.0  # [m] mean point distance below which two flights are alike
-MIN_LAYOUT_M = 2.0  # [m] Hausdorff distance below which two layouts are alike
+MIN_LAYOUT_M = 5.0  # [m] Hausdorff distance below which two failing obstacles are alike
 
 
 def _xy(trajectory) -> np.ndarray:
@@ -76,6 +78,15 @@ class Member:
         object.__setattr__(self, "trajectory", traj)
 
     @property
+    def failing_obstacle(self) -> Obstacle | None:
+        """The obstacle the flight came closest to (by the competition's distance), None without obstacles."""
+        from .geometry import competition_distances
+
+        if not self.test.obstacles or len(self.trajectory) == 0:
+            return None
+        return self.test.obstacles[int(np.argmin(competition_distances(self.trajectory, self.test.obstacles)))]
+
+    @property
     def points(self) -> int:
         from .competition import points
 
@@ -99,9 +110,10 @@ class Suite:
         return status == "collision" or (math.isfinite(distance) and distance < self.threshold_m)
 
     def alike(self, a: Member, b: Member) -> bool:
-        """Whether two failures are the same one: alike in flight and in layout."""
+        """Whether two failures are the same one: alike in flight and in the obstacle they failed at."""
+        boxes = [m.failing_obstacle for m in (a, b)]
         return (trajectory_distance(a.trajectory, b.trajectory) < self.min_flight_m
-                and layout_distance(a.test.obstacles, b.test.obstacles) < self.min_layout_m)
+                and layout_distance(*[[o] if o is not None else [] for o in boxes]) < self.min_layout_m)
 
     def offer(self, candidate: Member) -> tuple["Suite", str]:
         """The suite with ``candidate`` offered: ``added``, ``replaced N`` (it came closer than the member it is

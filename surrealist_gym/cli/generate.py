@@ -87,7 +87,7 @@ def _write_suite(out, suite, options) -> None:
     plot_suite(suite, folder / "suite.png")
     spread = diversity(suite.members)
     print(f"suite: {len(suite)} distinct failures (apart by >= {suite.min_flight_m:g} m in flight and >= "
-          f"{suite.min_layout_m:g} m in layout)"
+          f"{suite.min_layout_m:g} m in the obstacle failed at)"
           + (f"; mean pairwise flight distance {spread['flight_mean_m']:.1f} m, layout {spread['layout_mean_m']:.1f} m"
              if len(suite) > 1 else ""))
     if not paths or options.confirm == 0:

@@ -125,6 +125,15 @@ def test_invalid_and_infeasible_tests_are_not_flown():
     _, _, _, _, info = env.step(env.action_for(values))
     assert info["invalid"] is not None and info["invalid"].startswith("infeasible")
     assert info["evaluations"] == 1  # neither cost budget
+    # a box beside the take-off point: every run would fail before the planner has anything to do
+    values = np.zeros(18)
+    seed_box = env.seed_test.obstacles[1]
+    values[:6] = 0.0
+    values[6:12] = [-seed_box.x, 11.0 - seed_box.y, 4 - seed_box.l, 20 - seed_box.w, 0, -seed_box.r]
+    _, _, _, _, info = env.step(env.action_for(values))
+    assert info["invalid"] == ("degenerate: the take-off point is 1.00 m from obstacles[1], within the 1.5 m "
+                               "safety distance: every run would fail before flying")
+    assert info["evaluations"] == 1
     env.close()
 
 
