@@ -14,6 +14,7 @@ from .repetitions import Repetition, run_repetition
 from .rl import PPOAgent, ProceduralEnv, train_policy
 
 __all__ = ["Agent", "AdaptiveGreedy", "CMAES", "CMAESConfig", "CompareResult", "GreedyConfig", "PPOAgent",
-           "ProceduralEnv", "RandomConfig", "RandomSearch", "Repetition", "SearchMetrics", "SearchResult", "SuiteSearch", "SuiteSearchConfig",
+           "ProceduralEnv", "RandomConfig", "RandomSearch", "Repetition", "SearchMetrics", "SearchResult",
+           "SuiteSearch", "SuiteSearchConfig",
            "agent_names", "compare", "make_agent", "register_agent", "run_repetition", "search_metrics",
            "train_policy"]

@@ -2,8 +2,8 @@
 
 Names:
     ``greedy`` (the adaptive greedy with the authors' preset), ``greedy-paper`` (paper Table 1), ``random``,
-    ``cmaes``, ``suite`` (suites of distinct failures), ``ppo:POLICY.zip`` / ``sac:POLICY.zip`` (a policy trained by ``surrealist train-ppo``), any name
-    added with :func:`register_agent`, and ``module:Class`` or ``path/to/file.py:Class`` for an Agent subclass
+    ``cmaes``, ``suite`` (suites of distinct failures), ``ppo:POLICY.zip`` / ``sac:POLICY.zip`` (a policy
+    trained by ``surrealist train-ppo``), any name added with :func:`register_agent`, and ``module:Class`` or ``path/to/file.py:Class`` for an Agent subclass
     of your own (built as ``Class(seed=seed, **options)``).
 
 Example:

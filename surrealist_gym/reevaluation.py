@@ -337,7 +337,7 @@ def suite_lines(ev: Evaluation) -> list[str]:
             f"points: {sum(t.points_mean for t in ev.tests):.1f} expected per round of the suite (sum of the mean "
             f"points per run), {sum(t.points_median_run for t in ev.tests)} for the median runs",
             f"distinct failures: {len(ev.suite)} of {len(ev.failing)} failing tests (alike: flights < "
-            f"{ev.suite.min_flight_m:g} m apart and layouts < {ev.suite.min_layout_m:g} m apart)",
+            f"{ev.suite.min_flight_m:g} m apart and the boxes they failed at < {ev.suite.min_layout_m:g} m apart)",
             f"diversity of the failing tests' closest runs: flight mean {_f(d['flight_mean_m'])} m (min "
             f"{_f(d['flight_min_m'])} m), layout mean {_f(d['layout_mean_m'])} m (min {_f(d['layout_min_m'])} m)"
             if d["members"] > 1 else "diversity: needs two failing tests"]
