@@ -134,16 +134,22 @@ def case_study_path(name) -> Path:
                              f"competition's case_studies folder"))
 
 
-def load_case_study(name) -> TestCase:
-    """The case study's mission, parameters and commands as a test without obstacles (its own obstacles dropped)."""
+def load_competition_test(path) -> TestCase:
+    """``load_test`` without the warning every competition mission gives: its first item (MAV_CMD 530, a camera
+    mode) is skipped, as known."""
     import warnings
 
     from .testcase import load_test
 
-    path = case_study_path(name)
-    with warnings.catch_warnings():  # the case studies' first item (MAV_CMD 530, camera mode) is skipped as known
+    with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r".*MAV_CMD 530 is not supported")
-        test = load_test(path)
+        return load_test(path)
+
+
+def load_case_study(name) -> TestCase:
+    """The case study's mission, parameters and commands as a test without obstacles (its own obstacles dropped)."""
+    path = case_study_path(name)
+    test = load_competition_test(path)
     if test.mission is None:
         raise InvalidTestCase(f"{path}: field 'mission_file': a case study needs a mission")
     return test.with_obstacles(())

@@ -70,16 +70,11 @@ def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, Te
     """Load the tests named by ``paths`` (see :func:`find_tests`) and check them; unless ``any_layout``, against
     the competition's rules (:func:`~surrealist_gym.competition.violations`). Raises a one-line
     :class:`~surrealist_gym.errors.InvalidTestCase` naming the file and field of the first bad test."""
-    import warnings
-
-    from .competition import violations
-    from .testcase import load_test
+    from .competition import load_competition_test, violations
 
     out = []
     for path in find_tests(paths):
-        with warnings.catch_warnings():  # the case studies' first item (MAV_CMD 530, camera mode) is skipped as known
-            warnings.filterwarnings("ignore", message=r".*MAV_CMD 530 is not supported")
-            test = load_test(path)
+        test = load_competition_test(path)
         if test.mission is None or not any(item.has_position for item in test.mission.items):
             raise InvalidTestCase(f"{path}: mission_file: no mission item with a position to fly to")
         if not any_layout:

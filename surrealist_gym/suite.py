@@ -72,19 +72,18 @@ class Member:
     evaluation: int = 0      # the evaluation (1-based, as the env counts) that found it
     status: str = "success"  # how that run ended (collision, success, ...)
 
+    failing_obstacle: Obstacle | None = field(init=False, compare=False, repr=False)  # the box it came closest to
+
     def __post_init__(self):
+        from .geometry import competition_distances
+
         traj = np.array(self.trajectory, dtype=np.float64)
         traj.setflags(write=False)
         object.__setattr__(self, "trajectory", traj)
-
-    @property
-    def failing_obstacle(self) -> Obstacle | None:
-        """The obstacle the flight came closest to (by the competition's distance), None without obstacles."""
-        from .geometry import competition_distances
-
-        if not self.test.obstacles or len(self.trajectory) == 0:
-            return None
-        return self.test.obstacles[int(np.argmin(competition_distances(self.trajectory, self.test.obstacles)))]
+        closest = None  # by the competition's distance, once: every offer compares it with each member
+        if self.test.obstacles and len(traj):
+            closest = self.test.obstacles[int(np.argmin(competition_distances(traj, self.test.obstacles)))]
+        object.__setattr__(self, "failing_obstacle", closest)
 
     @property
     def points(self) -> int:

@@ -76,29 +76,19 @@ def _fmt(value: float) -> str:
 
 def plot_suite(suite: Suite, path, columns: int = 4) -> None:
     """A top view of each member: its boxes and the flight that came closest (x north up, y east right)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Polygon
+    from .report_plots import _BOX, _FAIL, _boxes, _figure, _top_axes
 
     n = max(1, len(suite.members))
-    rows = math.ceil(n / columns)
-    fig, axes = plt.subplots(rows, min(columns, n), figsize=(3.2 * min(columns, n), 3.4 * rows), squeeze=False)
-    for ax in axes.flat:
-        ax.set_visible(False)
-    for i, (member, ax) in enumerate(zip(suite.members, axes.flat)):
-        ax.set_visible(True)
-        for o in member.test.obstacles:
-            ax.add_patch(Polygon([(y, x) for x, y in o.footprint()], closed=True, facecolor="0.75",
-                                 edgecolor="0.3"))
-        xyz = member.trajectory
-        ax.plot(xyz[:, 1], xyz[:, 0], color="tab:red", linewidth=1.2)
+    cols = min(columns, n)
+    fig = _figure(3.2 * cols, 3.4 * math.ceil(n / columns))
+    for i, member in enumerate(suite.members):
+        ax = fig.add_subplot(math.ceil(n / columns), cols, i + 1)
+        _boxes(ax, member.test.obstacles, facecolor=_BOX, edgecolor="0.3")
+        ax.plot(member.trajectory[:, 1], member.trajectory[:, 0], color=_FAIL, linewidth=1.2)
         ax.set_title(f"{member_name(i)}: {member.distance:.2f} m, {member.points} pt", fontsize=9)
-        ax.set_aspect("equal")
         ax.set_xlabel("y east [m]", fontsize=8)
         ax.set_ylabel("x north [m]", fontsize=8)
         ax.tick_params(labelsize=7)
+        _top_axes(ax)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
