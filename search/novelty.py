@@ -8,9 +8,8 @@ a Gaussian step of ``sigma`` (in action units: 1 is half a mutator's range). A c
 closer replaces it in the suite (:class:`~surrealist_gym.envs.suite.RecordSuite`); one that differs enough becomes a
 new member. The agent reads the competition distance and the status of each run from ``info`` and nothing else.
 
-Measured on mission1 (200 single-run evaluations, budget and seed as ``benchmarks/bench_suites.py``): children of
-failures failed in 64-67% of cases, uniform samples in 6-10%, children of near misses (1.5-3 m) in 2-3%, so only
-failures are parents (``near_m``); the study is in ``benchmarks/lab/2026-11-24-suites/README.md``.
+Only failures are parents (``near_m``): near misses made no better parents than uniform samples
+(``benchmarks/lab/2026-11-24-suites/``).
 
 Example:
     >>> import gymnasium as gym, surrealist_gym                                # doctest: +SKIP
