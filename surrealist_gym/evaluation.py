@@ -11,6 +11,7 @@ only the rest, with the same seeds, so the result is the same as in one go.
 from __future__ import annotations
 
 import math
+import sqlite3
 import time
 from dataclasses import dataclass, field, replace
 from typing import Protocol, Sequence
@@ -164,7 +165,8 @@ class Evaluator:
         self._memo: dict[str, Evaluation] = {}
         self._partial: dict[str, tuple[tuple[RunSummary, ...], float]] = {}  # runs flown by partial evaluations
         self._first_runs: dict[tuple[str, int], Evaluation] = {}  # first-k scores of tests known in full
-        self.simulations = 0
+        self.simulations = 0  # flown by this evaluator
+        self._uncounted = 0  # of those, not yet counted in the store (a dropped candidate's runs, until the next add)
         self.replayed_seconds = 0.0  # simulation time of the evaluations read back from the store
 
     def evaluate(self, test: TestCase, runs: int | None = None) -> Evaluation:
@@ -189,6 +191,7 @@ class Evaluator:
             start = time.perf_counter()
             fresh = self.executor.run(test, range(len(flown), n), self.seed, self.sim_config)
             self.simulations += len(fresh)
+            self._uncounted += len(fresh)
             flown = flown + tuple(RunSummary.of(r) for r in fresh)
             sim_seconds += time.perf_counter() - start
         evaluation = self._judge(test, flown[:n], sim_seconds)
@@ -198,7 +201,9 @@ class Evaluator:
         self._partial.pop(key, None)
         self._memo[key] = evaluation
         if self.store is not None:
-            self.store.add(_to_stored(evaluation, [self.seed] * self.runs, self.sim_config.common_noise))
+            self.store.add(_to_stored(evaluation, [self.seed] * self.runs, self.sim_config.common_noise),
+                           simulations=self._uncounted)
+            self._uncounted = 0
         return evaluation
 
     def _judge(self, test: TestCase, runs: tuple[RunSummary, ...], sim_seconds: float,
@@ -216,8 +221,19 @@ class Evaluator:
         self._memo[test.key()] = evaluation
         return evaluation
 
+    @property
+    def search_simulations(self) -> int:
+        """The simulations of the whole search: with a store, those of earlier processes that wrote to it too."""
+        return self.simulations if self.store is None else self.store.simulations + self._uncounted
+
     def close(self) -> None:
         self.executor.close()
+        if self.store is not None and self._uncounted:
+            try:
+                self.store.count_simulations(self._uncounted)
+                self._uncounted = 0
+            except sqlite3.Error:  # a full disk: the count of dropped candidates' runs is lost, no evaluation
+                pass
 
 
 def search_identity(objective, runs: int, seed: int, sim_config) -> dict:

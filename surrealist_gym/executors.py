@@ -70,8 +70,7 @@ def _fly_with_retry(submit, test, indices, seed, config, renew=lambda: None) -> 
         except Exception as err:  # noqa: BLE001 - anything else is the machinery's failure
             if attempt == 2:
                 raise InfrastructureError(f"the simulations failed twice outside the simulator ({type(err).__name__}: "
-                                          f"{err}); every completed evaluation is stored, --resume re-flies the "
-                                          f"rest") from None
+                                          f"{one_line(err)})") from None
             renew()
     results = []
     for index in indices:

@@ -44,8 +44,9 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         "seed_fitness": seed_eval.fitness, "best_fitness": best_eval.fitness,
         "seed_terms": seed_eval.terms, "best_terms": best_eval.terms,
         "evaluations": result.evaluations, "evaluations_to_best": result.evaluations_to_best,
-        # simulated by this process (a resumed search counts only what it simulated after the interruption)
-        "simulations": env.evaluator.simulations, "runs_per_evaluation": env.evaluator.runs,
+        # flown by the whole search (a resumed one: before and after the interruption), and by this process
+        "simulations": env.evaluator.search_simulations,
+        "simulations_since_start": env.evaluator.simulations, "runs_per_evaluation": env.evaluator.runs,
         "budget": env.budget, "stop_reason": result.stop_reason,
         "wall_seconds": round(wall_seconds, 3),
         "seconds_per_evaluation": round(wall_seconds / max(1, rows), 3),

@@ -110,8 +110,11 @@ class EvaluationStore:
                                       f"{_short(held.get(key))} there, {_short(identity.get(key))} here); use "
                                       f"--resume with that search's options, or another results folder")
 
-    def add(self, evaluation: StoredEvaluation) -> int:
-        """Write one evaluation and commit at once; returns its id."""
+    def add(self, evaluation: StoredEvaluation, simulations: int = 0) -> int:
+        """Write one evaluation and commit at once, with ``simulations`` added to the search's count of them
+        (:meth:`count_simulations`) in the same transaction; returns its id."""
+        if simulations:
+            self.count_simulations(simulations, commit=False)
         cur = self._db.execute(
             "INSERT INTO evaluations (search, test_key, test, seeds, runs, fitness, info, sim_seconds, wall_seconds,"
             " created) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
@@ -148,6 +151,29 @@ class EvaluationStore:
         except (sqlite3.DatabaseError, ValueError, TypeError, KeyError) as err:
             raise SurrealistError(f"{self.path}: a damaged evaluation store ({type(err).__name__}: "
                                   f"{one_line(err)}); move it aside or use another results folder") from None
+
+    def count_simulations(self, n: int, commit: bool = True) -> None:
+        """Add ``n`` to the simulations this search has flown (kept as evaluations or not: racing drops some), so
+        a resumed search reports all of them."""
+        self._upgrade()
+        self._db.execute("INSERT INTO meta (key, value) VALUES (?, ?) ON CONFLICT(key) DO UPDATE SET "
+                         "value = CAST(value AS INTEGER) + excluded.value", (f"simulations:{self.search}", int(n)))
+        if commit:
+            self._db.commit()
+
+    @property
+    def simulations(self) -> int:
+        """The simulations this search has flown (:meth:`count_simulations`; for a store written before it was
+        counted, the runs of its evaluations)."""
+        with self._readable():
+            try:
+                row = self._db.execute("SELECT value FROM meta WHERE key = ?",
+                                       (f"simulations:{self.search}",)).fetchone()
+            except sqlite3.OperationalError as err:
+                if "no such table" not in str(err):
+                    raise
+                row = None
+            return int(row[0]) if row is not None else sum(len(e.runs) for e in self)
 
     def searches(self) -> list[str]:
         return [r[0] for r in self._db.execute("SELECT DISTINCT search FROM evaluations ORDER BY search")]

@@ -4,31 +4,74 @@ from __future__ import annotations
 import dataclasses
 import json
 import shutil
+import sqlite3
 import sys
 import time
 from collections import Counter
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from datetime import datetime
 from pathlib import Path
 
-from ..errors import SurrealistError
-from .options import RUN_FILE, SearchOptions
+from ..errors import InfrastructureError, SurrealistError, one_line
+from .options import RUN_FILE, SearchOptions, check_writable
 
 
 @contextmanager
-def new_search_folder(args, options_type: type[SearchOptions]):
-    """Yield (folder, options) from :func:`prepare`; a folder made here is removed again if setting up fails
-    (a bad log or test case leaves no empty results folder behind)."""
+def search_folder(args, options_type: type[SearchOptions]):
+    """Yield (folder, options) from :func:`prepare`, the folder locked against a second writer until the search
+    ends. A failure keeps the folder once it holds a stored evaluation (a worker or scheduler lost twice, a full
+    disk, a plot that cannot be written) and says so in one line with the ``--resume`` that finishes it; only a
+    folder made here that holds no evaluation is removed again (a bad log or test case leaves nothing behind)."""
     fresh = not args.resume and not (args.out and Path(args.out).exists())
     out, options = prepare(args, options_type)
+    _lock(out)
     try:
-        _lock(out)
         yield out, options
-    except BaseException:
-        _unlock(out)
-        if fresh:
-            shutil.rmtree(out, ignore_errors=True)
+    except KeyboardInterrupt:
+        if fresh and not stored_evaluations(out):
+            _remove(out)
         raise
+    except (SurrealistError, OSError, sqlite3.Error) as err:
+        stored = stored_evaluations(out)
+        if fresh and not stored:
+            _remove(out)
+            if isinstance(err, SurrealistError) and not isinstance(err, InfrastructureError):
+                raise  # bad input found while setting up: its own line says it all
+            raise SurrealistError(f"{_what_failed(err, out)}; nothing was stored, so {out} is removed") from None
+        if not stored and isinstance(err, SurrealistError) and not isinstance(err, InfrastructureError):
+            raise
+        raise SurrealistError(f"{_what_failed(err, out)}; {stored} evaluation(s) are stored in {out}: "
+                              f"--resume {out} flies the rest") from None
+    finally:
+        _unlock(out)
+
+
+def stored_evaluations(out: Path) -> int:
+    """How many evaluations the results folder's store holds (an unreadable store counts as holding some, so it
+    is never removed)."""
+    path = out / "evaluations.sqlite"
+    if not path.is_file():
+        return 0
+    try:
+        with closing(sqlite3.connect(f"file:{path}?mode=ro", uri=True)) as db:
+            return int(db.execute("SELECT COUNT(*) FROM evaluations").fetchone()[0])
+    except sqlite3.Error:
+        return 1 if path.stat().st_size else 0
+
+
+def _what_failed(err: BaseException, out: Path) -> str:
+    """The failure in words: an input or infrastructure error's own line, else what could not be written."""
+    if isinstance(err, SurrealistError):
+        return str(err)
+    if isinstance(err, OSError):
+        where = err.filename or out
+        return f"{where}: cannot write ({err.strerror or one_line(err)})"
+    return f"{out / 'evaluations.sqlite'}: cannot store an evaluation ({one_line(err)})"
+
+
+def _remove(out: Path) -> None:
+    _unlock(out)
+    shutil.rmtree(out, ignore_errors=True)
 
 
 _LOCKS: dict[Path, object] = {}  # results folders this process writes to, with their open lock files
@@ -62,6 +105,7 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         saved = out / RUN_FILE
         if not saved.is_file():
             raise SurrealistError(f"{out}: not a results folder to resume (no {RUN_FILE})")
+        check_writable(out, "--resume")
         options = options_type.from_json(saved)
         flags = getattr(args, "_flags", frozenset())  # options typed on the command line, even at their defaults
         for f in dataclasses.fields(options_type):  # what the command line changes: where it runs, nothing else
@@ -100,9 +144,7 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         if getattr(options, key, None) and not (key == "seed" and options.seed in SEEDS):
             changes[key] = str(Path(getattr(options, key)).resolve())
     options = measured_prescreen(dataclasses.replace(options, **changes))
-    out = Path(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}")
-    if out.exists() and not out.is_dir():
-        raise SurrealistError(f"--out {out}: exists and is not a folder")
+    out = check_writable(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}", "--out")
     if (out / RUN_FILE).exists():
         raise SurrealistError(f"--out {out}: holds a search already; continue it with --resume {out}, or choose "
                               f"another folder")
@@ -178,27 +220,28 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
 
     try:
         result = agent.run(env, seed=options.random_seed, callback=progress)
+        bar.n = min(result.evaluations, bar.total)
+        bar.close()
+        summary = write_results(out, env, result, time.perf_counter() - start, problem)
+        if hasattr(agent, "skipped"):
+            (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
     except KeyboardInterrupt:
         bar.close()
-        print(f"interrupted: every finished evaluation is stored; resume with --resume {out}", file=sys.stderr)
         env.close()
-        _unlock(out)
+        stored = stored_evaluations(out)
+        print(f"interrupted: {stored} evaluation(s) are stored in {out}; --resume {out} flies the rest",
+              file=sys.stderr)
         return 130
-    except BaseException:
-        _unlock(out)
-        raise
-    bar.n = min(result.evaluations, bar.total)
-    bar.close()
-    summary = write_results(out, env, result, time.perf_counter() - start, problem)
+    finally:
+        bar.close()
+        env.close()  # its pool's workers hold the folder's lock file (inherited) until they end
     if hasattr(agent, "skipped"):
-        (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
         raced = agent.dropped
         ties = sum(bool(s.get("tie")) for s in agent.skipped)
         margin = "/".join("not calibrated" if m is None else f"{m:.2f}" for m in agent.race_margins.values())
         print(f"pre-screening ({agent.rule}): {len(agent.skipped) - raced} candidates skipped without a simulation"
               + (f", {raced} dropped after their first {'/'.join(map(str, stages))} runs ({ties} of them tied the "
                  f"best; racing margin {margin})" if stages else "") + " (skipped.json)")
-    env.close()
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
           f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "
           f"({summary['simulations']} simulations, {summary['wall_seconds']:.1f} s)")
@@ -215,7 +258,6 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
               + ("competition distance" if measure == "competition" else "2-D clearance") + ")")
     print(f"results in {out}/: best.yaml, evaluations.csv, summary.json, figure1.png, fitness.png, "
           f"min_distances.png")
-    _unlock(out)
     return 0
 
 

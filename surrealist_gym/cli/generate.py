@@ -5,7 +5,7 @@ exported for Aerialist and re-flown to give each its failure probability.
 """
 from __future__ import annotations
 
-from ._search import new_search_folder, run_search, sim_config_of
+from ._search import run_search, search_folder, sim_config_of
 from .options import GenerateOptions
 
 CASE_STUDY_DEFAULTS = {"budget": 200, "runs": 1, "agent": "suite"}  # what --case-study changes, unless typed
@@ -26,7 +26,7 @@ def run(args) -> int:
     if args.uav is None and not args.resume:  # the seed test's default UAV, recorded in run.json
         from ..sim.profiles import default_profile
         args.uav = default_profile(load_test(args.test or data_path("rq2-seed.yaml"))).name
-    with new_search_folder(args, GenerateOptions) as (out, options):
+    with search_folder(args, GenerateOptions) as (out, options):
         if options.case_study:
             return _case_study_search(out, options)
         seed = load_test(options.test or data_path("rq2-seed.yaml"))
@@ -40,7 +40,7 @@ def run(args) -> int:
                           aggregate=options.aggregate, executor=options.dask_scheduler,
                           store=out / "evaluations.sqlite", random_seed=options.random_seed,
                           workers=options.workers, sim_config=sim_config_of(options))
-    return run_search(env, options, out, "generate")
+        return run_search(env, options, out, "generate")
 
 
 def _case_study(args) -> int:
@@ -58,7 +58,7 @@ def _case_study(args) -> int:
     if args.uav is None:
         from ..envs.case_study import DEFAULT_UAV
         args.uav = DEFAULT_UAV
-    with new_search_folder(args, GenerateOptions) as (out, options):
+    with search_folder(args, GenerateOptions) as (out, options):
         return _case_study_search(out, options)
 
 

@@ -218,5 +218,42 @@ def check_at_least(args: argparse.Namespace, **lowest) -> None:
             raise SurrealistError(f"--{name.replace('_', '-')}: expected a whole number >= {low}, got {value!r}")
 
 
+def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tuple[str, ...] = ()) -> Path:
+    """One line naming ``flag`` unless ``path`` can be written as a ``kind`` ("folder" or "file"), checked before any
+    work: a folder is an existing folder or a path whose nearest existing ancestor is a folder; a file's folder is
+    such a path and the file itself, if it exists, is a regular file. Writability is probed by creating (and
+    removing) a file in the nearest existing folder, so a read-only mount is refused even to root. Nothing is left
+    behind. ``suffixes``: the file's accepted endings (e.g. ``(".png",)``)."""
+    import errno
+    import os
+    import tempfile
+
+    path = Path(path)
+    if kind == "file":
+        if suffixes and path.suffix.lower() not in suffixes:
+            raise SurrealistError(f"{flag} {path}: expected a {' or '.join(suffixes)} file")
+        if path.exists() and not path.is_file():
+            raise SurrealistError(f"{flag} {path}: exists and is not a regular file")
+        folder = path.parent
+    else:
+        if path.exists() and not path.is_dir():
+            raise SurrealistError(f"{flag} {path}: exists and is not a folder")
+        folder = path
+    existing = folder
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise SurrealistError(f"{flag} {path}: {existing} is a file, not a folder")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".surrealist-probe-", dir=existing)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as err:
+        reason = {errno.EROFS: "a read-only file system", errno.EACCES: "permission denied",
+                  errno.ENOSPC: "no space left on the device"}.get(err.errno, err.strerror or str(err))
+        raise SurrealistError(f"{flag} {path}: cannot write in {existing} ({reason})") from None
+    return path
+
+
 __all__ = ["GenerateOptions", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "check_at_least",
-           "race_stages"]
+           "check_writable", "race_stages"]

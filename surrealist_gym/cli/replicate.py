@@ -4,7 +4,7 @@ from __future__ import annotations
 import dataclasses
 import json
 
-from ._search import new_search_folder, run_search
+from ._search import run_search, search_folder
 from .options import RUN_FILE, ReplicateOptions
 
 
@@ -18,7 +18,7 @@ def run(args) -> int:
 
     from ..errors import InvalidTestCase
 
-    with new_search_folder(args, ReplicateOptions) as (out, options):
+    with search_folder(args, ReplicateOptions) as (out, options):
         try:
             env = ReplicateEnv(reference_log=options.log, seed_test=options.seed, runs=options.runs,
                                budget=options.budget, averaging=options.averaging, executor=options.dask_scheduler,
@@ -38,4 +38,4 @@ def run(args) -> int:
                 uav = str((out / "uav.yaml").resolve())
             options = dataclasses.replace(options, uav=uav)
             (out / RUN_FILE).write_text(json.dumps(options.to_json(), indent=2) + "\n")
-    return run_search(env, options, out, "replicate")
+        return run_search(env, options, out, "replicate")
