@@ -315,6 +315,7 @@ def test_resume_on_local_workers_leaves_a_lost_cluster(tmp_path):
     assert main(["generate", "--resume", str(out), "--workers", "1"]) == 0
     assert json.loads((out / "summary.json").read_text())["evaluations"] <= 2
     dask = pytest.importorskip("dask")
+    pytest.importorskip("distributed")  # its defaults join dask's config first: set() would remove them on exit
     with dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
         assert main(["generate", "--budget", "1", "--dask-scheduler", "tcp://127.0.0.1:9", "--out",
                      str(tmp_path / "g2")]) == 2  # an unreachable scheduler: one line, no folder left behind
