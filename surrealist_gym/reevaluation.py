@@ -5,11 +5,16 @@ test draws its noise from (test key, seed, i). A run **fails** when it collides 
 (:attr:`~surrealist_gym.sim.runner.RunResult.competition_distance`) is below 1.5 m. Per test
 (:class:`TestStats`): the failure probability with its 95% Clopper-Pearson interval, the competition's points
 (:func:`~surrealist_gym.competition.points`; a collision scores 5) as a mean per run and for the median run, and the
-closest approach. Per suite (:class:`Evaluation`): the failing tests' closest runs offered in turn to a
-:class:`~surrealist_gym.suite.Suite` (distinct failures) and their :func:`~surrealist_gym.suite.diversity`.
+closest approach. A run that ends in ``error`` (its simulation raised, or the vehicle's state became invalid) is
+neither a pass nor a failure: it is counted apart, and the figures are over the runs flown. Per suite
+(:class:`Evaluation`): the failing tests' closest runs offered in turn to a :class:`~surrealist_gym.suite.Suite`
+(distinct failures) and their :func:`~surrealist_gym.suite.diversity`.
 
 The tests are flown on a process pool several at a time, so every core stays busy: whole tests (their runs in one
-world) first, the last round split run by run so that no worker idles at the end.
+world) first, the last round split run by run so that no worker idles at the end. Given a ``store``, each chunk of
+runs is written to it (an :class:`~surrealist_gym.store.EvaluationStore`) as it completes, and the runs it holds
+already are read back instead of flown: an interrupted evaluation resumes and loses nothing. :func:`write_report`
+writes the report whole or not at all.
 
 Example::
 
@@ -20,8 +25,12 @@ Example::
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 import os
+import shutil
+import sqlite3
+import tempfile
 import time
 from collections import Counter
 from dataclasses import dataclass, replace
@@ -38,8 +47,8 @@ from .testcase import Obstacle, TestCase
 if TYPE_CHECKING:
     from .suite import Suite
 
-__all__ = ["CONFIDENCE", "Evaluation", "RunRecord", "TestStats", "evaluate", "find_tests", "fly_tests",
-           "load_tests", "summarise_test", "write_report"]
+__all__ = ["CONFIDENCE", "Evaluation", "RunRecord", "TestStats", "evaluate", "evaluation_identity", "find_tests",
+           "fly_tests", "load_tests", "summarise_test", "write_report"]
 
 CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
 _SUFFIXES = (".yaml", ".yml")
@@ -90,7 +99,8 @@ def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, Te
 @dataclass(frozen=True, slots=True, eq=False)
 class RunRecord:
     """One run: index, status, competition distance [m] (inf without obstacles or a flight), duration since arming
-    [s], its trajectory (N, 3) [m] (x north, y east, z up; 0.5 s means) and the end's message."""
+    [s], its trajectory (N, 3) [m] (x north, y east, z up; 0.5 s means) and the end's message. A run in ``error``
+    was not flown to an end: it neither passes nor fails."""
 
     index: int
     status: str
@@ -100,9 +110,24 @@ class RunRecord:
     message: str = ""
 
     @property
+    def flown(self) -> bool:
+        """Whether the run ended in anything but ``error`` (only such runs pass or fail)."""
+        return self.status != "error"
+
+    @property
     def failed(self) -> bool:
-        """A collision, or a competition distance below 1.5 m."""
-        return self.status == "collision" or self.distance < UNSAFE_DISTANCE_M
+        """A flown run that collided or came within 1.5 m (competition distance)."""
+        return self.flown and (self.status == "collision" or self.distance < UNSAFE_DISTANCE_M)
+
+    def to_dict(self) -> dict:
+        """The run as a store keeps it (its trajectory apart)."""
+        return {"index": self.index, "status": self.status, "distance": self.distance, "duration": self.duration,
+                "message": self.message}
+
+    @classmethod
+    def from_dict(cls, run: dict, trajectory) -> "RunRecord":
+        return cls(run["index"], run["status"], run["distance"], run["duration"],
+                   np.asarray(trajectory, dtype=np.float64).reshape(-1, 3), run["message"])
 
     @property
     def points(self) -> int:
@@ -141,20 +166,28 @@ def _jobs(tests: int, runs: int, workers: int) -> list[tuple[int, list[int]]]:
 
 
 def fly_tests(tests: Sequence[TestCase], configs: Sequence, runs: int, seed: int = 0, workers: int | None = None,
-              progress: Callable[[int, int], None] | None = None) -> list[tuple[RunRecord, ...]]:
+              progress: Callable[[int, int], None] | None = None, have: Sequence[dict] | None = None,
+              done: Callable[[int, list[RunRecord]], None] | None = None) -> list[tuple[RunRecord, ...]]:
     """Fly ``runs`` runs of every test (``configs[i]``: the SimConfig of test i) on ``workers`` processes (default:
     all cores, at most 8; 1: in this process). Returns the runs of each test, in order; ``progress`` is called with
-    (runs done, runs). A job that raises is flown again here, run by run."""
+    (runs done, runs). A job that raises is flown again here, run by run. ``have[i]``: runs of test i flown before
+    ({index: RunRecord}), not flown again; ``done(i, records)`` is called with each chunk of test i as it completes
+    (to store it)."""
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     from .executors import _die_with_parent
 
     workers = workers or max(1, min(os.cpu_count() or 1, 8))
-    jobs = _jobs(len(tests), runs, workers)
-    got: list[dict] = [{} for _ in tests]
+    got: list[dict] = [dict(h) for h in have] if have is not None else [{} for _ in tests]
+    jobs = [(i, todo) for i, chunk in _jobs(len(tests), runs, workers)
+            if (todo := [k for k in chunk if k not in got[i]])]
     total = len(tests) * runs
+    if progress and any(got):
+        progress(sum(map(len, got)), total)
 
     def collect(i: int, records: list[RunRecord]) -> None:
+        if done:
+            done(i, records)
         got[i].update((r.index, r) for r in records)
         if progress:
             progress(sum(map(len, got)), total)
@@ -162,9 +195,10 @@ def fly_tests(tests: Sequence[TestCase], configs: Sequence, runs: int, seed: int
     if workers == 1:
         for i, chunk in jobs:
             try:
-                collect(i, _records(tests[i], chunk, seed, configs[i]))
+                records = _records(tests[i], chunk, seed, configs[i])
             except Exception:  # noqa: BLE001 - retried run by run
-                collect(i, _guarded(tests[i], chunk, seed, configs[i]))
+                records = _guarded(tests[i], chunk, seed, configs[i])
+            collect(i, records)
     elif jobs:
         pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), initializer=_die_with_parent)
         try:
@@ -172,11 +206,17 @@ def fly_tests(tests: Sequence[TestCase], configs: Sequence, runs: int, seed: int
             for future in as_completed(futures):
                 i, chunk = futures[future]
                 try:
-                    collect(i, future.result())
+                    records = future.result()
                 except Exception:  # noqa: BLE001 - retried in this process
-                    collect(i, _guarded(tests[i], chunk, seed, configs[i]))
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+                    records = _guarded(tests[i], chunk, seed, configs[i])
+                collect(i, records)
+        except BaseException:  # Ctrl-C, a store that cannot be written: end the workers now, not after their jobs
+            workers_now = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in workers_now:  # (Python 3.14: pool.terminate_workers())
+                process.terminate()
+            raise
+        pool.shutdown(wait=True)
     return [tuple(g[k] for k in range(runs)) for g in got]
 
 
@@ -187,9 +227,13 @@ class TestStats:
 
     Attributes:
         file: the YAML. uav: the UAV profile flown. runs: the runs, in run order.
-        failures: failing runs; p: their share; ci_low, ci_high: its 95% Clopper-Pearson interval.
+        failures: failing runs; errors: runs that ended in ``error`` (neither passing nor failing); the other figures
+            are over the runs flown (``flown``: runs - errors).
+        p: the share of the flown runs that fail; ci_low, ci_high: its 95% Clopper-Pearson interval (all nan when
+            no run was flown).
         points_mean: the competition's points per run; points_median_run: the points of the median run (runs
-            ordered by distance, collisions first; of an even number, the farther of the two middle runs).
+            ordered by distance, collisions first; of an even number, the farther of the two middle runs; None
+            when no run was flown).
         min_distance, median_distance: the closest approach over the runs [m] (nan without a finite distance).
         suite: what the failure suite said when offered the test's closest failing run ("" for a passing test).
     """
@@ -201,11 +245,12 @@ class TestStats:
     uav: str
     runs: tuple[RunRecord, ...]
     failures: int
+    errors: int
     p: float
     ci_low: float
     ci_high: float
     points_mean: float
-    points_median_run: int
+    points_median_run: int | None
     min_distance: float
     median_distance: float
     suite: str = ""
@@ -213,6 +258,11 @@ class TestStats:
     @property
     def name(self) -> str:
         return Path(self.file).stem
+
+    @property
+    def flown(self) -> int:
+        """Runs that did not end in ``error``: the runs the figures are over."""
+        return len(self.runs) - self.errors
 
     @property
     def statuses(self) -> str:
@@ -226,11 +276,12 @@ class TestStats:
 
     def to_row(self) -> dict:
         """The row of ``evaluation.csv``."""
-        return {"file": self.file, "runs": len(self.runs), "failures": self.failures, "p": _r(self.p),
-                "ci_low": _r(self.ci_low), "ci_high": _r(self.ci_high), "points_mean": _r(self.points_mean),
-                "points_median_run": self.points_median_run, "min_distance": _r(self.min_distance),
-                "median_distance": _r(self.median_distance), "statuses": self.statuses, "uav": self.uav,
-                "suite": self.suite}
+        return {"file": self.file, "runs": len(self.runs), "failures": self.failures, "errors": self.errors,
+                "p": _r(self.p), "ci_low": _r(self.ci_low), "ci_high": _r(self.ci_high),
+                "points_mean": _r(self.points_mean),
+                "points_median_run": "" if self.points_median_run is None else self.points_median_run,
+                "min_distance": _r(self.min_distance), "median_distance": _r(self.median_distance),
+                "statuses": self.statuses, "uav": self.uav, "suite": self.suite}
 
 
 def _by_risk(runs: Sequence[RunRecord]) -> list[RunRecord]:
@@ -239,15 +290,19 @@ def _by_risk(runs: Sequence[RunRecord]) -> list[RunRecord]:
 
 
 def summarise_test(file, test: TestCase, runs: Sequence[RunRecord], uav: str = "") -> TestStats:
-    """The statistics of one test's runs."""
+    """The statistics of one test's runs: over the runs flown; those that ended in ``error`` are counted apart."""
     from scipy.stats import binomtest
 
-    n, k = len(runs), sum(r.failed for r in runs)
-    ci = binomtest(k, n).proportion_ci(confidence_level=CONFIDENCE, method="exact")
-    ordered = _by_risk(runs)
-    finite = [r.distance for r in runs if math.isfinite(r.distance)]
-    return TestStats(os.fspath(file), test, uav, tuple(runs), k, k / n, float(ci.low), float(ci.high),
-                     float(np.mean([r.points for r in runs])), ordered[n // 2].points,
+    flown = [r for r in runs if r.flown]
+    n, k = len(flown), sum(r.failed for r in flown)
+    low = high = math.nan
+    if n:
+        ci = binomtest(k, n).proportion_ci(confidence_level=CONFIDENCE, method="exact")
+        low, high = float(ci.low), float(ci.high)
+    finite = [r.distance for r in flown if math.isfinite(r.distance)]
+    return TestStats(os.fspath(file), test, uav, tuple(runs), k, len(runs) - n, k / n if n else math.nan, low, high,
+                     float(np.mean([r.points for r in flown])) if n else math.nan,
+                     _by_risk(flown)[n // 2].points if n else None,
                      float(np.min(finite)) if finite else math.nan, float(np.median(finite)) if finite else math.nan)
 
 
@@ -259,7 +314,8 @@ class Evaluation:
         runs, seed: runs per test and base seed; uav: the profile given (None: each test's default).
         tests: per-test statistics, in input order. suite: the distinct failures (a
         :class:`~surrealist_gym.suite.Suite` of the failing tests' closest runs). diversity: their
-        :func:`~surrealist_gym.suite.diversity` over all failing tests. workers, wall_s: processes and flying time [s].
+        :func:`~surrealist_gym.suite.diversity` over all failing tests. workers, wall_s: processes and flying time [s]
+        (of this call). stored: runs read back from the store, flown before this call.
     """
 
     runs: int
@@ -270,6 +326,7 @@ class Evaluation:
     diversity: FrozenDict
     workers: int
     wall_s: float
+    stored: int = 0
 
     @property
     def failing(self) -> tuple[TestStats, ...]:
@@ -278,11 +335,16 @@ class Evaluation:
 
 
 def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 0, uav=None,
-             workers: int | None = None, progress: Callable[[int, int], None] | None = None) -> Evaluation:
+             workers: int | None = None, progress: Callable[[int, int], None] | None = None, store=None,
+             identity: dict | None = None) -> Evaluation:
     """Fly ``runs`` runs of each (file, test) (from :func:`load_tests`) and compute the report's figures.
 
     ``uav``: a profile name, YAML or :class:`~surrealist_gym.sim.profiles.UavProfile` for every test (default: each
-    test's :func:`~surrealist_gym.sim.profiles.default_profile`)."""
+    test's :func:`~surrealist_gym.sim.profiles.default_profile`). ``store``: an SQLite file
+    (:class:`~surrealist_gym.store.EvaluationStore`) that holds this evaluation's runs: those it holds are read back,
+    not flown, and each chunk flown is written to it as it completes. It records the evaluation's identity
+    (:func:`evaluation_identity`, with ``identity``: anything else the runs depend on), so a store of another
+    evaluation is refused in one line."""
     from .sim.profiles import default_profile, load_profile
     from .suite import Member, Suite, diversity
 
@@ -292,9 +354,24 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     profiles = [given or default_profile(test) for _, test in tests]
     configs = [p.sim_config() for p in profiles]
     workers = workers or max(1, min(os.cpu_count() or 1, 8))
-    start = time.perf_counter()
-    flown = fly_tests([t for _, t in tests], configs, runs, seed, workers, progress)
-    wall = time.perf_counter() - start
+    have: list[dict] = [{} for _ in tests]
+    db = None
+    try:
+        if store is not None:
+            from .store import EvaluationStore
+
+            db = EvaluationStore(store)
+            db.claim({**evaluation_identity(tests, runs, seed, configs), **(identity or {})})
+            for row in db:
+                have[row.info["test"]].update(
+                    (r["index"], RunRecord.from_dict(r, t)) for r, t in zip(row.runs, row.info["trajectories"]))
+        start = time.perf_counter()
+        flown = fly_tests([t for _, t in tests], configs, runs, seed, workers, progress, have,
+                          None if db is None else lambda i, records: _store(db, i, *tests[i], records))
+        wall = time.perf_counter() - start
+    finally:
+        if db is not None:
+            db.close()
     stats = [summarise_test(path, test, records, profile.name)
              for (path, test), records, profile in zip(tests, flown, profiles)]
     suite, members = Suite(), []
@@ -304,7 +381,34 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
             suite, what = suite.offer(members[-1])
             stats[i] = replace(st, suite=what)
     return Evaluation(runs, seed, None if given is None else given.name, tuple(stats), suite,
-                      FrozenDict(diversity(members)), workers, wall)
+                      FrozenDict(diversity(members)), workers, wall, sum(map(len, have)))
+
+
+def evaluation_identity(tests: Sequence[tuple[Path, TestCase]], runs: int, seed: int, configs: Sequence) -> dict:
+    """What the runs of an evaluation depend on: its tests (file and a digest of ``TestCase.key()``, in order), the
+    runs per test, the base seed, the UAV profiles and the simulator settings (digest); and, recorded but not
+    compared, the package version."""
+    from . import __version__
+
+    def digest(value) -> str:
+        return hashlib.sha1(value.encode()).hexdigest()[:16]
+
+    return {"command": "evaluate", "tests": [[os.fspath(path), digest(test.key())] for path, test in tests],
+            "runs": int(runs), "seed": int(seed), "uav": sorted({c.profile for c in configs}),
+            "sim": digest(repr(list(configs))), "version": __version__}
+
+
+def _store(db, i: int, path, test: TestCase, records: list[RunRecord]) -> None:
+    """Write a chunk of runs of test ``i`` (with their trajectories, for the report) and commit it."""
+    from .store import StoredEvaluation
+
+    try:
+        db.add(StoredEvaluation(test.key(), {"file": os.fspath(path)}, tuple(r.index for r in records),
+                                tuple(r.to_dict() for r in records), None,
+                                {"test": i, "trajectories": [r.trajectory.tolist() for r in records]}))
+    except (sqlite3.Error, OSError) as err:
+        raise SurrealistError(f"{db.path}: cannot store the runs ({one_line(err)}); the runs stored before are "
+                              f"kept, and resuming flies the rest") from None
 
 
 # --- report --------------------------------------------------------------------------------------------------------
@@ -323,66 +427,102 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
         writer.writerows(rows)
 
 
+def _p_text(t: TestStats) -> str:
+    """``0.40 [0.05, 0.85]``: p and its interval; ``- (no run flown)`` when every run ended in error."""
+    return f"{t.p:.2f} [{t.ci_low:.2f}, {t.ci_high:.2f}]" if t.flown else "- (no run flown)"
+
+
 def suite_lines(ev: Evaluation) -> list[str]:
     """The suite's figures, one per line (the CLI's summary and the report share them)."""
     d = ev.diversity
-    failing_runs = sum(t.failures for t in ev.tests)
-    return [f"tests failing at least once: {len(ev.failing)} of {len(ev.tests)}; failing runs: {failing_runs} of "
-            f"{len(ev.tests) * ev.runs}",
-            f"points: {sum(t.points_mean for t in ev.tests):.1f} expected per round of the suite (sum of the mean "
-            f"points per run), {sum(t.points_median_run for t in ev.tests)} for the median runs",
-            f"distinct failures: {len(ev.suite)} of {len(ev.failing)} failing tests (alike: flights < "
-            f"{ev.suite.min_flight_m:g} m apart and the boxes they failed at < {ev.suite.min_layout_m:g} m apart)",
-            f"diversity of the failing tests' closest runs: flight mean {_f(d['flight_mean_m'])} m (min "
-            f"{_f(d['flight_min_m'])} m), layout mean {_f(d['layout_mean_m'])} m (min {_f(d['layout_min_m'])} m)"
-            if d["members"] > 1 else "diversity: needs two failing tests"]
+    failing_runs, errors = sum(t.failures for t in ev.tests), sum(t.errors for t in ev.tests)
+    unflown = [t.name for t in ev.tests if not t.flown]
+    lines = [f"tests failing at least once: {len(ev.failing)} of {len(ev.tests)}; failing runs: {failing_runs} of "
+             f"{sum(t.flown for t in ev.tests)} flown",
+             f"points: {sum(t.points_mean for t in ev.tests if t.flown):.1f} expected per round of the suite (sum of "
+             f"the mean points per run), {sum(t.points_median_run for t in ev.tests if t.flown)} for the median runs"]
+    if errors:
+        lines.append(f"runs that ended in error (neither passing nor failing, left out of p and points): {errors} of "
+                     f"{len(ev.tests) * ev.runs}" + (f"; tests with no run flown (p unknown): {', '.join(unflown)}"
+                                                     if unflown else ""))
+    return lines + [
+        f"distinct failures: {len(ev.suite)} of {len(ev.failing)} failing tests (alike: flights < "
+        f"{ev.suite.min_flight_m:g} m apart and the boxes they failed at < {ev.suite.min_layout_m:g} m apart)",
+        f"diversity of the failing tests' closest runs: flight mean {_f(d['flight_mean_m'])} m (min "
+        f"{_f(d['flight_min_m'])} m), layout mean {_f(d['layout_mean_m'])} m (min {_f(d['layout_min_m'])} m)"
+        if d["members"] > 1 else "diversity: needs two failing tests"]
+
+
+REPORT_FILES = {"evaluation": "evaluation.csv", "runs": "runs.csv", "distances": "distances.png",
+                "top_views": "top-views.png", "suite_map": "suite-map.png", "report": "report.md"}
 
 
 def write_report(ev: Evaluation, out) -> dict[str, Path]:
     """Write ``evaluation.csv`` (one row per test), ``runs.csv`` (one row per run), the figures
-    (:mod:`surrealist_gym.report_plots`) and ``report.md`` to the folder ``out``; returns their paths."""
+    (:mod:`surrealist_gym.report_plots`) and ``report.md`` to the folder ``out``; returns their paths.
+
+    Whole or not at all: the files are written to a temporary folder inside ``out`` and then moved into place
+    (``report.md`` last); if that fails (a full disk), the temporary folder and any report file moved are removed and
+    a one-line SurrealistError says why."""
     from .report_plots import plot_distances, plot_suite_map, plot_top_views
 
     out = Path(out)
-    paths = {"report": out / "report.md", "evaluation": out / "evaluation.csv", "runs": out / "runs.csv",
-             "distances": out / "distances.png", "top_views": out / "top-views.png",
-             "suite_map": out / "suite-map.png"}
+    paths = {key: out / name for key, name in REPORT_FILES.items()}
+    tmp, moving = None, False
     try:
         out.mkdir(parents=True, exist_ok=True)
-        _write_csv(paths["evaluation"], [t.to_row() for t in ev.tests])
-        _write_csv(paths["runs"], [{"file": t.file, "run": r.index, "status": r.status, "distance": _r(r.distance),
-                                    "failed": int(r.failed), "points": r.points, "duration_s": _r(r.duration, 2),
-                                    "message": r.message} for t in ev.tests for r in t.runs])
-        plot_distances(ev, paths["distances"])
-        plot_top_views(ev, paths["top_views"])
-        plot_suite_map(ev, paths["suite_map"])
-        paths["report"].write_text(report_text(ev), encoding="utf-8")
-    except OSError as err:
-        raise SurrealistError(f"{out}: cannot write the report ({err.strerror or err})") from err
+        for stale in out.glob(".report-*"):  # left by a process killed while writing
+            shutil.rmtree(stale, ignore_errors=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".report-", dir=out))
+        draft = {key: tmp / name for key, name in REPORT_FILES.items()}
+        _write_csv(draft["evaluation"], [t.to_row() for t in ev.tests])
+        _write_csv(draft["runs"], [{"file": t.file, "run": r.index, "status": r.status, "distance": _r(r.distance),
+                                    "failed": int(r.failed) if r.flown else "", "points": r.points if r.flown else "",
+                                    "duration_s": _r(r.duration, 2), "message": r.message}
+                                   for t in ev.tests for r in t.runs])
+        plot_distances(ev, draft["distances"])
+        plot_top_views(ev, draft["top_views"])
+        plot_suite_map(ev, draft["suite_map"])
+        draft["report"].write_text(report_text(ev), encoding="utf-8")
+        moving = True
+        for key in REPORT_FILES:
+            os.replace(draft[key], paths[key])
+    except BaseException as err:
+        if moving:  # some files of this report may have replaced those of an earlier one: no half report
+            for path in paths.values():
+                path.unlink(missing_ok=True)
+        if isinstance(err, OSError):
+            raise SurrealistError(f"{out}: cannot write the report ({err.strerror or err})") from None
+        raise
+    finally:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
     return paths
 
 
 def report_text(ev: Evaluation) -> str:
     """The Markdown report (the figures are read from beside it)."""
     uav = ev.uav or ", ".join(sorted({t.uav for t in ev.tests})) + " (each test's default)"
+    stored = f" ({ev.stored} runs flown before, read back from the store)" if ev.stored else ""
     lines = [f"# Re-evaluation of {len(ev.tests)} tests", "",
              f"{ev.runs} runs per test, base seed {ev.seed}, UAV profile {uav}; flown on {ev.workers} worker(s) in "
-             f"{ev.wall_s:.1f} s.", "",
+             f"{ev.wall_s:.1f} s{stored}.", "",
              f"A run **fails** when it collides or its competition distance (box footprint to the 0.5 s flight "
              f"polyline, 2-D) is below {UNSAFE_DISTANCE_M:g} m. Points as the competition scores a run: 5 below "
              f"0.25 m (and for a collision), 2 below 1 m, 1 below 1.5 m.", "", "## Suite", ""]
     lines += [f"- {line}" for line in suite_lines(ev)]
     lines += ["", "## Tests", "",
-              "p is the failure probability (failing runs / runs) with its 95% Clopper-Pearson interval; "
-              "points per run is the mean over the runs, median run the points of the run in the middle when "
+              "p is the failure probability (failing runs / runs flown) with its 95% Clopper-Pearson interval; "
+              "a run that ended in error (errors) was not flown to an end and is neither a pass nor a failure; "
+              "points per run is the mean over the runs flown, median run the points of the run in the middle when "
               "ordered by distance; suite says what the archive of distinct failures did with the test's closest "
               "failing run (added, alike N: the same failure as member N, replaced N).", "",
-              "| test | failures | p [95% CI] | points per run | median run | min distance [m] | "
-              "median distance [m] | statuses | suite |", "|---|---|---|---|---|---|---|---|---|"]
+              "| test | failures | errors | p [95% CI] | points per run | median run | min distance [m] | "
+              "median distance [m] | statuses | suite |", "|---|---|---|---|---|---|---|---|---|---|"]
     for t in ev.tests:
-        lines.append(f"| {t.name} | {t.failures}/{len(t.runs)} | {t.p:.2f} [{t.ci_low:.2f}, {t.ci_high:.2f}] | "
-                     f"{t.points_mean:.1f} | {t.points_median_run} | {_f(t.min_distance)} | "
-                     f"{_f(t.median_distance)} | {t.statuses} | {t.suite or '-'} |")
+        lines.append(f"| {t.name} | {t.failures}/{t.flown} | {t.errors} | {_p_text(t)} | {_f(t.points_mean, 1)} | "
+                     f"{_f(t.points_median_run, 0)} | {_f(t.min_distance)} | {_f(t.median_distance)} | "
+                     f"{t.statuses} | {t.suite or '-'} |")
     lines += ["", "## Figures", "",
               "**Closest approach per run** (`distances.png`): one row per test, each dot a run's competition "
               "distance (red: failing, a cross: a collision), a box of the runs' quartiles behind; the dashed line "

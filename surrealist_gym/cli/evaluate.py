@@ -5,6 +5,10 @@ prints one row per test (failure probability with its 95% Clopper-Pearson interv
 closest approach) and the suite's distinct failures and diversity, and writes ``report.md``, ``evaluation.csv``,
 ``runs.csv`` and the figures to ``--out``. Tests must keep the competition's rules unless ``--any-layout``.
 
+``--out`` holds one evaluation: its options (``run.json``) and every run, stored as it completes
+(``evaluations.sqlite``). ``--resume DIR`` finishes an interrupted evaluation: it flies only the missing runs and
+writes the same report an uninterrupted one would have.
+
 Example::
 
     surrealist evaluate ../shared/data/competition/camba-collection --runs 5 --workers 2 --out results/camba
@@ -12,13 +16,61 @@ Example::
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 import sys
 import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import SurrealistError
+from .options import RUN_FILE
+
+STORE_FILE = "evaluations.sqlite"
+
+
+@dataclass(frozen=True)
+class EvaluateOptions:
+    """What an evaluation is run with, as ``run.json`` keeps it: the tests (absolute paths as given), runs per test,
+    base seed, UAV profile (a preset's name or a YAML's absolute path), whether the competition's rules are skipped,
+    and the workers (the one option ``--resume`` may change)."""
+
+    tests: tuple[str, ...]
+    runs: int = 5
+    random_seed: int = 0
+    uav: str | None = None
+    any_layout: bool = False
+    workers: int | None = None
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace) -> "EvaluateOptions":
+        return cls(tuple(str(Path(t).absolute()) for t in args.tests), args.runs, args.random_seed,
+                   _uav_option(args.uav), args.any_layout, args.workers)
+
+    def to_json(self) -> dict:
+        return {"command": "evaluate", **dataclasses.asdict(self), "tests": list(self.tests)}
+
+    @classmethod
+    def from_json(cls, path: Path) -> "EvaluateOptions":
+        try:
+            values = json.loads(path.read_text())
+            if values.pop("command", None) != "evaluate":
+                raise SurrealistError(f"{path.parent}: holds no evaluation to resume ({path.name} is another "
+                                      f"command's)")
+            return cls(**{**values, "tests": tuple(values["tests"])})
+        except (OSError, UnicodeDecodeError, ValueError, TypeError, KeyError, AttributeError) as err:
+            raise SurrealistError(f"{path}: not a readable run file ({type(err).__name__})") from None
+
+
+def _uav_option(uav: str | None) -> str | None:
+    from ..sim.profiles import PRESETS
+
+    return uav if uav is None or uav in PRESETS else str(Path(uav).absolute())
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist evaluate``."""
-    parser.add_argument("tests", metavar="TESTS", nargs="+", help="Aerialist test YAMLs, or folders of them")
+    parser.add_argument("tests", metavar="TESTS", nargs="*", help="Aerialist test YAMLs, or folders of them")
     parser.add_argument("--runs", type=int, default=5, help="runs per test (default 5)")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
     parser.add_argument("--random-seed", type=int, default=0, metavar="S",
@@ -29,7 +81,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--any-layout", action="store_true",
                         help="accept tests outside the competition's rules on obstacles (count, bounds, boxes only)")
     parser.add_argument("--out", metavar="DIR", default=None,
-                        help="output folder (default results/evaluate-<timestamp>)")
+                        help="output folder, new or empty (default results/evaluate-<timestamp>)")
+    parser.add_argument("--resume", metavar="DIR", default=None,
+                        help="finish an interrupted evaluation in DIR: fly its missing runs and write its report "
+                             "(same options; only --workers changes)")
 
 
 def summary_text(ev) -> str:
@@ -37,34 +92,130 @@ def summary_text(ev) -> str:
     from ..reevaluation import suite_lines
 
     width = max([len("test"), *(len(t.name) for t in ev.tests)])
-    head = (f"{'test':{width}}  {'fail':>5}  {'p':>5}  {'95% CI':>12}  {'pts/run':>7}  {'median':>6}  "
+    head = (f"{'test':{width}}  {'fail':>5}  {'err':>3}  {'p':>5}  {'95% CI':>12}  {'pts/run':>7}  {'median':>6}  "
             f"{'min [m]':>7}  {'med [m]':>7}  statuses")
     lines = [f"{len(ev.tests)} tests x {ev.runs} runs, seed {ev.seed}, flown in {ev.wall_s:.1f} s on {ev.workers} "
-             f"worker(s)", head, "-" * len(head)]
+             f"worker(s)" + (f" ({ev.stored} runs read back from the store)" if ev.stored else ""),
+             head, "-" * len(head)]
     for t in ev.tests:
-        lines.append(f"{t.name:{width}}  {f'{t.failures}/{len(t.runs)}':>5}  {t.p:5.2f}  "
-                     f"{f'[{t.ci_low:.2f}, {t.ci_high:.2f}]':>12}  {t.points_mean:7.1f}  {t.points_median_run:6d}  "
-                     f"{_m(t.min_distance):>7}  {_m(t.median_distance):>7}  {t.statuses}")
+        ci = f"[{t.ci_low:.2f}, {t.ci_high:.2f}]" if t.flown else "no run flown"
+        lines.append(f"{t.name:{width}}  {f'{t.failures}/{t.flown}':>5}  {t.errors:3d}  {_m(t.p):>5}  {ci:>12}  "
+                     f"{_m(t.points_mean, 1):>7}  {_m(t.points_median_run, 0):>6}  {_m(t.min_distance):>7}  "
+                     f"{_m(t.median_distance):>7}  {t.statuses}")
     return "\n".join(lines + suite_lines(ev))
 
 
-def _m(value: float) -> str:
-    return "-" if value != value else f"{value:.2f}"  # nan -> "-"
+def _m(value, digits: int = 2) -> str:
+    return "-" if value is None or value != value else f"{value:.{digits}f}"  # None, nan -> "-"
 
 
 def run(args: argparse.Namespace) -> int:
-    """Load and check the tests, fly them, print the summary and write the report."""
-    from tqdm import tqdm
-
-    from ..reevaluation import evaluate, load_tests, write_report
+    """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
+    summary and write the report."""
+    from ..reevaluation import load_tests
     from ..sim.profiles import load_profile
+    from ._search import _unlock
     from .options import check_at_least
 
     check_at_least(args, runs=1, workers=1)
-    uav = None if args.uav is None else load_profile(args.uav)
-    tests = load_tests(args.tests, any_layout=args.any_layout)  # bad input fails before the progress bar
-    out = args.out or f"results/evaluate-{time.strftime('%Y%m%d-%H%M%S')}"
-    bar = tqdm(total=len(tests) * args.runs, unit="run", desc="evaluate", dynamic_ncols=True, file=sys.stderr,
+    if args.resume:
+        out, options = _resumed(args)
+    else:
+        if not args.tests:
+            raise SurrealistError("TESTS: give the tests to evaluate (YAMLs or folders of them), or --resume DIR")
+        out = _empty_folder(Path(args.out or f"results/evaluate-{time.strftime('%Y%m%d-%H%M%S')}"))
+        options = EvaluateOptions.from_args(args)
+    uav = None if options.uav is None else load_profile(options.uav if args.resume else args.uav)  # named as given
+    tests = load_tests(options.tests if args.resume else args.tests, any_layout=options.any_layout)
+    tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
+    _own(out)
+    try:
+        if not args.resume:
+            try:
+                with open(out / RUN_FILE, "x") as f:  # the one evaluation of this folder
+                    f.write(json.dumps(options.to_json(), indent=2) + "\n")
+            except FileExistsError:
+                raise SurrealistError(f"--out {out}: holds an evaluation already; finish it with --resume {out}, "
+                                      f"or choose another folder") from None
+            except OSError as err:
+                raise SurrealistError(f"--out {out}: cannot write {RUN_FILE} ({err.strerror or err})") from None
+        return _evaluate(out, options, tests, uav)
+    finally:
+        _unlock(out)
+
+
+def _own(out: Path) -> None:
+    """Make the folder and hold its lock (cli._search's) until :func:`~surrealist_gym.cli._search._unlock`: one
+    writer."""
+    from ._search import _lock
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        _lock(out)
+    except SurrealistError:
+        raise SurrealistError(f"{out}: another process is writing to this folder") from None
+    except OSError as err:
+        raise SurrealistError(f"{out}: cannot write in this folder ({err.strerror or err})") from None
+
+
+def _empty_folder(out: Path) -> Path:
+    """``--out``, refused in one line unless it can be written and is new or empty (but for a lock file)."""
+    from ._search import _unlock
+    from .options import check_writable
+
+    check_writable(out, "--out", "folder")
+    held = sorted(p.name for p in out.iterdir() if p.name != ".lock") if out.is_dir() else []
+    if RUN_FILE in held and _evaluation_folder(out):
+        _own(out)  # an evaluation running there is refused as such
+        _unlock(out)
+        raise SurrealistError(f"--out {out}: holds an evaluation already; finish it with --resume {out}, or choose "
+                              f"another folder")
+    if held:
+        raise SurrealistError(f"--out {out}: not empty (holds {held[0]}" + (f" and {len(held) - 1} more" if
+                                                                             len(held) > 1 else "")
+                              + "); an evaluation writes to a new or empty folder: choose another")
+    return out
+
+
+def _evaluation_folder(out: Path) -> bool:
+    try:
+        return json.loads((out / RUN_FILE).read_text()).get("command") == "evaluate"
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
+    """The folder and options of the evaluation to finish; options given again must be those it was started with."""
+    from .options import check_writable
+
+    out = check_writable(args.resume, "--resume", "folder")
+    if not (out / RUN_FILE).is_file():
+        raise SurrealistError(f"--resume {out}: not an evaluation to resume (no {RUN_FILE})")
+    options = EvaluateOptions.from_json(out / RUN_FILE)
+    flags = getattr(args, "_flags", frozenset())
+    given = {"tests": (EvaluateOptions.from_args(args).tests if args.tests else None, None),
+             "runs": (args.runs, 5), "random_seed": (args.random_seed, 0), "uav": (_uav_option(args.uav), None),
+             "any_layout": (args.any_layout, False)}
+    for name, (value, default) in given.items():
+        flag = "TESTS" if name == "tests" else "--" + name.replace("_", "-")
+        if (flag in flags or value != default) and value != getattr(options, name):
+            shown = f"other tests ({out / RUN_FILE} lists them)" if name == "tests" else repr(getattr(options, name))
+            raise SurrealistError(f"{flag}: the evaluation in {out} was started with {shown}; --resume keeps its "
+                                  f"options (only --workers changes)")
+    if args.out and Path(args.out).absolute() != out.absolute():
+        raise SurrealistError(f"--out {args.out}: --resume writes to the folder it resumes ({out})")
+    return out, dataclasses.replace(options, workers=args.workers or options.workers)
+
+
+def _evaluate(out: Path, options: EvaluateOptions, tests, uav) -> int:
+    """Fly the runs the store lacks (a progress bar from those stored), then the summary and the report."""
+    from tqdm import tqdm
+
+    from ..reevaluation import evaluate, write_report
+
+    store = out / STORE_FILE
+    resume = f"surrealist evaluate --resume {out}"
+    bar = tqdm(total=len(tests) * options.runs, unit="run", desc="evaluate", dynamic_ncols=True, file=sys.stderr,
                disable=None)
 
     def progress(done: int, total: int) -> None:
@@ -72,11 +223,19 @@ def run(args: argparse.Namespace) -> int:
         bar.refresh()
 
     try:
-        ev = evaluate(tests, runs=args.runs, seed=args.random_seed, uav=uav, workers=args.workers,
-                      progress=progress)
-    finally:
-        bar.close()
-    paths = write_report(ev, out)
+        try:
+            ev = evaluate(tests, runs=options.runs, seed=options.random_seed, uav=uav, workers=options.workers,
+                          progress=progress, store=store, identity={"any_layout": options.any_layout})
+        finally:
+            bar.close()
+        try:
+            paths = write_report(ev, out)
+        except SurrealistError as err:
+            raise SurrealistError(f"{err}; every run is stored in {store}: {resume} writes the report") from None
+    except KeyboardInterrupt:
+        print(f"interrupted: the runs flown are stored in {store}; {resume} flies the rest and writes the report",
+              file=sys.stderr)
+        return 130
     print(summary_text(ev))
     print(f"report: {paths['report']}; per test: {paths['evaluation']}; per run: {paths['runs']}")
     return 0

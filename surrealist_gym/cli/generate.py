@@ -113,9 +113,11 @@ def _write_suite(out, suite, options) -> None:
     finally:
         bar.close()
     write_report(ev, folder / "confirmation")
-    confirmed = sum(s.p >= CONFIRMED_P for s in ev.tests)
+    confirmed = sum(s.p >= CONFIRMED_P for s in ev.tests)  # of the re-runs flown: those in error do not count
+    errors = sum(s.errors for s in ev.tests)
     print(f"confirmation: {confirmed} of {len(suite)} fail in >= {CONFIRMED_P:.0%} of {options.confirm} re-runs "
-          f"(report in {folder / 'confirmation'}/report.md)")
+          + (f"({errors} re-runs ended in error and are not counted) " if errors else "")
+          + f"(report in {folder / 'confirmation'}/report.md)")
     print(f"suite in {folder}/: failure-NN.yaml (robot/mission keys), legacy/ (drone/test keys), suite.csv, "
           f"suite.png")
 

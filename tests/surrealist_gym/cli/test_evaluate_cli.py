@@ -52,7 +52,7 @@ def test_evaluate_three_camba_tests(folder, tmp_path, capsys):
 
     rows = _rows(out / "evaluation.csv")
     assert [r["file"].rsplit("/", 1)[-1] for r in rows] == sorted(f"{n}.yaml" for n in NAMES)
-    assert list(rows[0])[:11] == ["file", "runs", "failures", "p", "ci_low", "ci_high", "points_mean",
+    assert list(rows[0])[:12] == ["file", "runs", "failures", "errors", "p", "ci_low", "ci_high", "points_mean",
                                   "points_median_run", "min_distance", "median_distance", "statuses"]
     runs = _rows(out / "runs.csv")
     assert len(runs) == 6 and {r["run"] for r in runs} == {"0", "1"}
@@ -74,7 +74,7 @@ def test_evaluate_three_camba_tests(folder, tmp_path, capsys):
 
     report = (out / "report.md").read_text()
     assert report.startswith("# Re-evaluation of 3 tests")
-    assert "| test | failures | p [95% CI] |" in report and all(name in report for name in NAMES)
+    assert "| test | failures | errors | p [95% CI] |" in report and all(name in report for name in NAMES)
     for png in ("distances.png", "top-views.png", "suite-map.png"):
         assert f"]({png})" in report
         assert (out / png).read_bytes()[:8] == PNG_MAGIC
@@ -107,6 +107,22 @@ def test_statistics_of_made_up_runs():
     crash = summarise_test("t.yaml", None, [_run(0, 3.0, "collision"), _run(1, 2.0)])
     assert (crash.failures, crash.points_mean, crash.points_median_run) == (1, 2.5, 0)
     assert crash.closest_failure.status == "collision"
+
+
+def test_error_runs_are_neither_passes_nor_failures():
+    # a run in error (its simulation raised, or the vehicle flipped: a distance may be kept) is counted apart
+    runs = [_run(0, 0.1), _run(1, 2.0), _run(2, math.inf, "error"), _run(3, 0.2, "error")]
+    stats = summarise_test("t.yaml", None, runs)
+    assert (stats.failures, stats.errors, stats.flown, stats.p) == (1, 2, 2, 0.5)
+    assert (round(stats.ci_low, 4), round(stats.ci_high, 4)) == (0.0126, 0.9874)  # Clopper-Pearson, 1 of 2
+    assert (stats.points_mean, stats.points_median_run, stats.min_distance) == (2.5, 0, 0.1)
+    assert stats.to_row()["errors"] == 2 and stats.statuses == "success:2 error:2"
+    none = summarise_test("t.yaml", None, [_run(0, math.inf, "error"), _run(1, 0.3, "error")])
+    assert (none.failures, none.errors, none.flown, none.points_median_run) == (0, 2, 0, None)
+    assert all(math.isnan(v) for v in (none.p, none.ci_low, none.ci_high, none.points_mean, none.min_distance))
+    assert none.closest_failure is None
+    row = none.to_row()
+    assert (row["p"], row["ci_low"], row["ci_high"], row["points_median_run"]) == ("", "", "", "")
 
 
 def test_rotations_beyond_90_degrees_are_the_same_boxes(shared_data):
