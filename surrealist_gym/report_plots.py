@@ -43,24 +43,26 @@ def _top_axes(ax) -> None:
 
 def plot_distances(ev, path) -> None:
     """Each run's competition distance, one row per test: a box of the quartiles, the runs as dots (red when they
-    fail, a cross for a collision) and the 1.5 m line. Infinite distances (no obstacles, an error) are left out."""
+    fail, a cross for a collision) and the 1.5 m line. Runs that ended in an error (not flown to an end) and
+    infinite distances (no obstacles) are left out; a row's label counts the errors apart."""
     tests = ev.tests
     fig = _figure(9, 1.4 + 0.32 * len(tests))
     ax = fig.subplots()
     rng = np.random.default_rng(0)  # jitter only
-    finite = [[r.distance for r in t.runs if math.isfinite(r.distance)] for t in tests]
+    finite = [[r.distance for r in t.runs if r.flown and math.isfinite(r.distance)] for t in tests]
     rows = np.arange(len(tests))[::-1]  # the first test on top
     ax.boxplot([d if d else [math.nan] for d in finite], positions=rows, vert=False, widths=0.6, showfliers=False,
                medianprops={"color": "0.2"}, boxprops={"color": "0.6"}, whiskerprops={"color": "0.6"},
                capprops={"color": "0.6"})
     dots = [(r.distance, row + rng.uniform(-0.18, 0.18), r.failed, r.status == "collision")
-            for row, t in zip(rows, tests) for r in t.runs if math.isfinite(r.distance)]
+            for row, t in zip(rows, tests) for r in t.runs if r.flown and math.isfinite(r.distance)]
     for failed, crash in ((False, False), (True, False), (True, True), (False, True)):
         xy = np.array([(x, y) for x, y, f, c in dots if f == failed and c == crash]).reshape(-1, 2)
         ax.scatter(xy[:, 0], xy[:, 1], s=28 if crash else 14, zorder=3, marker="x" if crash else "o",
                    color=_FAIL if failed else _PASS)
     ax.axvline(UNSAFE_DISTANCE_M, color="darkred", linestyle="--", linewidth=1, label=f"{UNSAFE_DISTANCE_M:g} m")
-    ax.set_yticks(rows, [f"{t.name}  ({t.failures}/{len(t.runs)})" for t in tests], fontsize="small")
+    ax.set_yticks(rows, [f"{t.name}  ({t.failures}/{t.flown}" + (f", {t.errors} error)" if t.errors else ")")
+                         for t in tests], fontsize="small")
     ax.set_ylim(-0.7, len(tests) - 0.3)
     ax.set_xlim(left=0)
     ax.set_xlabel("competition distance [m] (2-D, footprint to the flight polyline)")
@@ -72,7 +74,8 @@ def plot_distances(ev, path) -> None:
 
 
 def plot_top_views(ev, path, columns: int = 4) -> None:
-    """One top view per test: the boxes' footprints and every run's x-y flight (red: failing runs)."""
+    """One top view per test: the boxes' footprints and every run's x-y flight (red: failing runs; grey dashed:
+    runs that ended in an error)."""
     tests = ev.tests
     cols = max(1, min(columns, len(tests)))
     rows = math.ceil(len(tests) / cols)
@@ -82,8 +85,8 @@ def plot_top_views(ev, path, columns: int = 4) -> None:
         _boxes(ax, t.test.obstacles, facecolor="0.8", edgecolor=_BOX)
         for r in sorted(t.runs, key=lambda r: r.failed):  # failing flights on top
             if len(r.trajectory):
-                ax.plot(r.trajectory[:, 1], r.trajectory[:, 0], color=_FAIL if r.failed else _PASS, linewidth=0.8,
-                        alpha=0.8)
+                ax.plot(r.trajectory[:, 1], r.trajectory[:, 0], color=_FAIL if r.failed else _PASS if r.flown
+                        else "0.5", linestyle="-" if r.flown else "--", linewidth=0.8, alpha=0.8)
         _top_axes(ax)
         closest = "-" if math.isnan(t.min_distance) else f"{t.min_distance:.2f} m"
         ax.set_title(f"{t.name}\np {t.p:.2f}, closest {closest}", fontsize="small")
