@@ -25,6 +25,7 @@ COMMANDS = {
     "surrogate": ("surrealist_gym.cli.surrogate", "train or evaluate a surrogate model on evaluation stores"),
     "fidelity": ("surrealist_gym.cli.fidelity", "fly a labelled set of tests and report how far our UAV agrees"),
     "evaluate": ("surrealist_gym.cli.evaluate", "re-fly a suite of tests N times: failure odds, points, diversity"),
+    "compete": ("surrealist_gym.cli.compete", "run a UAV Testing Competition tool, unedited, on our simulator"),
 }
 
 

@@ -1,0 +1,98 @@
+"""``surrealist compete TOOL_DIR CASE_STUDY BUDGET``: run a UAV Testing Competition tool, unedited, on our simulator.
+
+The tool's own ``cli.py generate CASE_STUDY BUDGET`` runs in a copy of its folder inside ``--out``; every Aerialist
+agent it reaches (Local, Docker, K8s; DroneTest or AerialistTest) flies surrealist-gym's simulator instead of PX4
+and returns Aerialist's own results from ULogs. Prints where the tool's output folder is and a summary: tests
+written, simulations flown, failures by the competition's distance. A tool that crashes, exceeds its budget or never
+prints ``output folder:`` gets one line and exit code 2, with what it wrote kept.
+
+Example::
+
+    surrealist compete ../shared/third_party/uav-testing-competition/snippets mission1 10 --out results/ref-m1
+    SURREALIST_AERIALIST=../shared/third_party/aerialist-0.2.1 \\
+        surrealist compete ../shared/third_party/peers/ambiegen/snippets mission2 10
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``surrealist compete``."""
+    parser.add_argument("tool", metavar="TOOL_DIR", help="the competition tool's folder (with its cli.py)")
+    parser.add_argument("case_study", metavar="CASE_STUDY",
+                        help="mission1, mission2, mission3 (the tool's case_studies/ first) or an Aerialist YAML")
+    parser.add_argument("budget", metavar="BUDGET", type=int, help="simulations the tool may fly (given to its cli.py)")
+    parser.add_argument("--out", metavar="DIR", default=None,
+                        help="output folder, must not exist (default results/compete-<time>)")
+    parser.add_argument("--runs-per-test", type=int, default=1,
+                        help="runs an agent flies per test (default 1; a test's own agent.count wins)")
+    parser.add_argument("--workers", type=int, default=1,
+                        help="processes that fly the runs of one test (default 1: in this process)")
+    parser.add_argument("--aerialist", metavar="DIR", default=None,
+                        help="Aerialist's folder (default: the folders in $SURREALIST_AERIALIST holding the API the "
+                             "tool imports, then the installed aerialist)")
+    parser.add_argument("--seed", type=int, default=0, help="base seed of the runs' noise (default 0)")
+    parser.add_argument("--uav", metavar="NAME_OR_YAML", default="px4-v1.12-sitl-iris",
+                        help="UAV profile flown (default px4-v1.12-sitl-iris, the competition's PX4 SITL)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the command; returns the exit code."""
+    from tqdm import tqdm
+
+    from ..compete import prepare
+    from ..compete import run as run_tool
+    from ..errors import SurrealistError
+    from .options import check_at_least, check_writable
+
+    check_at_least(args, budget=1, runs_per_test=1, workers=1, seed=0)
+    plan = prepare(args.tool, args.case_study, args.budget, args.out, runs_per_test=args.runs_per_test,
+                   workers=args.workers, aerialist=args.aerialist, seed=args.seed, uav=args.uav)
+    check_writable(plan.out, "--out")
+    print(f"tool: {plan.tool} ({', '.join(plan.apis) or 'no Aerialist test API found'}), case study "
+          f"{plan.case_study_file}, budget {plan.budget}; {plan.aerialist.describe()}; UAV {plan.uav}", flush=True)
+    bar = tqdm(total=plan.budget, unit="sim", desc="simulations", file=sys.stderr, dynamic_ncols=True)
+    failing = []
+
+    def on_flight(flight) -> None:
+        if flight.refused:
+            bar.set_postfix_str(f"refused: over budget ({flight.number})")
+            return
+        bar.update(len(flight.statuses))
+        failing.extend(d for d in flight.distances if d < 1.5)
+        bar.set_postfix_str(f"runs < 1.5 m: {len(failing)}")
+
+    try:
+        result = run_tool(plan, on_flight)
+    finally:
+        bar.close()
+    _print_summary(result)
+    if result.problem:
+        raise SurrealistError(result.problem)
+    return 0
+
+
+def _print_summary(result) -> None:
+    plan = result.plan
+    if result.output_folder is not None:
+        complete = sum(1 for t in result.tests if t.ulg is not None and t.png is not None)
+        print(f"output folder: {result.output_folder} (the tool's: {len(result.tests)} tests, {complete} with yaml, "
+              f"ulg and png)")
+    flown = [f for f in result.flights if f.statuses]
+    mean = sum(f.wall_s for f in flown) / max(1, sum(len(f.statuses) for f in flown))
+    print(f"simulations: {result.spent} of budget {plan.budget} flown ({mean:.2f} s each), {result.refused} refused; "
+          f"{len(result.flights)} agent runs in {result.wall_s:.1f} s")
+    judged = [t for t in result.tests if t.distance is not None]
+    if judged:
+        counts = {p: sum(1 for t in judged if t.points == p) for p in (5, 2, 1)}
+        least = min(t.distance for t in judged)
+        print(f"failures by the competition's distance: {len(result.failures)} of {len(judged)} tests below 1.5 m "
+              f"(5 points: {counts[5]}, 2 points: {counts[2]}, 1 point: {counts[1]}); least distance {least:.2f} m")
+    unjudged = [t for t in result.tests if t.distance is None]
+    for t in unjudged:
+        print(f"  {t.name}: not judged ({t.note})")
+    for note in result.notes:
+        print(f"compat: {note}")
+    print(f"records: {plan.out / 'summary.json'}, {plan.out / 'flights.csv'}, flights in {plan.out / 'flights'}/")

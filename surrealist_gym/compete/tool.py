@@ -1,0 +1,372 @@
+"""Run a competition tool's own ``cli.py``, unedited, with every Aerialist agent flying surrealist-gym's simulator.
+
+:func:`prepare` checks everything before anything starts (the tool folder and its ``cli.py``, the case study, the
+output folder, the UAV, an Aerialist that holds the API the tool imports and imports here); :func:`run` copies the
+tool folder into the output folder, starts a :class:`~surrealist_gym.compete.server.SimulationServer`, and runs
+``python cli.py generate CASE_STUDY BUDGET`` in the copy, as the competition does, with the shim folder first on its
+``PYTHONPATH`` (``shim/``: Aerialist's agents ask the server to fly). The output folder then holds::
+
+    tool/            the copy the tool ran in, with what it wrote (its output folder, logs/, results/)
+    flights/         every test flown, as our YAML (sim-NNNN.yaml) and one ULog per run (sim-NNNN-runI.ulg)
+    tool-stdout.txt, tool-stderr.txt   what the tool printed
+    flights.csv      one row per agent.run(): agent, API, runs, statuses, competition distances, time
+    summary.json     the tests the tool wrote, with their competition distance and points; the budget spent
+
+Example::
+
+    >>> plan = prepare("../shared/third_party/uav-testing-competition/snippets", "mission1", 10)  # doctest: +SKIP
+    >>> result = run(plan)                                                                      # doctest: +SKIP
+    >>> result.output_folder, len(result.tests), result.spent, result.problem                   # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import Callable
+
+from ..errors import InvalidTestCase, SurrealistError, one_line
+from .locate import API_MODULES, AerialistSource, find_aerialist, tool_apis
+from .server import Flight, SimulationServer
+
+SHIM = Path(__file__).resolve().parent / "shim"
+DEFAULT_UAV = "px4-v1.12-sitl-iris"
+COMPAT_EXTRA = "pip install -e '.[compete]'"
+#: Made in the tool's working folder before it runs, as the competition's Dockerfile does (``mkdir -p``).
+PREPARED_FOLDERS = ("logs", "results", "generated_tests")
+_COPY_IGNORE = shutil.ignore_patterns(".git", "__pycache__", ".venv", "venv", ".pytest_cache")
+_FILE_FIELDS = (("robot", "drone", "mission_file"), ("robot", "drone", "params_file"),
+                ("mission", "test", "commands_file"))
+
+
+@dataclass(frozen=True, slots=True)
+class CompetePlan:
+    """A checked ``surrealist compete`` run: the tool, what its cli.py is given, where it writes, which Aerialist."""
+
+    tool: Path
+    case_study: str  # as the tool's cli.py gets it (relative to the tool's folder, or absolute)
+    case_study_file: Path
+    budget: int
+    out: Path
+    aerialist: AerialistSource
+    apis: tuple[str, ...]
+    runs_per_test: int = 1
+    workers: int = 1
+    seed: int = 0
+    uav: str = DEFAULT_UAV
+
+
+@dataclass(frozen=True, slots=True)
+class WrittenTest:
+    """One test in the tool's output folder: its files, and the competition distance [m] of its ULog (None when it
+    could not be judged: ``note`` says why)."""
+
+    name: str
+    yaml: Path
+    ulg: Path | None
+    png: Path | None
+    distance: float | None
+    points: int | None
+    flight: int | None = None  # the Flight whose ULog the tool copied
+    note: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class CompeteResult:
+    """What a run of the tool gave: its output folder and tests, the simulations flown, and ``problem`` (a one-line
+    reason the run does not count: a crash, a budget exceeded, no output folder; None when it counts)."""
+
+    plan: CompetePlan
+    returncode: int
+    output_folder: Path | None
+    tests: tuple[WrittenTest, ...]
+    flights: tuple[Flight, ...]
+    spent: int
+    refused: int
+    notes: tuple[str, ...]
+    wall_s: float
+    problem: str | None = None
+
+    @property
+    def failures(self) -> tuple[WrittenTest, ...]:
+        """The tests whose run is a soft failure (competition distance below 1.5 m: 1 point or more)."""
+        return tuple(t for t in self.tests if t.points)
+
+    def to_dict(self) -> dict:
+        plan = self.plan
+        return {
+            "tool": str(plan.tool), "case_study": str(plan.case_study_file), "budget": plan.budget,
+            "runs_per_test": plan.runs_per_test, "seed": plan.seed, "uav": plan.uav,
+            "aerialist": {"version": plan.aerialist.version, "apis": list(plan.aerialist.apis),
+                          "path": str(plan.aerialist.path or plan.aerialist.package)},
+            "returncode": self.returncode, "problem": self.problem, "wall_s": round(self.wall_s, 2),
+            "output_folder": None if self.output_folder is None else str(self.output_folder),
+            "simulations": self.spent, "refused": self.refused, "requests": len(self.flights),
+            "compat": list(self.notes),
+            "tests": [{"name": t.name, "yaml": str(t.yaml), "ulg": t.ulg and str(t.ulg), "png": t.png and str(t.png),
+                       "competition_distance": _finite(t.distance), "points": t.points, "flight": t.flight, "note": t.note}
+                      for t in self.tests],
+        }
+
+
+# --- checks ----------------------------------------------------------------------------------------------------------
+def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, workers: int = 1, aerialist=None,
+            seed: int = 0, uav: str = DEFAULT_UAV) -> CompetePlan:
+    """Check every input and find the Aerialist to use; nothing is written. One-line SurrealistError otherwise.
+
+    Args:
+        tool: the tool's folder (holding its ``cli.py``).
+        case_study: a case-study name (``mission1``: the tool's ``case_studies/``, then the project's look-up,
+            ``competition.case_study_path``) or an Aerialist YAML.
+        budget: the simulations the tool may fly, as its cli.py is told.
+        out: the output folder (must not exist; default ``results/compete-<time>``).
+        runs_per_test: runs an agent flies per ``run()`` (a test's own ``agent.count`` wins).
+        workers: processes flying the runs of one ``run()``.
+        aerialist: an Aerialist folder (default: ``$SURREALIST_AERIALIST``, then the installed one).
+        seed: base seed of the runs' noise.
+        uav: the UAV profile flown (default the competition's PX4 v1.12 SITL Iris).
+    """
+    from ..sim.profiles import load_profile
+
+    for name, value in (("budget", budget), ("--runs-per-test", runs_per_test), ("--workers", workers)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise SurrealistError(f"{name}: expected a whole number >= 1, got {value!r}")
+    tool = Path(tool)
+    if not tool.is_dir():
+        raise SurrealistError(f"tool {tool}: {'not a folder' if tool.exists() else 'no such folder'}")
+    if not (tool / "cli.py").is_file():
+        raise SurrealistError(f"tool {tool}: no cli.py in it (a competition tool is a folder with cli.py)")
+    out = Path(out) if out is not None else Path("results") / f"compete-{datetime.now():%Y%m%d-%H%M%S}"
+    if out.exists() or out.is_symlink():
+        raise SurrealistError(f"--out {out}: exists; give a new folder")
+    load_profile(uav)
+    argument, file = _case_study(tool.resolve(), case_study)
+    apis = tool_apis(tool)
+    if len(apis) > 1:
+        raise SurrealistError(f"tool {tool}: imports both {' and '.join(apis)}; no Aerialist holds both")
+    source = find_aerialist(apis, aerialist)
+    _check_imports(source, apis, tool)
+    return CompetePlan(tool.resolve(), argument, file, budget, out, source, apis, runs_per_test, workers, seed, uav)
+
+
+def _case_study(tool: Path, name) -> tuple[str, Path]:
+    """What the tool's cli.py is given for the case study, and its file; checked as our loader and Aerialist (paths
+    relative to the tool's folder) would read it."""
+    from ..competition import case_study_path, load_competition_test
+
+    given = Path(os.fspath(name))
+    if given.suffix in (".yaml", ".yml"):
+        if not given.is_absolute() and (tool / given).is_file():
+            argument, file = given.as_posix(), tool / given
+        elif given.is_file():
+            argument, file = str(given.resolve()), given.resolve()
+        else:
+            raise InvalidTestCase(f"case study {os.fspath(name)!r}: no such file (nor in the tool's folder)")
+    elif (tool / "case_studies" / f"{given.name}.yaml").is_file():
+        argument, file = f"case_studies/{given.name}.yaml", tool / "case_studies" / f"{given.name}.yaml"
+    else:
+        file = case_study_path(name).resolve()
+        argument = str(file)
+    load_competition_test(file)
+    _check_relative_files(file, tool)
+    return argument, file
+
+
+def _check_relative_files(file: Path, tool: Path) -> None:
+    """Aerialist opens a case study's relative paths from the tool's working folder: they must be there."""
+    import yaml
+
+    doc = yaml.safe_load(file.read_text(encoding="utf-8")) or {}
+    for section, legacy, key in _FILE_FIELDS:
+        part = doc.get(section) or doc.get(legacy) or {}
+        value = part.get(key) if isinstance(part, dict) else None
+        if isinstance(value, str) and not os.path.isabs(value) and not (tool / value).is_file():
+            raise InvalidTestCase(f"case study {file}: field {key!r}: {value!r} is not in the tool's folder {tool} "
+                                  f"(Aerialist opens relative paths from the tool's working folder)")
+
+
+def _check_imports(source: AerialistSource, apis: tuple[str, ...], tool: Path) -> None:
+    """Import Aerialist's test API and agents as the tool will (shim first on its path): a one-line error naming
+    the missing module otherwise."""
+    modules = [f"aerialist.px4.{API_MODULES[api]}" for api in apis] + ["aerialist.px4.docker_agent",
+                                                                       "aerialist.px4.k8s_agent"]
+    probe = "import importlib, sys\nfor m in sys.argv[1:]: importlib.import_module(m)"
+    env = tool_environment(source, "", b"", 1)
+    done = subprocess.run([sys.executable, "-c", probe, *modules], cwd=tool, env=env, capture_output=True,
+                          text=True, stdin=subprocess.DEVNULL)
+    if done.returncode != 0:
+        lines = [line for line in done.stderr.splitlines() if line.strip()]
+        raise SurrealistError(f"{source.describe()} does not import here ({one_line(lines[-1] if lines else '?', 120)})"
+                              f"; install what Aerialist's modules import with: {COMPAT_EXTRA}")
+
+
+def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs: int) -> dict[str, str]:
+    """The environment of the tool's process: the shim, then Aerialist's folder first on its PYTHONPATH, and the
+    server's address and key."""
+    env = dict(os.environ)
+    paths = [str(SHIM)] + ([str(source.path)] if source.path is not None else [])
+    if env.get("PYTHONPATH"):
+        paths.append(env["PYTHONPATH"])
+    env.update({"PYTHONPATH": os.pathsep.join(paths), "PYTHONUNBUFFERED": "1",
+                "SURREALIST_COMPETE_ADDRESS": address, "SURREALIST_COMPETE_AUTHKEY": authkey.hex(),
+                "SURREALIST_COMPETE_RUNS": str(runs)})
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
+
+
+# --- the run ---------------------------------------------------------------------------------------------------------
+def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) -> CompeteResult:
+    """Run the tool (see the module docstring); ``on_flight`` is called with each Flight as the server records it."""
+    from ..sim.profiles import load_profile
+
+    start = time.perf_counter()
+    plan.out.mkdir(parents=True)
+    work = plan.out / "tool"
+    shutil.copytree(plan.tool, work, ignore=_COPY_IGNORE)
+    for folder in PREPARED_FOLDERS:  # as the competition's Dockerfile prepares the tool's working folder
+        (work / folder).mkdir(exist_ok=True)
+    stdout, stderr = plan.out / "tool-stdout.txt", plan.out / "tool-stderr.txt"
+    config = load_profile(plan.uav).sim_config()
+    command = [sys.executable, "cli.py", "generate", plan.case_study, str(plan.budget)]
+    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight) as server, \
+            open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
+        env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test)
+        process = subprocess.Popen(command, cwd=work, env=env, stdout=out_file, stderr=err_file,
+                                   stdin=subprocess.DEVNULL)
+        try:
+            returncode, stopped = _wait(process, server.runaway)
+        finally:
+            if process.poll() is None:  # Ctrl-C or any other exit: the tool does not outlive us
+                _stop(process)
+        flights, spent, refused, notes = server.flights, server.spent, server.refused, server.notes
+    output = _output_folder(stdout, work)
+    tests = _written_tests(output, flights) if output is not None and output.is_dir() else ()
+    problem = _problem(plan, returncode, stopped, refused, output, stdout, stderr)
+    result = CompeteResult(plan, returncode, output, tests, flights, spent, refused, notes,
+                           time.perf_counter() - start, problem)
+    _write_records(result)
+    return result
+
+
+def _wait(process: subprocess.Popen, runaway) -> tuple[int, bool]:
+    """The tool's exit code, and whether it was stopped for asking past its budget again and again."""
+    while True:
+        try:
+            return process.wait(timeout=0.2), False
+        except subprocess.TimeoutExpired:
+            if runaway.is_set():
+                _stop(process)
+                return process.returncode, True
+
+
+def _stop(process: subprocess.Popen) -> None:
+    process.terminate()
+    try:
+        process.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+def _output_folder(stdout: Path, work: Path) -> Path | None:
+    """The folder the tool named last in an ``output folder: PATH`` line (relative to its working folder)."""
+    found = None
+    for line in stdout.read_text(encoding="utf-8", errors="replace").splitlines():
+        if line.strip().startswith("output folder:"):
+            found = line.strip()[len("output folder:"):].strip()
+    if not found:
+        return None
+    path = Path(found)
+    return Path(os.path.normpath(path if path.is_absolute() else work / path))
+
+
+def _problem(plan, returncode, stopped, refused, output, stdout, stderr) -> str | None:
+    where = f"what it wrote is kept in {plan.out}"
+    if stopped:
+        return (f"the tool kept asking for simulations past its budget of {plan.budget} and was stopped; {where}")
+    if returncode != 0:
+        lines = [line for line in stderr.read_text(encoding="utf-8", errors="replace").splitlines() if line.strip()]
+        last = f": {one_line(lines[-1], 120)}" if lines else ""
+        return f"the tool crashed (exit code {returncode}){last} (see {stderr}); {where}"
+    if refused:
+        return (f"the tool asked for more simulations than its budget of {plan.budget} ({refused} refused); "
+                f"{where}")
+    if output is None:
+        return f"the tool never printed 'output folder: PATH' (see {stdout}); {where}"
+    if not output.is_dir():
+        return f"the tool's output folder {output} does not exist; {where}"
+    return None
+
+
+def _natural(path: Path):
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
+
+
+def _digest(path) -> str:
+    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
+
+
+def _written_tests(folder: Path, flights) -> tuple[WrittenTest, ...]:
+    """The tests in the tool's output folder, each judged by the competition's distance on its own ULog with the
+    obstacles of the flight it came from (the tool copies our ULog as it is)."""
+    by_log = {_digest(log): flight for flight in flights for log in flight.logs if Path(log).is_file()}
+    tests = []
+    for yaml_file in sorted(folder.glob("*.yaml"), key=_natural):
+        ulg, png = yaml_file.with_suffix(".ulg"), yaml_file.with_suffix(".png")
+        ulg, png = (ulg if ulg.is_file() else None), (png if png.is_file() else None)
+        flight = by_log.get(_digest(ulg)) if ulg is not None else None
+        distance, points, note = None, None, ""
+        if ulg is None:
+            note = "no ULog beside it"
+        elif flight is None:
+            note = "its ULog is none that was flown"
+        else:
+            try:
+                distance = ulog_distance(ulg, flight.test_file)
+                from ..competition import points as competition_points
+
+                points = competition_points(distance)
+            except SurrealistError as err:
+                note = str(err)
+        tests.append(WrittenTest(yaml_file.stem, yaml_file, ulg, png, distance, points,
+                                 None if flight is None else flight.number, note))
+    return tuple(tests)
+
+
+def ulog_distance(ulg, test_file) -> float:
+    """The competition distance [m] of a ULog's flight to the obstacles of a test (our YAML): the least over the
+    boxes of the distance from the footprint to the 0.5 s trajectory's polyline (unbuffered)."""
+    from ..competition import load_competition_test
+    from ..geometry import competition_distance
+    from ..logs import read_flight
+
+    test = load_competition_test(test_file)
+    return float(competition_distance(read_flight(ulg).trajectory, test.obstacles))
+
+
+def _write_records(result: CompeteResult) -> None:
+    out = result.plan.out
+    (out / "summary.json").write_text(json.dumps(result.to_dict(), indent=2, default=str) + "\n",
+                                      encoding="utf-8")
+    with open(out / "flights.csv", "w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f)
+        writer.writerow(["number", "agent", "api", "test_file", "runs", "statuses", "competition_distances",
+                         "wall_s", "refused", "error"])
+        for flight in result.flights:
+            writer.writerow([flight.number, flight.agent, flight.api, flight.test_file, len(flight.statuses),
+                             " ".join(flight.statuses), " ".join(f"{d:.3f}" for d in flight.distances),
+                             f"{flight.wall_s:.3f}", int(flight.refused), flight.error])
+
+
+def _finite(value: float | None) -> float | None:
+    return value if value is not None and math.isfinite(value) else None
