@@ -48,7 +48,7 @@ if TYPE_CHECKING:
     from .suite import Suite
 
 __all__ = ["CONFIDENCE", "Evaluation", "RunRecord", "TestStats", "evaluate", "evaluation_identity", "find_tests",
-           "fly_tests", "load_tests", "summarise_test", "write_report"]
+           "fly_tests", "load_tests", "regroup", "summarise_test", "write_report"]
 
 CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
 _SUFFIXES = (".yaml", ".yml")
@@ -79,20 +79,25 @@ def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, Te
     """Load the tests named by ``paths`` (see :func:`find_tests`) and check them; unless ``any_layout``, against
     the competition's rules (:func:`~surrealist_gym.competition.violations`). Raises a one-line
     :class:`~surrealist_gym.errors.InvalidTestCase` naming the file and field of the first bad test."""
-    from .competition import load_competition_test, violations
+    from .competition import load_competition_test
 
     out = []
     for path in find_tests(paths):
         test = load_competition_test(path)
         if test.mission is None or not any(item.has_position for item in test.mission.items):
             raise InvalidTestCase(f"{path}: mission_file: no mission item with a position to fly to")
-        if not any_layout:
-            broken = violations(test)
-            if broken:
-                more = f" (and {len(broken) - 1} more)" if len(broken) > 1 else ""
-                raise InvalidTestCase(f"{path}: {broken[0]}{more}; --any-layout skips the competition's rules")
+        if not any_layout and (broken := rule_broken(test)):
+            raise InvalidTestCase(f"{path}: {broken}; --any-layout skips the competition's rules")
         out.append((path, test))
     return out
+
+
+def rule_broken(test: TestCase) -> str:
+    """The first of the competition's rules the test breaks (and how many more), or "" when it keeps them all."""
+    from .competition import violations
+
+    broken = violations(test)
+    return broken[0] + (f" (and {len(broken) - 1} more)" if len(broken) > 1 else "") if broken else ""
 
 
 # --- flying --------------------------------------------------------------------------------------------------------
@@ -346,7 +351,7 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     (:func:`evaluation_identity`, with ``identity``: anything else the runs depend on), so a store of another
     evaluation is refused in one line."""
     from .sim.profiles import default_profile, load_profile
-    from .suite import Member, Suite, diversity
+    from .suite import Suite
 
     if runs < 1:
         raise SurrealistError(f"runs: expected a whole number >= 1, got {runs!r}")
@@ -374,14 +379,28 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
             db.close()
     stats = [summarise_test(path, test, records, profile.name)
              for (path, test), records, profile in zip(tests, flown, profiles)]
-    suite, members = Suite(), []
+    return _with_suite(Evaluation(runs, seed, None if given is None else given.name, tuple(stats), Suite(),
+                                  FrozenDict(), workers, wall, sum(map(len, have))))
+
+
+def _with_suite(ev: Evaluation) -> Evaluation:
+    """The evaluation with its tests' closest failing runs offered in order to a new Suite, and their diversity."""
+    from .suite import Member, Suite, diversity
+
+    stats, suite, members = list(ev.tests), Suite(), []
     for i, st in enumerate(stats):
         if (run := st.closest_failure) is not None:
             members.append(Member(st.test, run.distance, run.trajectory, evaluation=i + 1, status=run.status))
             suite, what = suite.offer(members[-1])
             stats[i] = replace(st, suite=what)
-    return Evaluation(runs, seed, None if given is None else given.name, tuple(stats), suite,
-                      FrozenDict(diversity(members)), workers, wall, sum(map(len, have)))
+    return replace(ev, tests=tuple(stats), suite=suite, diversity=FrozenDict(diversity(members)))
+
+
+def regroup(ev: Evaluation, order: Sequence[int], files: Sequence) -> Evaluation:
+    """The evaluation of the same runs with its tests in another ``order`` (indices into ``ev.tests``) and named by
+    ``files``; the distinct failures and diversity are those of the new order."""
+    return _with_suite(replace(ev, tests=tuple(replace(ev.tests[i], file=os.fspath(f), suite="")
+                                               for i, f in zip(order, files))))
 
 
 def evaluation_identity(tests: Sequence[tuple[Path, TestCase]], runs: int, seed: int, configs: Sequence) -> dict:
@@ -455,26 +474,31 @@ def suite_lines(ev: Evaluation) -> list[str]:
 
 REPORT_FILES = {"evaluation": "evaluation.csv", "runs": "runs.csv", "distances": "distances.png",
                 "top_views": "top-views.png", "suite_map": "suite-map.png", "report": "report.md"}
+SCORING_FILES = {"leaderboard": "leaderboard.csv", "test_scores": "test-scores.csv",
+                 "leaderboard_plot": "leaderboard.png"}  # with the competition's scoring (--competition)
 
 
-def write_report(ev: Evaluation, out) -> dict[str, Path]:
+def write_report(ev: Evaluation, out, board: Sequence | None = None) -> dict[str, Path]:
     """Write ``evaluation.csv`` (one row per test), ``runs.csv`` (one row per run), the figures
-    (:mod:`surrealist_gym.report_plots`) and ``report.md`` to the folder ``out``; returns their paths.
+    (:mod:`surrealist_gym.report_plots`) and ``report.md`` to the folder ``out``; returns their paths. With ``board``
+    (:func:`~surrealist_gym.scoring.standings` of the folders scored as an edition did) also ``leaderboard.csv``,
+    ``test-scores.csv`` and ``leaderboard.png``, and the report has a section on them.
 
     Whole or not at all: the files are written to a temporary folder inside ``out`` and then moved into place
     (``report.md`` last); if that fails (a full disk), the temporary folder and any report file moved are removed and
     a one-line SurrealistError says why."""
-    from .report_plots import plot_distances, plot_suite_map, plot_top_views
+    from .report_plots import plot_distances, plot_leaderboard, plot_suite_map, plot_top_views
 
     out = Path(out)
-    paths = {key: out / name for key, name in REPORT_FILES.items()}
+    files = {**(SCORING_FILES if board else {}), **REPORT_FILES}  # report.md last
+    paths = {key: out / name for key, name in files.items()}
     tmp, moving = None, False
     try:
         out.mkdir(parents=True, exist_ok=True)
         for stale in out.glob(".report-*"):  # left by a process killed while writing
             shutil.rmtree(stale, ignore_errors=True)
         tmp = Path(tempfile.mkdtemp(prefix=".report-", dir=out))
-        draft = {key: tmp / name for key, name in REPORT_FILES.items()}
+        draft = {key: tmp / name for key, name in files.items()}
         _write_csv(draft["evaluation"], [t.to_row() for t in ev.tests])
         _write_csv(draft["runs"], [{"file": t.file, "run": r.index, "status": r.status, "distance": _r(r.distance),
                                     "failed": int(r.failed) if r.flown else "", "points": r.points if r.flown else "",
@@ -483,9 +507,14 @@ def write_report(ev: Evaluation, out) -> dict[str, Path]:
         plot_distances(ev, draft["distances"])
         plot_top_views(ev, draft["top_views"])
         plot_suite_map(ev, draft["suite_map"])
-        draft["report"].write_text(report_text(ev), encoding="utf-8")
+        if board:
+            _write_csv(draft["leaderboard"], [_leaderboard_row(row) for row in board])
+            _write_csv(draft["test_scores"], [_test_score_row(row.suite, i, t) for row in board
+                                              for i, t in enumerate(row.suite.drawn)])
+            plot_leaderboard(board, draft["leaderboard_plot"])
+        draft["report"].write_text(report_text(ev, board), encoding="utf-8")
         moving = True
-        for key in REPORT_FILES:
+        for key in files:
             os.replace(draft[key], paths[key])
     except BaseException as err:
         if moving:  # some files of this report may have replaced those of an earlier one: no half report
@@ -500,8 +529,57 @@ def write_report(ev: Evaluation, out) -> dict[str, Path]:
     return paths
 
 
-def report_text(ev: Evaluation) -> str:
-    """The Markdown report (the figures are read from beside it)."""
+def _leaderboard_row(row) -> dict:
+    """The row of ``leaderboard.csv``."""
+    s = row.suite
+    return {"case_study": s.case_study, "folder": s.folder, "edition": s.edition, "tests": s.tests,
+            "drawn": len(s.drawn), "failing": s.failing, "alike": s.alike, "failure": _r(s.failure, 6),
+            "rest": _r(s.rest, 6), "sim_pen": _r(s.sim_pen, 6), "score": _r(s.score, 6),
+            "diversity": _r(s.diversity, 6), "r_f": row.r_f, "r_d": "" if row.r_d is None else row.r_d,
+            "r": _r(row.r), "rank": row.rank}
+
+
+def _test_score_row(s, i: int, t) -> dict:
+    """The row of ``test-scores.csv``: one drawn test of a folder."""
+    return {"case_study": s.case_study, "folder": s.folder, "position": i, "file": t.file, "obstacles": t.obstacles,
+            "runs_scored": len(t.points), "points_mean": _r(float(np.mean(t.points)) if t.points else math.nan, 6),
+            "minutes_mean": _r(float(np.mean(t.durations_s)) / 60 if t.durations_s else math.nan, 6),
+            "test_score": _r(t.score, 6), "counted": int(t.counted),
+            "same_as": "" if t.same_as is None else t.same_as, "invalid": t.invalid}
+
+
+def scoring_lines(board: Sequence) -> list[str]:
+    """The folders' scores and ranks, one line per folder (the CLI's summary and the report share them), and a line
+    for each folder with fewer tests than the edition draws."""
+    from .scoring import EDITIONS
+
+    if not board:
+        return []
+    ed = EDITIONS[board[0].suite.edition]
+    lines = []
+    for row in board:
+        s = row.suite
+        head = (f"{s.case_study}: {s.name}: {len(s.drawn)} of {s.tests} tests drawn, {s.failing} failing; ")
+        if ed.name == "2024":
+            lines.append(head + f"score {s.score:.2f} = ({s.failure:.2f} + rest {s.rest:.2f}) x sim_pen "
+                                f"{s.sim_pen:.2f} ({s.alike} flying alike); rank {row.rank}")
+        else:
+            lines.append(head + f"failure {s.failure:.2f}, diversity {_f(s.diversity)}"
+                                + (f" ({s.alike} duplicates counted once)" if s.alike else "")
+                                + f"; R_F {row.r_f}, R_D {row.r_d}, R {row.r:g}, rank {row.rank}")
+    for row in board:
+        if row.suite.tests < ed.tests:
+            lines.append(f"{row.suite.name}: {row.suite.tests} tests, fewer than the {ed.tests} the {ed.name} edition "
+                         f"evaluates: all {row.suite.tests} scored")
+    invalid = sum(bool(t.invalid) for row in board for t in row.suite.drawn)
+    if invalid:
+        lines.append(f"{invalid} drawn tests break the competition's rules: not flown, they score 0 "
+                     f"(test-scores.csv names the rule)")
+    return lines
+
+
+def report_text(ev: Evaluation, board: Sequence | None = None) -> str:
+    """The Markdown report (the figures are read from beside it); with ``board``, the competition's scoring first."""
     uav = ev.uav or ", ".join(sorted({t.uav for t in ev.tests})) + " (each test's default)"
     stored = f" ({ev.stored} runs flown before, read back from the store)" if ev.stored else ""
     lines = [f"# Re-evaluation of {len(ev.tests)} tests", "",
@@ -509,7 +587,9 @@ def report_text(ev: Evaluation) -> str:
              f"{ev.wall_s:.1f} s{stored}.", "",
              f"A run **fails** when it collides or its competition distance (box footprint to the 0.5 s flight "
              f"polyline, 2-D) is below {UNSAFE_DISTANCE_M:g} m. Points as the competition scores a run: 5 below "
-             f"0.25 m (and for a collision), 2 below 1 m, 1 below 1.5 m.", "", "## Suite", ""]
+             f"0.25 m (and for a collision), 2 below 1 m, 1 below 1.5 m.", ""]
+    lines += _scoring_section(board, ev.runs) if board else []
+    lines += ["## Suite", ""]
     lines += [f"- {line}" for line in suite_lines(ev)]
     lines += ["", "## Tests", "",
               "p is the failure probability (failing runs / runs flown) with its 95% Clopper-Pearson interval; "
@@ -535,3 +615,43 @@ def report_text(ev: Evaluation) -> str:
               "each other near the same boxes are the same failure.", "", "![suite map](suite-map.png)", "",
               "Per test: `evaluation.csv`; per run: `runs.csv`.", ""]
     return "\n".join(lines)
+
+
+def _scoring_section(board: Sequence, runs: int) -> list[str]:
+    """The report's section on the competition's scoring: what the edition draws and computes, and the table."""
+    from .scoring import EDITIONS, SIMILAR_FLIGHT_M
+
+    ed = EDITIONS[board[0].suite.edition]
+    flown = f"each flown {runs} time{'s' if runs != 1 else ''} (the edition: {ed.runs})"
+    score = (f"test_score = avg_point x 10 / (n_obstacles^2 x avg_time), avg_time the mean flight time in minutes "
+             f"(simulated, from arming to the end of the run).")
+    if ed.name == "2024":
+        how = [f"Scored as the 2024 edition (SBFT) did: {ed.tests} tests drawn at random from each folder (seeded by "
+               f"the base seed), {flown}. {score} A folder of more than {ed.tests} tests earns half the mean test "
+               f"score for each test beyond them (rest). Two drawn tests are similar when the DBA averages of their runs are less than {SIMILAR_FLIGHT_M:g} m apart on "
+               f"average along DTW's path (x-y); sim_pen = 1 - similar / evaluated, each test similar to an earlier "
+               f"one counted once. score = (sum test_score + rest) x sim_pen; rank by score per case study (1 the "
+               f"best, equal scores share a rank)."]
+        head = ["| case study | folder | tests | drawn | failing | sum test_score | rest | alike | sim_pen | score "
+                "| rank |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+        rows = [f"| {r.suite.case_study} | {r.suite.name} | {r.suite.tests} | {len(r.suite.drawn)} | "
+                f"{r.suite.failing} | {r.suite.failure:.2f} | {r.suite.rest:.2f} | {r.suite.alike} | "
+                f"{r.suite.sim_pen:.2f} | {r.suite.score:.2f} | {r.rank} |" for r in board]
+    else:
+        how = [f"Scored as the 2025 editions (ICST, SBFT) did: the first {ed.tests} tests of each folder in the "
+               f"order the tool wrote them (the natural order of their names, digits as numbers; by modification "
+               f"time when a name holds no number), {flown}. {score} Tests "
+               f"whose boxes cover the same ground (area similarity 1) are duplicates, counted once. failure = sum "
+               f"test_score; diversity = 1 - mean pairwise area similarity (intersection over union of the boxes' "
+               f"footprints). Per case study R_F ranks the failure score, R_D the diversity (1 the best, equal "
+               f"values share a rank), R = 0.75 R_F + 0.25 R_D, and rank orders R."]
+        head = ["| case study | folder | tests | drawn | failing | duplicates | failure | diversity | R_F | R_D | R "
+                "| rank |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        rows = [f"| {r.suite.case_study} | {r.suite.name} | {r.suite.tests} | {len(r.suite.drawn)} | "
+                f"{r.suite.failing} | {r.suite.alike} | {r.suite.failure:.2f} | {_f(r.suite.diversity)} | {r.r_f} | "
+                f"{r.r_d} | {r.r:g} | {r.rank} |" for r in board]
+    return (["## Competition scoring", ""] + how + [""] + head + rows + [""]
+            + [f"- {line}" for line in scoring_lines(board)[len(board):]]
+            + ["", "Per folder: `leaderboard.csv`; per drawn test (points, minutes, test score, duplicate or alike "
+               "of which earlier test, the rule it breaks): `test-scores.csv`.", "",
+               "![leaderboard](leaderboard.png)", ""])

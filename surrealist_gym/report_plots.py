@@ -1,5 +1,5 @@
 """The figures of a re-evaluation report (:mod:`surrealist_gym.reevaluation`): distances per test, a top view per
-test and a map of the suite.
+test, a map of the suite and, when folders are scored as the competition did, the leaderboard.
 
 Top views follow the local frame (x north, y east): east (y) on the horizontal axis, north (x) up. matplotlib is
 imported inside each function (the ``Figure`` API, no pyplot state).
@@ -13,7 +13,7 @@ import numpy as np
 
 from .outcomes import UNSAFE_DISTANCE_M
 
-__all__ = ["plot_distances", "plot_suite_map", "plot_top_views"]
+__all__ = ["plot_distances", "plot_leaderboard", "plot_suite_map", "plot_top_views"]
 
 _PASS, _FAIL, _BOX = "tab:blue", "tab:red", "0.55"
 
@@ -135,3 +135,37 @@ def _colours(n: int) -> list:
 
     cmap = colormaps["tab20" if n > 10 else "tab10"]
     return [cmap(i % cmap.N) for i in range(n)]
+
+
+def plot_leaderboard(board, path) -> None:
+    """The folders scored as an edition did (:func:`~surrealist_gym.scoring.standings`), one row per case study:
+    a bar per folder of its score (2024: the suite score; 2025: the failure score, and its diversity beside),
+    labelled with its rank."""
+    studies = list(dict.fromkeys(row.suite.case_study for row in board))
+    year = board[0].suite.edition
+    panels = [("failure", "failure score (sum of test scores)"), ("diversity", "diversity (1 - mean area IoU)")] \
+        if year == "2025" else [("score", "suite score ((sum test_score + rest) x sim_pen)")]
+    most = max(sum(row.suite.case_study == study for row in board) for study in studies)
+    fig = _figure(5.2 * len(panels), 0.9 + len(studies) * (0.9 + 0.35 * most))
+    axes = np.atleast_2d(fig.subplots(len(studies), len(panels), squeeze=False))
+    for ax_row, study in zip(axes, studies):
+        rows = [row for row in board if row.suite.case_study == study]
+        colours = _colours(len(rows))
+        ys = np.arange(len(rows))[::-1]  # the best on top
+        for ax, (field, label) in zip(ax_row, panels):
+            values = [getattr(row.suite, field) for row in rows]
+            ax.barh(ys, [0 if math.isnan(v) else v for v in values], color=colours, height=0.6)
+            for y, v, row in zip(ys, values, rows):
+                rank = f"R_D {row.r_d}" if field == "diversity" else (
+                    f"R_F {row.r_f}, R {row.r:g}, rank {row.rank}" if year == "2025" else f"rank {row.rank}")
+                ax.text(0 if math.isnan(v) else v, y, f"  {'-' if math.isnan(v) else f'{v:.2f}'}  ({rank})",
+                        va="center", fontsize="small")
+            ax.set_yticks(ys, [row.suite.name for row in rows], fontsize="small")
+            ax.set_xlim(0, max([1e-9, *(v for v in values if not math.isnan(v))]) * 1.6
+                        if field != "diversity" else 1.45)
+            ax.set_title(f"{study}: {label}", fontsize="small")
+            ax.grid(True, axis="x", linewidth=0.3)
+    fig.suptitle(f"scored as the {year} edition" + ("; R = 0.75 R_F + 0.25 R_D per case study" if year == "2025"
+                                                     else "; ranked by score per case study"), fontsize="medium")
+    fig.tight_layout()
+    fig.savefig(os.fspath(path), dpi=100)

@@ -47,7 +47,8 @@ def trajectory_distance(a, b) -> float:
     return total / len(path)
 
 
-def _footprints(obstacles: Sequence[Obstacle]):
+def footprints(obstacles: Sequence[Obstacle]):
+    """The ground the obstacles cover: the union of their footprints (a shapely geometry; a cylinder as a circle)."""
     import shapely
 
     shapes = [shapely.Point(o.x, o.y).buffer(o.l / 2, quad_segs=16) if o.shape == Shape.CYLINDER
@@ -59,7 +60,7 @@ def layout_distance(a: Sequence[Obstacle], b: Sequence[Obstacle]) -> float:
     """Hausdorff distance [m] between the union of the footprints of two layouts (inf when one is empty)."""
     if not a or not b:
         return 0.0 if not a and not b else math.inf
-    return float(_footprints(a).hausdorff_distance(_footprints(b)))
+    return float(footprints(a).hausdorff_distance(footprints(b)))
 
 
 @dataclass(frozen=True, slots=True)

@@ -5,13 +5,18 @@ prints one row per test (failure probability with its 95% Clopper-Pearson interv
 closest approach) and the suite's distinct failures and diversity, and writes ``report.md``, ``evaluation.csv``,
 ``runs.csv`` and the figures to ``--out``. Tests must keep the competition's rules unless ``--any-layout``.
 
-``--out`` holds one evaluation: its options (``run.json``) and every run, stored as it completes
-(``evaluations.sqlite``). ``--resume DIR`` finishes an interrupted evaluation: it flies only the missing runs and
-writes the same report an uninterrupted one would have.
+``--competition 2024|2025`` scores each folder (a tool's output, one case study) as that edition did: it draws
+the edition's tests (:mod:`surrealist_gym.scoring`), flies them the edition's runs, and ranks the folders per case
+study (``leaderboard.csv``, ``test-scores.csv``, ``leaderboard.png`` and a section of the report).
+
+``--out`` holds one evaluation: its options (``run.json``, with the tests drawn) and every run, stored as it
+completes (``evaluations.sqlite``). ``--resume DIR`` finishes an interrupted evaluation: it flies only the missing
+runs and writes the same report an uninterrupted one would have.
 
 Example::
 
     surrealist evaluate ../shared/data/competition/camba-collection --runs 5 --workers 2 --out results/camba
+    surrealist evaluate tool-a/out tool-b/out --competition 2025 --out results/ranked
 """
 from __future__ import annotations
 
@@ -24,16 +29,19 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import SurrealistError
+from ..scoring import Draw
 from .options import RUN_FILE
 
 STORE_FILE = "evaluations.sqlite"
+DEFAULT_RUNS = 5  # runs per test without --competition
 
 
 @dataclass(frozen=True)
 class EvaluateOptions:
     """What an evaluation is run with, as ``run.json`` keeps it: the tests (absolute paths as given), runs per test,
     base seed, UAV profile (a preset's name or a YAML's absolute path), whether the competition's rules are skipped,
-    and the workers (the one option ``--resume`` may change)."""
+    the workers (the one option ``--resume`` may change) and, with ``--competition``, the edition and each folder's
+    draw (so that a resume flies the same tests)."""
 
     tests: tuple[str, ...]
     runs: int = 5
@@ -41,14 +49,31 @@ class EvaluateOptions:
     uav: str | None = None
     any_layout: bool = False
     workers: int | None = None
+    competition: str | None = None
+    draws: tuple[Draw, ...] = ()
 
     @classmethod
     def from_args(cls, args: argparse.Namespace) -> "EvaluateOptions":
-        return cls(tuple(str(Path(t).absolute()) for t in args.tests), args.runs, args.random_seed,
-                   _uav_option(args.uav), args.any_layout, args.workers)
+        """The options of a new evaluation; with ``--competition``, each folder's tests are loaded and drawn here
+        (one-line errors before anything is flown)."""
+        from ..scoring import draw_folder, edition
+
+        ed = None if args.competition is None else edition(args.competition)
+        runs = args.runs if args.runs is not None else ed.runs if ed else DEFAULT_RUNS
+        draws = () if ed is None else tuple(
+            draw_folder(folder, ed, args.random_seed)
+            for folder in dict.fromkeys(str(Path(t).absolute()) for t in args.tests))  # each folder once
+        return cls(tuple(str(Path(t).absolute()) for t in args.tests), runs, args.random_seed,
+                   _uav_option(args.uav), args.any_layout, args.workers, ed and ed.name, draws)
+
+    @property
+    def files(self) -> tuple[str, ...]:
+        """The tests to load: with ``--competition`` the tests drawn, else the tests given."""
+        return tuple(f for d in self.draws for f in d.drawn) if self.competition else self.tests
 
     def to_json(self) -> dict:
-        return {"command": "evaluate", **dataclasses.asdict(self), "tests": list(self.tests)}
+        return {"command": "evaluate", **dataclasses.asdict(self), "tests": list(self.tests),
+                "draws": [d.to_json() for d in self.draws]}
 
     @classmethod
     def from_json(cls, path: Path) -> "EvaluateOptions":
@@ -57,7 +82,8 @@ class EvaluateOptions:
             if values.pop("command", None) != "evaluate":
                 raise SurrealistError(f"{path.parent}: holds no evaluation to resume ({path.name} is another "
                                       f"command's)")
-            return cls(**{**values, "tests": tuple(values["tests"])})
+            return cls(**{**values, "tests": tuple(values["tests"]),
+                          "draws": tuple(Draw.from_json(d) for d in values.get("draws", ()))})
         except (OSError, UnicodeDecodeError, ValueError, TypeError, KeyError, AttributeError) as err:
             raise SurrealistError(f"{path}: not a readable run file ({type(err).__name__})") from None
 
@@ -71,7 +97,12 @@ def _uav_option(uav: str | None) -> str | None:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist evaluate``."""
     parser.add_argument("tests", metavar="TESTS", nargs="*", help="Aerialist test YAMLs, or folders of them")
-    parser.add_argument("--runs", type=int, default=5, help="runs per test (default 5)")
+    parser.add_argument("--runs", type=int, default=None,
+                        help="runs per test (default 5; with --competition the edition's: 2024 5, 2025 3)")
+    parser.add_argument("--competition", metavar="EDITION", default=None,
+                        help="score each folder (a tool's output, one case study) as the 2024 or 2025 edition did: "
+                             "its tests drawn, test scores, 2024's rest score and similarity penalty, 2025's "
+                             "duplicates and diversity, and the folders ranked per case study")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
     parser.add_argument("--random-seed", type=int, default=0, metavar="S",
                         help="base seed: run i of a test draws its noise from the test, S and i (default 0)")
@@ -112,7 +143,8 @@ def _m(value, digits: int = 2) -> str:
 def run(args: argparse.Namespace) -> int:
     """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
     summary and write the report."""
-    from ..reevaluation import load_tests
+    from ..reevaluation import load_tests, rule_broken
+    from ..scoring import edition
     from ..sim.profiles import load_profile
     from ._search import _unlock
     from .options import check_at_least
@@ -123,11 +155,20 @@ def run(args: argparse.Namespace) -> int:
     else:
         if not args.tests:
             raise SurrealistError("TESTS: give the tests to evaluate (YAMLs or folders of them), or --resume DIR")
+        if args.competition is not None:
+            edition(args.competition)
         out = _empty_folder(Path(args.out or f"results/evaluate-{time.strftime('%Y%m%d-%H%M%S')}"))
         options = EvaluateOptions.from_args(args)
     uav = None if options.uav is None else load_profile(options.uav if args.resume else args.uav)  # named as given
-    tests = load_tests(options.tests if args.resume else args.tests, any_layout=options.any_layout)
+    scored = bool(options.competition)  # a drawn test that breaks the rules is not flown and scores 0
+    tests = load_tests(options.tests if not (args.resume or scored) else options.files,
+                       any_layout=options.any_layout or scored)
     tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
+    invalid = {path: broken for path, test in tests if scored and not options.any_layout
+               and (broken := rule_broken(test))}
+    if scored and len(invalid) == len(tests):
+        raise SurrealistError(f"every drawn test breaks the competition's rules ({tests[0][0]}: "
+                              f"{invalid[tests[0][0]]}): each would score 0; --any-layout flies them anyway")
     _own(out)
     try:
         if not args.resume:
@@ -139,7 +180,7 @@ def run(args: argparse.Namespace) -> int:
                                       f"or choose another folder") from None
             except OSError as err:
                 raise SurrealistError(f"--out {out}: cannot write {RUN_FILE} ({err.strerror or err})") from None
-        return _evaluate(out, options, tests, uav)
+        return _evaluate(out, options, tests, uav, invalid)
     finally:
         _unlock(out)
 
@@ -193,9 +234,9 @@ def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
         raise SurrealistError(f"--resume {out}: not an evaluation to resume (no {RUN_FILE})")
     options = EvaluateOptions.from_json(out / RUN_FILE)
     flags = getattr(args, "_flags", frozenset())
-    given = {"tests": (EvaluateOptions.from_args(args).tests if args.tests else None, None),
-             "runs": (args.runs, 5), "random_seed": (args.random_seed, 0), "uav": (_uav_option(args.uav), None),
-             "any_layout": (args.any_layout, False)}
+    given = {"tests": (tuple(str(Path(t).absolute()) for t in args.tests) if args.tests else None, None),
+             "runs": (args.runs, None), "random_seed": (args.random_seed, 0), "uav": (_uav_option(args.uav), None),
+             "any_layout": (args.any_layout, False), "competition": (args.competition, None)}
     for name, (value, default) in given.items():
         flag = "TESTS" if name == "tests" else "--" + name.replace("_", "-")
         if (flag in flags or value != default) and value != getattr(options, name):
@@ -207,15 +248,18 @@ def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
     return out, dataclasses.replace(options, workers=args.workers or options.workers)
 
 
-def _evaluate(out: Path, options: EvaluateOptions, tests, uav) -> int:
-    """Fly the runs the store lacks (a progress bar from those stored), then the summary and the report."""
+def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict) -> int:
+    """Fly the runs the store lacks (a progress bar from those stored), then the summary and the report; with
+    ``--competition`` the folders' scores and ranks (``invalid``: the drawn tests not flown, with the rule each
+    breaks)."""
     from tqdm import tqdm
 
-    from ..reevaluation import evaluate, write_report
+    from ..reevaluation import evaluate, scoring_lines, write_report
 
     store = out / STORE_FILE
     resume = f"surrealist evaluate --resume {out}"
-    bar = tqdm(total=len(tests) * options.runs, unit="run", desc="evaluate", dynamic_ncols=True, file=sys.stderr,
+    flying = [(path, test) for path, test in tests if path not in invalid]
+    bar = tqdm(total=len(flying) * options.runs, unit="run", desc="evaluate", dynamic_ncols=True, file=sys.stderr,
                disable=None)
 
     def progress(done: int, total: int) -> None:
@@ -224,12 +268,14 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav) -> int:
 
     try:
         try:
-            ev = evaluate(tests, runs=options.runs, seed=options.random_seed, uav=uav, workers=options.workers,
-                          progress=progress, store=store, identity={"any_layout": options.any_layout})
+            ev = evaluate(flying, runs=options.runs, seed=options.random_seed, uav=uav, workers=options.workers,
+                          progress=progress, store=store,
+                          identity={"any_layout": options.any_layout, "competition": options.competition})
         finally:
             bar.close()
+        board = _board(options, ev, dict(tests), invalid) if options.competition else None
         try:
-            paths = write_report(ev, out)
+            paths = write_report(ev, out, board)
         except SurrealistError as err:
             raise SurrealistError(f"{err}; every run is stored in {store}: {resume} writes the report") from None
     except KeyboardInterrupt:
@@ -237,5 +283,19 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav) -> int:
               file=sys.stderr)
         return 130
     print(summary_text(ev))
-    print(f"report: {paths['report']}; per test: {paths['evaluation']}; per run: {paths['runs']}")
+    if board:
+        print(f"scored as the {options.competition} edition:")
+        print("\n".join(scoring_lines(board)))
+    print(f"report: {paths['report']}; per test: {paths['evaluation']}; per run: {paths['runs']}"
+          + (f"; leaderboard: {paths['leaderboard']}" if board else ""))
     return 0
+
+
+def _board(options: EvaluateOptions, ev, tests: dict, invalid: dict):
+    """The folders' draws scored as the edition did and ranked per case study."""
+    from ..scoring import edition, score_suite, standings
+
+    ed = edition(options.competition)
+    runs = {t.file: t.runs for t in ev.tests}
+    return standings([score_suite(ed, d, [(tests[Path(f)], runs.get(f, ()), invalid.get(Path(f), ""))
+                                          for f in d.drawn]) for d in options.draws])
