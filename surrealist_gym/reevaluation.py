@@ -628,10 +628,10 @@ def _scoring_section(board: Sequence, runs: int) -> list[str]:
     if ed.name == "2024":
         how = [f"Scored as the 2024 edition (SBFT) did: {ed.tests} tests drawn at random from each folder (seeded by "
                f"the base seed), {flown}. {score} A folder of more than {ed.tests} tests earns half the mean test "
-               f"score for each test beyond them (rest). Two drawn tests are similar when the DBA averages of their runs are less than {SIMILAR_FLIGHT_M:g} m apart on "
-               f"average along DTW's path (x-y); sim_pen = 1 - similar / evaluated, each test similar to an earlier "
-               f"one counted once. score = (sum test_score + rest) x sim_pen; rank by score per case study (1 the "
-               f"best, equal scores share a rank)."]
+               f"score for each test beyond them (rest). Two drawn tests are similar when the DBA averages of their "
+               f"runs are less than {SIMILAR_FLIGHT_M:g} m apart on average along DTW's path (x-y); sim_pen = 1 - "
+               f"similar / evaluated, each test similar to an earlier one counted once. score = (sum test_score + "
+               f"rest) x sim_pen; rank by score per case study (1 the best, equal scores share a rank)."]
         head = ["| case study | folder | tests | drawn | failing | sum test_score | rest | alike | sim_pen | score "
                 "| rank |", "|---|---|---|---|---|---|---|---|---|---|---|"]
         rows = [f"| {r.suite.case_study} | {r.suite.name} | {r.suite.tests} | {len(r.suite.drawn)} | "
