@@ -35,8 +35,8 @@ from datetime import datetime
 from pathlib import Path
 from typing import Callable
 
-from ..errors import InvalidTestCase, SurrealistError, one_line
-from .locate import API_MODULES, AerialistSource, find_aerialist, tool_apis
+from ..errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, one_line
+from .locate import AerialistSource, find_aerialist, tool_apis
 from .server import Flight, SimulationServer
 
 SHIM = Path(__file__).resolve().parent / "shim"
@@ -45,6 +45,8 @@ COMPAT_EXTRA = "pip install -e '.[compete]'"
 #: Made in the tool's working folder before it runs, as the competition's Dockerfile does (``mkdir -p``).
 PREPARED_FOLDERS = ("logs", "results", "generated_tests")
 _COPY_IGNORE = shutil.ignore_patterns(".git", "__pycache__", ".venv", "venv", ".pytest_cache")
+#: Aerialist's modules that only its LocalAgent imports (PX4's and ROS's Python modules: mavsdk, rospy, ...).
+LOCAL_AGENT_MODULES = ("local_agent", "drone", "simulator", "tools")
 _FILE_FIELDS = (("robot", "drone", "mission_file"), ("robot", "drone", "params_file"),
                 ("mission", "test", "commands_file"))
 
@@ -155,7 +157,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
     if len(apis) > 1:
         raise SurrealistError(f"tool {tool}: imports both {' and '.join(apis)}; no Aerialist holds both")
     source = find_aerialist(apis, aerialist)
-    _check_imports(source, apis, tool)
+    _check_imports(source)
     return CompetePlan(tool.resolve(), argument, file, budget, out, source, apis, runs_per_test, workers, seed, uav)
 
 
@@ -195,19 +197,32 @@ def _check_relative_files(file: Path, tool: Path) -> None:
                                   f"(Aerialist opens relative paths from the tool's working folder)")
 
 
-def _check_imports(source: AerialistSource, apis: tuple[str, ...], tool: Path) -> None:
-    """Import Aerialist's test API and agents as the tool will (shim first on its path): a one-line error naming
-    the missing module otherwise."""
-    modules = [f"aerialist.px4.{API_MODULES[api]}" for api in apis] + ["aerialist.px4.docker_agent",
-                                                                       "aerialist.px4.k8s_agent"]
-    probe = "import importlib, sys\nfor m in sys.argv[1:]: importlib.import_module(m)"
-    env = tool_environment(source, "", b"", 1)
-    done = subprocess.run([sys.executable, "-c", probe, *modules], cwd=tool, env=env, capture_output=True,
-                          text=True, stdin=subprocess.DEVNULL)
-    if done.returncode != 0:
-        lines = [line for line in done.stderr.splitlines() if line.strip()]
-        raise SurrealistError(f"{source.describe()} does not import here ({one_line(lines[-1] if lines else '?', 120)})"
-                              f"; install what Aerialist's modules import with: {COMPAT_EXTRA}")
+def _check_imports(source: AerialistSource) -> None:
+    """Every module that Aerialist's test-case, obstacle, trajectory, plot and agent modules import at their top is
+    found in this environment (the tool runs with this interpreter): a one-line error naming the first missing one
+    otherwise. Aerialist's local agent needs PX4's and ROS's modules and is left out (the shim stands in for it), as
+    is bagpy (the shim's stand-in)."""
+    import ast
+    import importlib.util
+
+    own = {"aerialist", "bagpy"}
+    for path in sorted((source.package / "px4").glob("*.py")):
+        if path.stem in LOCAL_AGENT_MODULES:
+            continue
+        try:
+            tree = ast.parse(path.read_text(encoding="utf-8", errors="replace"))
+        except SyntaxError as err:
+            raise SurrealistError(f"{source.describe()}: {path.name} is not valid Python ({err.msg})") from None
+        for node in tree.body:
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else []
+            for name in names:
+                top = name.split(".")[0]
+                if top not in own and top not in sys.stdlib_module_names and importlib.util.find_spec(top) is None:
+                    raise DependencyNotInstalled(
+                        f"{source.describe()}: its {path.name} imports {top}, which is not installed; install what "
+                        f"Aerialist's modules import with: {COMPAT_EXTRA}")
+                own.add(top)
 
 
 def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs: int) -> dict[str, str]:
