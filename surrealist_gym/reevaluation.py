@@ -48,7 +48,7 @@ if TYPE_CHECKING:
     from .suite import Suite
 
 __all__ = ["CONFIDENCE", "Evaluation", "RunRecord", "TestStats", "evaluate", "evaluation_identity", "find_tests",
-           "fly_tests", "load_tests", "regroup", "summarise_test", "write_report"]
+           "fly_tests", "load_tests", "regroup", "stored_runs", "summarise_test", "write_report"]
 
 CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
 _SUFFIXES = (".yaml", ".yml")
@@ -415,6 +415,18 @@ def evaluation_identity(tests: Sequence[tuple[Path, TestCase]], runs: int, seed:
     return {"command": "evaluate", "tests": [[os.fspath(path), digest(test.key())] for path, test in tests],
             "runs": int(runs), "seed": int(seed), "uav": sorted({c.profile for c in configs}),
             "sim": digest(repr(list(configs))), "version": __version__}
+
+
+def stored_runs(store, tests: Sequence[TestCase]) -> list[tuple[RunRecord, ...]]:
+    """The runs a search flew of each test, read from its store (``evaluations.sqlite``), as the re-evaluation keeps
+    runs (without their trajectories); empty for a test the store does not hold."""
+    from .store import EvaluationStore
+
+    with EvaluationStore(store) as db:
+        rows = [db.get(test.key()) for test in tests]
+    return [() if row is None else tuple(
+        RunRecord(int(r["index"]), str(r["status"]), float(r.get("competition_distance", math.nan)),
+                  float(r["duration"]), np.zeros((0, 3))) for r in row.runs) for row in rows]
 
 
 def _store(db, i: int, path, test: TestCase, records: list[RunRecord]) -> None:

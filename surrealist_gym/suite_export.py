@@ -1,9 +1,11 @@
 """A suite of distinct failures as files: Aerialist YAMLs ready to re-run on PX4, a table, and a top view of each.
 
-``export_suite(suite, folder)`` writes each member twice, with the current Aerialist keys (``robot``/``mission``) in
-``folder/`` and with the competition's keys (``drone``/``test``, Aerialist before 2024) in ``folder/legacy/``. The
-mission, parameter and command files are copied into ``folder/case_studies/`` (and ``legacy/case_studies/``), so
-each YAML names them by the relative path the competition's own YAMLs use and the folder can be moved as a whole.
+``export_suite(suite, folder, order)`` writes each member twice, with the current Aerialist keys
+(``robot``/``mission``) in ``folder/`` and with the competition's keys (``drone``/``test``, Aerialist before 2024) in
+``folder/legacy/``, as ``failure-01.yaml``, ``failure-02.yaml``, ... in the given order (the best first: the 2025
+edition evaluates the first 20 a tool wrote). The mission, parameter and command files are copied into
+``folder/case_studies/`` (and ``legacy/case_studies/``), so each YAML names them by the relative path the
+competition's own YAMLs use and the folder can be moved as a whole.
 """
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import math
 import shutil
 from dataclasses import replace
 from pathlib import Path
+from typing import Sequence
 
 from .suite import Member, Suite, layout_distance, trajectory_distance
 from .testcase import TestCase, save_test
@@ -38,26 +41,32 @@ def member_name(index: int) -> str:
     return f"failure-{index + 1:02d}"
 
 
-def export_suite(suite: Suite, folder) -> list[Path]:
-    """Write every member as ``failure-NN.yaml`` (robot/mission keys) and ``legacy/failure-NN.yaml`` (drone/test
-    keys), plus ``suite.csv``; returns the current-key YAMLs in member order."""
+def export_suite(suite: Suite, folder, order: Sequence[int] | None = None,
+                 expected: Sequence[float] | None = None) -> list[Path]:
+    """Write the members in ``order`` (indices into ``suite.members``; default: as they are) as ``failure-NN.yaml``
+    (robot/mission keys) and ``legacy/failure-NN.yaml`` (drone/test keys), plus ``suite.csv`` (with each member's
+    ``expected`` test score, when given); returns the current-key YAMLs in that order."""
     folder = Path(folder)
     legacy = folder / "legacy"
     legacy.mkdir(parents=True, exist_ok=True)
+    order = list(range(len(suite.members)) if order is None else order)
     paths = []
-    for i, member in enumerate(suite.members):
-        name = member_name(i) + ".yaml"
+    for k, i in enumerate(order):
+        name = member_name(k) + ".yaml"
+        member = suite.members[i]
         save_test(_with_copied_files(member.test, folder), folder / name)
         save_test(_with_copied_files(member.test, legacy), legacy / name, legacy=True)
         paths.append(folder / name)
     with open(folder / "suite.csv", "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(["test", "evaluation", "status", "distance_m", "points", "obstacles",
-                         "nearest_flight_m", "nearest_layout_m"])
-        for i, member in enumerate(suite.members):
+                         "nearest_flight_m", "nearest_layout_m", "expected_score"])
+        for k, i in enumerate(order):
+            member = suite.members[i]
             flight, layout = _nearest(member, suite.members)
-            writer.writerow([member_name(i), member.evaluation, member.status, f"{member.distance:.3f}",
-                             member.points, len(member.test.obstacles), _fmt(flight), _fmt(layout)])
+            writer.writerow([member_name(k), member.evaluation, member.status, f"{member.distance:.3f}",
+                             member.points, len(member.test.obstacles), _fmt(flight), _fmt(layout),
+                             "" if expected is None else f"{expected[i]:.4f}"])
     return paths
 
 
@@ -74,18 +83,21 @@ def _fmt(value: float) -> str:
     return "" if not math.isfinite(value) else f"{value:.2f}"
 
 
-def plot_suite(suite: Suite, path, columns: int = 4) -> None:
-    """A top view of each member: its boxes and the flight that came closest (x north up, y east right)."""
+def plot_suite(suite: Suite, path, order: Sequence[int] | None = None, columns: int = 4) -> None:
+    """A top view of each member, in ``order`` (as :func:`export_suite` names them): its boxes and the flight that
+    came closest (x north up, y east right)."""
     from .report_plots import _BOX, _FAIL, _boxes, _figure, _top_axes
 
-    n = max(1, len(suite.members))
+    order = list(range(len(suite.members)) if order is None else order)
+    n = max(1, len(order))
     cols = min(columns, n)
     fig = _figure(3.2 * cols, 3.4 * math.ceil(n / columns))
-    for i, member in enumerate(suite.members):
-        ax = fig.add_subplot(math.ceil(n / columns), cols, i + 1)
+    for k, i in enumerate(order):
+        member = suite.members[i]
+        ax = fig.add_subplot(math.ceil(n / columns), cols, k + 1)
         _boxes(ax, member.test.obstacles, facecolor=_BOX, edgecolor="0.3")
         ax.plot(member.trajectory[:, 1], member.trajectory[:, 0], color=_FAIL, linewidth=1.2)
-        ax.set_title(f"{member_name(i)}: {member.distance:.2f} m, {member.points} pt", fontsize=9)
+        ax.set_title(f"{member_name(k)}: {member.distance:.2f} m, {member.points} pt", fontsize=9)
         ax.set_xlabel("y east [m]", fontsize=8)
         ax.set_ylabel("x north [m]", fontsize=8)
         ax.tick_params(labelsize=7)

@@ -78,48 +78,64 @@ def _case_study_search(out, options) -> int:
 
 
 def _write_suite(out, suite, options) -> None:
-    """Export the suite, plot it, and re-fly each member ``--confirm`` times with fresh noise."""
-    from ..suite import diversity
-    from ..suite_export import export_suite, plot_suite
-
-    folder = out / "suite"
-    paths = export_suite(suite, folder)
-    plot_suite(suite, folder / "suite.png")
-    spread = diversity(suite.members)
-    print(f"suite: {len(suite)} distinct failures (apart by >= {suite.min_flight_m:g} m in flight and >= "
-          f"{suite.min_layout_m:g} m in the obstacle failed at)"
-          + (f"; mean pairwise flight distance {spread['flight_mean_m']:.1f} m, layout {spread['layout_mean_m']:.1f} m"
-             if len(suite) > 1 else ""))
-    if not paths or options.confirm == 0:
-        print(f"suite in {folder}/: failure-NN.yaml (robot/mission keys), legacy/ (drone/test keys), suite.csv, "
-              f"suite.png")
-        return
+    """Re-fly each member ``--confirm`` times with fresh noise, rank the members by their expected test score (from
+    those re-runs, else from the search's own runs), export and plot them in that order (the 2025 edition evaluates
+    the first 20 a tool wrote), and say what the first 20 would score and the closest failure."""
     import sys
 
     from tqdm import tqdm
 
-    from ..reevaluation import evaluate, load_tests, write_report
+    from ..reevaluation import evaluate, regroup, stored_runs, write_report
+    from ..scoring import EDITIONS, Draw, case_study_of, score_suite, test_score
+    from ..suite import diversity
+    from ..suite_export import export_suite, member_name, plot_suite
 
-    bar = tqdm(total=len(paths) * options.confirm, unit="run", desc="confirm", dynamic_ncols=True, file=sys.stderr,
-               disable=None)
-
-    def progress(done: int, total: int) -> None:
-        bar.n = done
-        bar.refresh()
-
-    try:  # fresh noise: the re-runs draw from another base seed than the search's runs
-        ev = evaluate(load_tests(paths), runs=options.confirm, seed=options.random_seed + 1, uav=options.uav,
-                      workers=options.workers, progress=progress)
-    finally:
-        bar.close()
-    write_report(ev, folder / "confirmation")
-    confirmed = sum(s.p >= CONFIRMED_P for s in ev.tests)  # of the re-runs flown: those in error do not count
-    errors = sum(s.errors for s in ev.tests)
-    print(f"confirmation: {confirmed} of {len(suite)} fail in >= {CONFIRMED_P:.0%} of {options.confirm} re-runs "
-          + (f"({errors} re-runs ended in error and are not counted) " if errors else "")
-          + f"(report in {folder / 'confirmation'}/report.md)")
-    print(f"suite in {folder}/: failure-NN.yaml (robot/mission keys), legacy/ (drone/test keys), suite.csv, "
-          f"suite.png")
+    folder = out / "suite"
+    members, ev = suite.members, None
+    if members and options.confirm > 0:  # fresh noise: another base seed than the search's runs
+        bar = tqdm(total=len(members) * options.confirm, unit="run", desc="confirm", dynamic_ncols=True,
+                   file=sys.stderr, disable=None)
+        try:  # named by member order until they are ranked
+            ev = evaluate([(folder / f"{member_name(i)}.yaml", m.test) for i, m in enumerate(members)],
+                          runs=options.confirm, seed=options.random_seed + 1, uav=options.uav,
+                          workers=options.workers, progress=lambda done, total: bar.update(done - bar.n))
+        finally:
+            bar.close()
+    runs = ([t.runs for t in ev.tests] if ev is not None
+            else stored_runs(out / "evaluations.sqlite", [m.test for m in members]))
+    expected = [test_score([r.points for r in rs if r.flown], [r.duration for r in rs if r.flown],
+                           len(m.test.obstacles)) for m, rs in zip(members, runs)]
+    order = sorted(range(len(members)), key=lambda i: (-expected[i], i))  # the best first, then as found
+    paths = export_suite(suite, folder, order, expected)
+    plot_suite(suite, folder / "suite.png", order)
+    spread = diversity(members)
+    print(f"suite: {len(suite)} distinct failures (apart by >= {suite.min_flight_m:g} m in flight and >= "
+          f"{suite.min_layout_m:g} m in the obstacle failed at)"
+          + (f"; mean pairwise flight distance {spread['flight_mean_m']:.1f} m, layout {spread['layout_mean_m']:.1f} m"
+             if len(suite) > 1 else ""))
+    if members:
+        i = min(order, key=lambda i: (members[i].status != "collision", members[i].distance))
+        print(f"closest failure: {members[i].distance:.2f} m ({members[i].status}) in {paths[order.index(i)]}")
+        ed = EDITIONS["2025"]
+        first = order[:ed.tests]
+        score = score_suite(ed, Draw(str(folder), case_study_of(members[0].test), len(members),
+                                     tuple(str(p) for p in paths[:ed.tests])),
+                            [(members[i].test, runs[i], "") for i in first])
+        source = f"{options.confirm} re-runs each" if ev is not None else "the search's own runs"
+        print(f"expected 2025 scores of the first {len(first)} (from {source}): failure {score.failure:.2f} (the "
+              f"sum of failure probability x points x 10 / (boxes^2 x flight minutes); the best, {member_name(0)}, "
+              f"{expected[order[0]]:.2f}), diversity " + ("-" if len(first) < 2 else f"{score.diversity:.2f}")
+              + " (1 - mean area IoU)")
+    if ev is not None:
+        ev = regroup(ev, order, paths)
+        write_report(ev, folder / "confirmation")
+        confirmed = sum(s.p >= CONFIRMED_P for s in ev.tests)  # of the re-runs flown: those in error do not count
+        errors = sum(s.errors for s in ev.tests)
+        print(f"confirmation: {confirmed} of {len(suite)} fail in >= {CONFIRMED_P:.0%} of {options.confirm} re-runs "
+              + (f"({errors} re-runs ended in error and are not counted) " if errors else "")
+              + f"(report in {folder / 'confirmation'}/report.md)")
+    print(f"suite in {folder}/: failure-NN.yaml (robot/mission keys, the best first), legacy/ (drone/test keys), "
+          f"suite.csv, suite.png")
 
 
 CONFIRMED_P = 0.6  # a failure probability at least this high over the re-runs: the failure is confirmed
