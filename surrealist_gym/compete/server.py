@@ -23,7 +23,6 @@ Example::
 """
 from __future__ import annotations
 
-import math
 import secrets
 import threading
 import time
@@ -235,8 +234,3 @@ class SimulationServer:
         if flight.error:
             return {"ok": False, "error": flight.error}
         return {"ok": True, "logs": list(flight.logs)}
-
-
-def finite_or_none(value: float) -> float | None:
-    """``value`` for JSON (None for inf or nan)."""
-    return value if math.isfinite(value) else None

@@ -116,7 +116,8 @@ class CompeteResult:
             "simulations": self.spent, "refused": self.refused, "requests": len(self.flights),
             "compat": list(self.notes),
             "tests": [{"name": t.name, "yaml": str(t.yaml), "ulg": t.ulg and str(t.ulg), "png": t.png and str(t.png),
-                       "competition_distance": _finite(t.distance), "points": t.points, "flight": t.flight, "note": t.note}
+                       "competition_distance": _finite(t.distance), "points": t.points, "flight": t.flight,
+                       "note": t.note}
                       for t in self.tests],
         }
 

@@ -32,7 +32,8 @@ AERIALIST_PATH = os.pathsep.join(str(p) for p in (MASTER, LEGACY))
 if not THIRD_PARTY.is_dir():
     pytest.skip(f"needs the competition's tools and Aerialist in {THIRD_PARTY}", allow_module_level=True)
 for _module in ("munch", "decouple", "ruptures", "requests", "webdav3", "webdav4", "pymoo"):
-    pytest.importorskip(_module, reason=f"{_module}: pip install -e '.[compete]' (Aerialist's imports, AmbieGen's pymoo)")
+    pytest.importorskip(_module, reason=f"{_module}: pip install -e '.[compete,compete-tools]' (Aerialist's imports, "
+                                        f"AmbieGen's pymoo)")
 
 
 @pytest.fixture(autouse=True)
@@ -69,7 +70,7 @@ def _aerialist_distances(result, module: str) -> list[list[float]]:
     its ULog, in a process with the tool's environment (the tool's folder as working folder, as Aerialist wants)."""
     script = (
         "import json, sys\n"
-        f"from aerialist.px4.{module} import {'AerialistTest as T' if module == 'aerialist_test' else 'DroneTest as T'}\n"
+        f"from aerialist.px4.{module} import {'AerialistTest' if module == 'aerialist_test' else 'DroneTest'} as T\n"
         "from aerialist.px4.trajectory import Trajectory\n"
         "from testcase import TestCase\n"
         "out = []\n"
@@ -122,7 +123,7 @@ def _check_distances(result, module: str, buffer: float) -> None:
 
 # --- the two generations end to end ----------------------------------------------------------------------------------
 @pytest.mark.slow
-def test_reference_generator_aerialist_master(tmp_path, capsys):
+def test_reference_generator_aerialist_master(tmp_path):
     """The competition's reference generator (cli.py + random_generator.py, AerialistTest) on mission1, budget 5."""
     result = run(prepare(SNIPPETS, "mission1", 5, tmp_path / "ref"))
     assert result.problem is None and result.returncode == 0
