@@ -6,6 +6,7 @@ imported inside each function (the ``Figure`` API, no pyplot state).
 """
 from __future__ import annotations
 
+import inspect
 import math
 import os
 
@@ -51,7 +52,9 @@ def plot_distances(ev, path) -> None:
     rng = np.random.default_rng(0)  # jitter only
     finite = [[r.distance for r in t.runs if r.flown and math.isfinite(r.distance)] for t in tests]
     rows = np.arange(len(tests))[::-1]  # the first test on top
-    ax.boxplot([d if d else [math.nan] for d in finite], positions=rows, vert=False, widths=0.6, showfliers=False,
+    horizontal = {"orientation": "horizontal"} if "orientation" in inspect.signature(ax.boxplot).parameters else {
+        "vert": False}  # matplotlib < 3.10 knows only vert, which 3.11 deprecates
+    ax.boxplot([d if d else [math.nan] for d in finite], positions=rows, **horizontal, widths=0.6, showfliers=False,
                medianprops={"color": "0.2"}, boxprops={"color": "0.6"}, whiskerprops={"color": "0.6"},
                capprops={"color": "0.6"})
     dots = [(r.distance, row + rng.uniform(-0.18, 0.18), r.failed, r.status == "collision")

@@ -82,3 +82,107 @@ def test_case_study_and_seed_test_exclude_each_other(tmp_path, capsys):
     seed = CASE_STUDIES / "mission1.yaml"
     assert main(["generate", str(seed), "--case-study", str(seed), "--out", str(tmp_path / "x")]) == 2
     assert "--case-study: a case study brings its own mission" in _one_line(capsys)
+
+
+# --- the export ranked by expected test score ---------------------------------------------------------------------
+def _points(distance: float, status: str) -> int:
+    if status == "collision" or distance < 0.25:
+        return 5
+    return 2 if distance < 1.0 else 1 if distance < 1.5 else 0
+
+
+def _by_hand(runs, boxes: int) -> float:
+    """Expected test score: mean points x 10 / (boxes^2 x mean minutes), from (distance, status, duration [s])."""
+    points = [_points(d, s) for d, s, _ in runs]
+    minutes = sum(t for _, _, t in runs) / len(runs) / 60
+    return sum(points) / len(points) * 10 / (boxes ** 2 * minutes)
+
+
+@pytest.fixture(scope="module")
+def flown_suite():
+    """CAMBA's three mission3 tests (short flights) as a suite, each with one real flight as the search's run."""
+    from surrealist_gym.competition import load_competition_test
+    from tests.conftest import SHARED_DATA
+
+    camba = SHARED_DATA / "competition" / "camba-collection"
+    if not camba.is_dir():
+        pytest.skip(f"needs the shared data folder {SHARED_DATA}")
+    config = load_profile("px4-v1.12-sitl-iris").sim_config()
+    members, runs = [], []
+    for i, name in enumerate(["02-12-16-24-05-5O9PN", "04-12-14-10-41-5O9PN", "26-11-13-35-31-5O9PN"]):
+        test = load_competition_test(camba / f"{name}.yaml")
+        run = simulate(test, runs=1, seed=0, config=config)[0]
+        members.append(Member(test, run.competition_distance, run.trajectory.xyz, i + 1, run.status.value))
+        runs.append(run)
+    return Suite(members=tuple(members)), runs
+
+
+def _write(out, suite, confirm: int, capsys) -> str:
+    from types import SimpleNamespace
+
+    from surrealist_gym.cli.generate import _write_suite
+
+    _write_suite(out, suite, SimpleNamespace(confirm=confirm, random_seed=0, uav="px4-v1.12-sitl-iris", workers=1))
+    return capsys.readouterr().out
+
+
+def _suite_rows(out) -> list[dict]:
+    with open(out / "suite" / "suite.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.mark.slow
+def test_export_is_ranked_by_the_confirmations_expected_score(tmp_path, flown_suite, capsys):
+    suite, _ = flown_suite
+    out = tmp_path / "search"
+    printed = _write(out, suite, 2, capsys)
+    folder = out / "suite"
+    with open(folder / "confirmation" / "runs.csv", newline="") as f:
+        runs = list(csv.DictReader(f))
+    names = [f"failure-{k:02d}" for k in (1, 2, 3)]
+    scores = []
+    for name in names:
+        mine = [(float(r["distance"]), r["status"], float(r["duration_s"])) for r in runs
+                if r["file"].endswith(f"/{name}.yaml") and r["status"] != "error"]
+        scores.append(_by_hand(mine, len(load_test(folder / f"{name}.yaml").obstacles)))
+    assert scores == sorted(scores, reverse=True)  # the best first: 2025 evaluates the first 20 written
+    assert [float(r["expected_score"]) for r in _suite_rows(out)] == pytest.approx(scores, abs=1e-3)
+    assert [r["test"] for r in _suite_rows(out)] == names
+
+    # the confirmation's runs are those of the files named: the same files re-flown with the same seed agree
+    again = tmp_path / "again"
+    assert main(["evaluate", str(folder), "--runs", "2", "--random-seed", "1", "--workers", "1",
+                 "--out", str(again)]) == 0
+    with open(again / "runs.csv", newline="") as f:
+        assert [(r["file"].rsplit("/", 1)[-1], r["distance"]) for r in csv.DictReader(f)] == \
+            [(r["file"].rsplit("/", 1)[-1], r["distance"]) for r in runs]
+
+    closest = min(suite.members, key=lambda m: (m.status != "collision", m.distance))
+    assert f"closest failure: {closest.distance:.2f} m ({closest.status}) in {folder}/failure-" in printed
+    from surrealist_gym.scoring import area_diversity
+
+    assert (f"expected 2025 scores of the first 3 (from 2 re-runs each): failure {sum(scores):.2f} "
+            in printed)  # CAMBA's three layouts differ: no duplicate
+    assert f"diversity {area_diversity([m.test.obstacles for m in suite.members]):.2f} (1 - mean area IoU)" in printed
+
+
+def test_without_confirmation_the_search_runs_rank_the_export(tmp_path, flown_suite, capsys):
+    from surrealist_gym.evaluation import RunSummary
+    from surrealist_gym.store import EvaluationStore, StoredEvaluation
+
+    suite, flown = flown_suite
+    out = tmp_path / "search"
+    out.mkdir()
+    with EvaluationStore(out / "evaluations.sqlite") as store:  # as the search stores its evaluations
+        for member, run in zip(suite.members, flown):
+            store.add(StoredEvaluation(member.test.key(), {}, (0,), (RunSummary.of(run).to_dict(),), None))
+    printed = _write(out, suite, 0, capsys)
+    expected = [_by_hand([(r.competition_distance, r.status.value, r.duration)], len(m.test.obstacles))
+                for m, r in zip(suite.members, flown)]
+    order = sorted(range(3), key=lambda i: (-expected[i], i))
+    rows = _suite_rows(out)
+    assert [float(r["expected_score"]) for r in rows] == pytest.approx([expected[i] for i in order], abs=1e-3)
+    assert [int(r["evaluation"]) for r in rows] == [suite.members[i].evaluation for i in order]
+    for k, i in enumerate(order):
+        assert load_test(out / "suite" / f"failure-{k + 1:02d}.yaml").obstacles == suite.members[i].test.obstacles
+    assert "(from the search's own runs): failure" in printed and not (out / "suite" / "confirmation").exists()
