@@ -55,7 +55,7 @@ EDITIONS = {"2024": Edition("2024", 20, 5, "random"), "2025": Edition("2025", 20
 
 #: [m] 2024: two tests are similar when the DBA averages of their runs are closer than this on average along DTW's
 #: path (x-y). Measured on CAMBA's 21 tests x 10 runs: two 5-run averages of the same test are 0.07-0.35 m apart
-#: for 18 of 21 tests (0.70 and 0.82 m for the others), averages of two different tests of one mission 0.45 m and
+#: for 19 of 21 tests (0.70 and 0.82 m for the other two), averages of two different tests of one mission 0.45 m and
 #: more (156 pairs): below 0.4 m a pair is as alike as repeats of one test are (``benchmarks/bench_similarity.py``).
 SIMILAR_FLIGHT_M = 0.4
 _SAME_AREA = 1.0 - 1e-9  # area similarity counted as 1 (floating error of the footprints' union and intersection)
