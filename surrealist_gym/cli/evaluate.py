@@ -161,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
         options = EvaluateOptions.from_args(args)
     uav = None if options.uav is None else load_profile(options.uav if args.resume else args.uav)  # named as given
     scored = bool(options.competition)  # a drawn test that breaks the rules is not flown and scores 0
-    tests = load_tests(options.tests if not (args.resume or scored) else options.files,
+    tests = load_tests(args.tests if not (args.resume or scored) else options.files,
                        any_layout=options.any_layout or scored)
     tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
     invalid = {path: broken for path, test in tests if scored and not options.any_layout
