@@ -28,7 +28,7 @@ from typing import Callable
 import gymnasium as gym
 import numpy as np
 
-from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
+from surrealist_gym.errors import DependencyNotInstalled, SurrealistError, regular_file
 
 from .base import Agent, SearchResult
 
@@ -214,16 +214,23 @@ def load_policy(path, algorithm: Algorithm | str = "ppo"):
     ``MlpPolicy`` whose spaces follow from the weights (one action per mutator, the env's observation). SB3's own
     ``load`` would unpickle the file's other entries, which can carry code."""
     import io
+    import pickle
     import zipfile
 
     import torch
 
     algorithm = Algorithm(algorithm)
+    regular_file(path, "policy file")
     try:
         with zipfile.ZipFile(path) as archive:
             state = torch.load(io.BytesIO(archive.read("policy.pth")), weights_only=True, map_location="cpu")
-    except (OSError, KeyError, zipfile.BadZipFile, RuntimeError, ValueError) as err:
+    except pickle.UnpicklingError:  # torch refuses what is not plain tensors; it is never loaded unsafely
+        raise SurrealistError(f"{path}: cannot be loaded safely: its policy.pth holds pickled objects besides "
+                              f"tensors (a policy of `surrealist train-ppo` holds weights only)") from None
+    except (OSError, KeyError, zipfile.BadZipFile, RuntimeError, ValueError, EOFError) as err:
         raise SurrealistError(f"{path}: not a policy file of `surrealist train-ppo` ({type(err).__name__})") from None
+    if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
+        raise SurrealistError(f"{path}: not a policy file of `surrealist train-ppo` (policy.pth holds no weights)")
     first, action = (("mlp_extractor.policy_net.0.weight", "action_net.weight") if algorithm is Algorithm.PPO
                      else ("actor.latent_pi.0.weight", "actor.mu.weight"))
     if first not in state or action not in state:

@@ -50,3 +50,26 @@ def one_line(err: Exception, limit: int = 80) -> str:
 class InfrastructureError(SurrealistError):
     """The machinery that runs simulations failed (a worker or pool died, a scheduler was lost), not the simulation:
     never stored as a result; the search stops and ``--resume`` re-flies what is missing."""
+
+
+def regular_file(path, what: str, error: type[SurrealistError] = SurrealistError, empty_ok: bool = True) -> str:
+    """``path`` (as a string) if it names an existing regular file, else a one-line ``error``: missing, or what it is
+    instead (a folder, a FIFO, a device, a socket), or empty when ``empty_ok`` is False. Checked with ``stat``, which
+    does not open the file, so an input that is a FIFO or a device is refused instead of blocking its reader. Every
+    reader of an input file calls it before opening it. ``what`` names the input ("log file", "test case")."""
+    import os
+    import stat
+
+    name = os.fspath(path)
+    try:
+        info = os.stat(name)
+    except OSError as err:
+        raise error(f"{name}: cannot read {what} ({err.strerror or err})") from None
+    if not stat.S_ISREG(info.st_mode):
+        kind = ("a folder" if stat.S_ISDIR(info.st_mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(info.st_mode)
+                else "a socket" if stat.S_ISSOCK(info.st_mode)
+                else "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode) else "a special file")
+        raise error(f"{name}: {kind}, not a regular file ({what} expected)")
+    if not empty_ok and info.st_size == 0:
+        raise error(f"{name}: an empty file, no {what} in it")
+    return name

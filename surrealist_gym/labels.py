@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Sequence
 
-from .errors import InvalidLabels, InvalidTestCase, SurrealistError
+from .errors import InvalidLabels, InvalidTestCase, SurrealistError, regular_file
 from .testcase import Obstacle, TestCase, load_test
 
 # their result (lower case) -> normalised result
@@ -80,8 +80,7 @@ def load_labelled_set(path, labels=None, mission=None) -> LabelledSet:
     path = Path(path)
     if path.is_dir():
         return _load_folder(path, Path(labels) if labels is not None else path / "labels.csv")
-    if not path.is_file():
-        raise InvalidLabels(f"{path}: no such labels file or folder")
+    regular_file(path, "labels file or folder", InvalidLabels)
     if labels is not None:
         raise InvalidLabels(f"{path}: a separate labels file goes with a folder of YAMLs, not with a tests CSV")
     base = Path(mission) if mission is not None else path.resolve().parent.parent / "case_studies" / "mission1.yaml"
@@ -93,6 +92,7 @@ def load_labelled_set(path, labels=None, mission=None) -> LabelledSet:
 
 def _read_rows(path: Path, needed: Sequence[str]) -> tuple[dict[str, str | None], list[tuple[int, dict]]]:
     """The column name used for each field (None if absent) and the rows with their row numbers."""
+    regular_file(path, "labels file", InvalidLabels)
     try:
         with open(path, newline="", encoding="utf-8") as f:
             reader = csv.DictReader(f)
@@ -183,7 +183,7 @@ def _load_csv(path: Path, base: TestCase) -> LabelledSet:
 
 
 def _load_folder(folder: Path, labels_file: Path) -> LabelledSet:
-    if not labels_file.is_file():
+    if not labels_file.exists():  # anything else that is not a regular file: _read_rows says what it is
         raise InvalidLabels(f"{labels_file}: labels file not found (a folder of YAMLs needs labels.csv, "
                             f"or --labels FILE)")
     columns, rows = _read_rows(labels_file, ("id", "distance"))

@@ -14,7 +14,7 @@ import warnings
 from dataclasses import dataclass, field, replace
 from enum import IntEnum
 
-from .errors import MissionError
+from .errors import MissionError, regular_file
 
 EARTH_RADIUS_M = 6371000.0  # PX4 CONSTANTS_RADIUS_OF_EARTH
 
@@ -153,7 +153,7 @@ class Mission:
 # --- reading ------------------------------------------------------------------------------------------------------
 def read_mission(path, home: tuple[float, float] | None = None) -> Mission:
     """Read a ``.plan`` (JSON) or ``QGC WPL 110`` file, chosen by its content."""
-    name = os.fspath(path)
+    name = regular_file(path, "mission file", MissionError)
     try:
         with open(path, "rb") as f:
             head = f.read(64)

@@ -13,9 +13,10 @@ import sqlite3
 import time
 import warnings
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Iterator
 
-from .errors import SurrealistError, one_line
+from .errors import SurrealistError, one_line, regular_file
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS evaluations (
@@ -58,15 +59,25 @@ class StoredEvaluation:
 
 
 class EvaluationStore:
-    """A SQLite file of evaluations; ``search`` names separate several searches in one file."""
+    """A SQLite file of evaluations; ``search`` names separate several searches in one file.
 
-    def __init__(self, path, search: str = ""):
+    ``readonly``: an input store (surrogate training and evaluation) is opened read-only (SQLite ``mode=ro``): it
+    must be an existing, non-empty regular file holding an evaluations table, and nothing is ever written to it (a
+    writable open would turn an empty or missing file into a new database)."""
+
+    def __init__(self, path, search: str = "", readonly: bool = False):
         self.path = os.fspath(path)
         self.search = search
+        if readonly:
+            regular_file(self.path, "evaluation store", SurrealistError, empty_ok=False)
         try:
-            self._db = sqlite3.connect(self.path)
+            self._db = (sqlite3.connect(Path(self.path).resolve().as_uri() + "?mode=ro", uri=True) if readonly
+                        else sqlite3.connect(self.path))
             tables = {r[0] for r in self._db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
             if "evaluations" not in tables:  # a new store; an existing one is not changed by reading it
+                if readonly:
+                    self._db.close()
+                    raise SurrealistError(f"{self.path}: not an evaluation store (no evaluations table)")
                 self._upgrade()
         except sqlite3.DatabaseError as err:
             raise SurrealistError(f"{self.path}: not an evaluation store ({one_line(err)})") from None

@@ -10,15 +10,15 @@ import csv
 import functools
 import json
 import math
-import os
 from dataclasses import dataclass, field, fields, replace
 from enum import Enum
 from pathlib import Path
 from typing import Mapping
 
-from .errors import InvalidTestCase, MissionError
+from .errors import InvalidTestCase, MissionError, regular_file
 from .frozendict import FrozenDict
 from .mission import Mission, read_mission
+from .ranges import param_problem
 
 
 class Shape(str, Enum):
@@ -132,6 +132,17 @@ class RuntimeCommand:
     y: float = 0.0
     z: float = 0.0
     r: float = 0.0
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not _finite(value):
+                raise InvalidTestCase(f"command field {f.name!r}: expected a finite number, got {value!r}")
+        if self.timestamp < 0:
+            raise InvalidTestCase(f"command field 'timestamp': expected a number >= 0 [s], got {self.timestamp:g}")
+        if self.mode != int(self.mode):
+            raise InvalidTestCase(f"command field 'mode': expected a whole number, got {self.mode:g}")
+        object.__setattr__(self, "mode", int(self.mode))
 
     def to_dict(self) -> dict:
         return {"timestamp": self.timestamp, "mode": self.mode, "x": self.x, "y": self.y, "z": self.z, "r": self.r}
@@ -256,8 +267,9 @@ class TestCase:
         object.__setattr__(self, "commands", tuple(self.commands))
         params = {}
         for k, v in dict(self.params).items():
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise InvalidTestCase(f"params.{k}: expected a number, got {v!r}")
+            bad = param_problem(str(k), v)  # a PX4 parameter or uav.* setting in its physical range
+            if bad:
+                raise InvalidTestCase(f"params.{k}: {bad}")
             params[str(k)] = v
         object.__setattr__(self, "params", FrozenDict(params))
         if self.mission is not None and not isinstance(self.mission, Mission):
@@ -303,7 +315,7 @@ def load_test(path) -> TestCase:
     relative to their repository root), then by file name in the YAML's folder.
     """
     path = Path(path)
-    name = os.fspath(path)
+    name = regular_file(path, "test case", InvalidTestCase)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as err:
@@ -501,6 +513,9 @@ def _construct(cls, values: dict, where: str):
         return cls(**values)
     except InvalidTestCase as err:
         raise InvalidTestCase(f"{where}: {err}") from err
+    except TypeError:  # a required field left out
+        missing = [f.name for f in fields(cls) if f.name not in values]
+        raise InvalidTestCase(f"{where}: missing field {missing[0] if missing else '?'!r}") from None
 
 
 def _parse_obstacles(raw, name) -> tuple[Obstacle, ...]:
@@ -557,14 +572,16 @@ def _read_params(path: str) -> list[tuple[str, float]]:
             value = float(row[1])
         except ValueError as err:
             raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: not a number {row[1]!r}") from err
-        if not math.isfinite(value):
-            raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: not a finite number {row[1]!r}")
+        bad = param_problem(row[0].strip(), value)
+        if bad:
+            raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: {bad}")
         out.append((row[0].strip(), int(value) if value.is_integer() and "." not in row[1] else value))
     return out
 
 
 def _text_lines(path: str) -> list[str]:
     """The lines of a UTF-8 text file (a one-line error naming the file otherwise)."""
+    regular_file(path, "file", InvalidTestCase)
     try:
         return Path(path).read_text(encoding="utf-8").splitlines()
     except UnicodeDecodeError as err:
@@ -585,7 +602,10 @@ def _read_commands(path: str) -> tuple[RuntimeCommand, ...]:
             raise InvalidTestCase(f"{path}: line {n}: expected numbers timestamp,mode,x,y,z,r") from err
         if len(values) != 6:
             raise InvalidTestCase(f"{path}: line {n}: expected 6 columns timestamp,mode,x,y,z,r, got {len(values)}")
-        out.append(RuntimeCommand(values[0], int(values[1]), *values[2:]))
+        try:
+            out.append(RuntimeCommand(*values))
+        except InvalidTestCase as err:
+            raise InvalidTestCase(f"{path}: line {n}: {err}") from None
     return tuple(out)
 
 

@@ -344,10 +344,11 @@ def stack_rows(rows) -> np.ndarray:
 
 
 def _open(path) -> EvaluationStore:
-    if not Path(path).is_file():
+    """An input store, opened read-only (an empty file or a FIFO is refused, and nothing is written to it)."""
+    if not Path(path).exists():
         raise DatasetError(f"{path}: no such evaluation store")
     try:
-        store = EvaluationStore(path)
+        store = EvaluationStore(path, readonly=True)
     except SurrealistError as err:
         raise DatasetError(str(err)) from err
     try:

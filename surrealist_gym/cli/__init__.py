@@ -1,7 +1,7 @@
 """The ``surrealist`` command line: one module per sub-command, each with ``add_arguments`` and ``run``.
 
-This is the only place that prints. A :class:`~surrealist_gym.errors.SurrealistError` becomes one line on stderr
-and exit code 2; Ctrl-C exits with 130.
+This is the only place that prints. A :class:`~surrealist_gym.errors.SurrealistError`, and a command line that
+argparse refuses, becomes one line on stderr and exit code 2; Ctrl-C exits with 130.
 """
 from __future__ import annotations
 
@@ -29,8 +29,16 @@ COMMANDS = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose errors are one line like any other bad input (argparse prints the usage block
+    before its message); its sub-command parsers are of this class too. ``--help`` still prints the usage."""
+
+    def error(self, message: str):
+        raise SurrealistError(f"{self.prog}: {' '.join(message.split())}")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="surrealist", description="Test drones in the neighbourhood of real flights.")
+    parser = _Parser(prog="surrealist", description="Test drones in the neighbourhood of real flights.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, (module, help_text) in COMMANDS.items():
@@ -47,7 +55,11 @@ def _version() -> str:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = _parser().parse_args(argv)
+    try:
+        args = _parser().parse_args(argv)
+    except SurrealistError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     args._flags = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))  # the options given explicitly
     warnings.simplefilter("ignore", DeprecationWarning)
     warnings.formatwarning = lambda msg, category, *a, **k: f"warning: {msg}\n"

@@ -9,10 +9,9 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 
 from ..errors import SurrealistError
-from .options import check_at_least
+from .options import check_at_least, check_writable
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -38,9 +37,8 @@ def run(args) -> int:
     from ..testcase import load_test
 
     check_at_least(args, runs=1, workers=1)
-    out = Path(args.out)
-    if out.suffix.lower() not in (".yaml", ".yml"):
-        raise SurrealistError(f"--out {out}: expected a .yaml file for the profile")
+    out = check_writable(args.out, "--out", "file", (".yaml", ".yml"))  # before any log is read or flown
+    plot = check_writable(args.plot or out.with_suffix(".png"), "--plot", "file", (".png",))
     flights = []
     for log in args.logs:
         flight = read_flight(log)
@@ -59,7 +57,6 @@ def run(args) -> int:
     print(format_calibration(cal))
     out.parent.mkdir(parents=True, exist_ok=True)
     save_profile(cal.profile, out)
-    plot = Path(args.plot) if args.plot else out.with_suffix(".png")
     plot_calibration(cal, plot)
     print(f"profile {cal.profile.name} -> {out} ({cal.simulations} simulations, "
           f"{time.perf_counter() - start:.1f} s); phases plotted in {plot}")

@@ -33,21 +33,27 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from .options import check_at_least
+    from .options import check_at_least, check_writable
 
     check_at_least(args, repetitions=1, budget=1, runs=1, workers=1, parallel=1)
 
     from search.compare import compare
+    from search.registry import make_agent
 
     from gymnasium.envs.registration import registry
 
-    from ..errors import SurrealistError
+    from ..errors import InvalidTestCase, SurrealistError, one_line
 
     surrealist_envs = sorted(k for k in registry if k.startswith("Surrealist-"))
     if args.env not in surrealist_envs:  # checked before any folder or worker exists
         raise SurrealistError(f"--env {args.env!r}: not a Surrealist env (one of {', '.join(surrealist_envs)})")
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
-    out = Path(args.out or f"results/compare-{datetime.now():%Y%m%d-%H%M%S}")
+    if not agents:
+        raise SurrealistError(f"--agents {args.agents!r}: expected comma-separated agent names such as "
+                              f"greedy,random,cmaes")
+    for name in agents:  # an unknown agent or a bad policy file, before any folder exists
+        make_agent(name, seed=0)
+    out = check_writable(args.out or f"results/compare-{datetime.now():%Y%m%d-%H%M%S}", "--out", "folder")
     env_kwargs = {}
     if args.seed:
         env_kwargs["seed_test"] = str(Path(args.seed).resolve())
@@ -55,6 +61,17 @@ def run(args) -> int:
         env_kwargs["reference_log"] = str(Path(args.log).resolve())
     if args.common_noise:
         env_kwargs["sim_config"] = {"common_noise": True}
+    try:  # the env as each search makes it, once, before any folder exists: bad inputs of the problem fail here
+        import gymnasium as gym
+
+        gym.make(args.env, **env_kwargs, budget=args.budget, executor="inline",
+                 **({} if args.runs is None else {"runs": args.runs})).close()
+    except TypeError as err:  # an option this env does not take (--log of a generation env)
+        raise SurrealistError(f"--env {args.env}: does not take the options given ({one_line(err, 100)})") from None
+    except InvalidTestCase as err:  # a setting of the seed test (the env checks its uav.* params): name its file
+        if args.seed and str(err).startswith("params."):
+            raise InvalidTestCase(f"{args.seed}: {err}") from None
+        raise
     executor = args.dask_scheduler or ("inline" if args.inline else "process")
     bar = tqdm(total=len(agents) * args.repetitions * args.budget, unit="eval", desc="compare", dynamic_ncols=True,
                file=sys.stderr, disable=None)

@@ -43,9 +43,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _check(args) -> None:
-    from .options import check_at_least
+    from .options import check_at_least, check_writable
 
     check_at_least(args, runs=1, every=1, workers=1, limit=1)
+    check_writable(args.out, "--out", "folder")
     if not args.close > 0 or not math.isfinite(args.close):
         raise SurrealistError(f"--close: expected a positive number of metres, got {args.close:g}")
     if not args.buffer >= 0 or not math.isfinite(args.buffer):

@@ -119,14 +119,18 @@ def run(args: argparse.Namespace) -> int:
     from .. import data_path
     from ..logs import read_flight
 
+    from .options import check_writable
+
     if args.log is None:
         args.log = data_path("case0.ulg")
+    out = None
+    if not args.no_plot:  # the plot's path is checked before the log is read
+        out = check_writable(args.out or Path.cwd() / (Path(args.log).stem + ".png"), "--out", "file", (".png",))
     flight = read_flight(args.log)
     info = summary(flight)
-    if not args.no_plot:
+    if out is not None:
         from ..plots import plot_flight
 
-        out = Path(args.out) if args.out else Path.cwd() / (Path(args.log).stem + ".png")
         try:
             plot_flight(flight, out)
         except OSError as err:

@@ -46,7 +46,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _params(items: list[str]) -> dict:
+    """``--param NAME=VALUE`` overrides, each a finite number in its physical range (ranges.RANGES)."""
     from ..errors import SimulationError
+    from ..ranges import param_problem
 
     out = {}
     for item in items:
@@ -55,8 +57,11 @@ def _params(items: list[str]) -> dict:
             number = float(value) if sep else math.nan
         except ValueError:
             number = math.nan
-        if not math.isfinite(number):
+        if not math.isfinite(number) or not name.strip():
             raise SimulationError(f"--param {item!r}: expected NAME=number (a finite number)")
+        bad = param_problem(name.strip(), number)
+        if bad:
+            raise SimulationError(f"--param {item!r}: {name.strip()}: {bad}")
         out[name.strip()] = number
     return out
 
@@ -67,9 +72,11 @@ def run(args: argparse.Namespace) -> int:
     from ..geometry import competition_distance
     from ..sim import SimConfig, simulate
 
-    from .options import check_at_least
+    from .options import check_at_least, check_writable
 
     check_at_least(args, runs=1, seed=0)
+    out = check_writable(args.out, "--out", "folder")  # before anything is read or flown
+    params = _params(args.param)
     test = load_test(args.test)
     ref_path = args.reference or (None if args.no_reference else test.reference_log)
     reference = None
@@ -78,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         reference = read_flight(ref_path)
         if args.reference:
             test = replace(test, reference_log=str(Path(args.reference).resolve()))
-    config = SimConfig(avoidance=args.avoidance, params=_params(args.param))
+    config = SimConfig(avoidance=args.avoidance, params=params)
     if args.uav is not None and args.vehicle is not None:
         from ..errors import SimulationError
         raise SimulationError("--vehicle: give either --vehicle or --uav (the profile names its vehicle)")
@@ -97,7 +104,6 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     results = simulate(test, runs=args.runs, seed=args.seed, config=config)
     wall = time.perf_counter() - start
-    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = Path(args.test).stem
     rows = []

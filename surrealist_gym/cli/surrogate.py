@@ -49,10 +49,41 @@ def _print_metrics(label: str, m: dict, log_scale: bool) -> None:
           f"(95% ideal), NLL {m['nll']:.3f}")
 
 
+def _check_inputs(args) -> None:
+    """Every path of the command line, before anything is loaded or trained: the stores are existing, non-empty
+    regular files (never created or changed: they are opened read-only), the model a folder, and what is written
+    can be written."""
+    from pathlib import Path
+
+    from ..errors import regular_file
+    from .options import check_at_least, check_writable
+
+    for store in args.stores:
+        regular_file(store, "evaluation store", empty_ok=False)
+    if args.action == "eval":
+        if args.plot:
+            check_writable(args.plot, "--plot", "file", (".png",))
+        model = Path(args.model)
+        if not model.is_dir():
+            raise SurrealistError(f"{model}: not a surrogate model (expected the folder `surrealist surrogate "
+                                  f"train` writes)")
+        for name in ("meta.json", "weights.pt"):
+            regular_file(model / name, "surrogate model file")
+    else:
+        check_at_least(args, members=1, epochs=1, k=1, holdout=0, random_seed=0)
+        if args.holdout and not args.holdout < len(args.stores):
+            raise SurrealistError(f"--holdout {args.holdout}: " + (
+                f"expected 1 to {len(args.stores) - 1} (stores given: {len(args.stores)})" if len(args.stores) > 1
+                else "needs at least 2 stores, one to train on and one to hold out (given: 1)"))
+        check_writable(args.out, "--out", "folder")
+
+
 def run(args) -> int:
     import warnings
 
     import numpy as np
+
+    _check_inputs(args)
 
     from surrealist_gym.evaluation import describe_noise
     from surrogates.dataset import Featurizer, load_dataset
@@ -80,10 +111,6 @@ def run(args) -> int:
     config = {k: v for k, v in options.items() if v is not None}
     metrics = {}
     if args.holdout:
-        if not 0 < args.holdout < len(args.stores):
-            raise SurrealistError(f"--holdout {args.holdout}: " + (
-                f"expected 1 to {len(args.stores) - 1} (stores given: {len(args.stores)})" if len(args.stores) > 1
-                else "needs at least 2 stores, one to train on and one to hold out (given: 1)"))
         held = np.arange(len(args.stores) - args.holdout, len(args.stores))
         trial = SurrogateModel(featurizer, args.kind, args.target, config, args.random_seed)
         trial.fit_dataset(data.subset(~np.isin(data.groups, held)))

@@ -23,9 +23,20 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from .options import check_at_least
+    import math
+    from pathlib import Path
+
+    from ..errors import SurrealistError
+    from .options import check_at_least, check_writable
 
     check_at_least(args, steps=1, episode_budget=2, runs=1, threads=1, random_seed=0)
+    if not (math.isfinite(args.spread) and 0 < args.spread <= 1):
+        raise SurrealistError(f"--spread: expected a number in (0, 1] (action units), got {args.spread:g}")
+    out = Path(args.out)  # stable-baselines3 saves to the path with .zip added unless it ends in .zip
+    check_writable(out if out.suffix == ".zip" else out.with_name(out.name + ".zip"), "--out", "file")
+    if args.seed:  # the problems' seed test, read before anything is trained or flown
+        from ..testcase import load_test
+        load_test(args.seed)
 
     from ..errors import DependencyNotInstalled
     try:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import os
 import struct
 
-from ..errors import LogFormatError, one_line
+from ..errors import LogFormatError, one_line, regular_file
 from .flight import FlightLog, LocalPositions, ModeSpan
 from .mavlink import DATAFLASH_MAGIC, MAVLINK_STX, read_dataflash, read_tlog
 from .ulog import ULOG_MAGIC, read_ulog
@@ -25,7 +25,7 @@ _EXTENSIONS = {".ulg": "ulog", ".tlog": "tlog", ".mav": "tlog", ".bin": "datafla
 
 def detect_format(path) -> str | None:
     """``"ulog"``, ``"tlog"`` or ``"dataflash"`` from the first bytes of the file, else from its extension."""
-    name = os.fspath(path)
+    name = regular_file(path, "log file", LogFormatError)
     try:
         with open(name, "rb") as f:
             head = f.read(16)

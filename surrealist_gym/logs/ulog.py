@@ -92,12 +92,19 @@ def read_ulog(source) -> FlightLog:
     for d in ulog.data_list:
         if d.multi_id == 0 or d.name not in data:
             data[d.name] = d.data
-    start_us = int(ulog.start_timestamp)
-    positions = _positions(name, data.get("vehicle_local_position"), start_us)
+    lp, status = data.get("vehicle_local_position"), data.get("vehicle_status")
+    # each topic's samples on the log's timeline (flipped bits in a timestamp throw a sample seconds to days away)
+    lp_on = None if lp is None or "timestamp" not in lp else on_timeline(lp["timestamp"])
+    status_on = None if status is None or "timestamp" not in status else on_timeline(status["timestamp"])
+    start_us, end_us, off = _span(ulog, [(lp, lp_on), (status, status_on)])
+    positions = _positions(name, lp, start_us, lp_on)
     readable = f"positions readable for {(int(positions.timestamp_us[-1]) - start_us) / 1e6:.1f} s"
     damage = ""
-    if ulog.file_corruption:
-        damage = f"corrupt data in the file was skipped (pyulog resynchronised; {readable})"
+    if ulog.file_corruption or off:
+        damage = "; ".join(part for part in (
+            "corrupt data in the file was skipped (pyulog resynchronised)" if ulog.file_corruption else "",
+            f"damaged timestamps off the log's timeline were set aside ({off})" if off else "") if part)
+        damage += f"; {readable}"
     elif not hasattr(source, "read"):
         cut = _truncated_at(os.fspath(source))
         if cut is not None:
@@ -105,13 +112,10 @@ def read_ulog(source) -> FlightLog:
     if damage:
         warnings.warn(f"{name}: {damage}; the flight it holds may be incomplete", stacklevel=2)
     params = dict(ulog.initial_parameters)
-    # the header's last timestamp, unless corrupt data put it beyond the last position sample by more than a minute
-    end_us = min(int(ulog.last_timestamp), int(positions.timestamp_us[-1]) + 60_000_000)
-    status = data.get("vehicle_status")
     modes = ()
-    if status is not None and "nav_state" in status and len(status["timestamp"]):
-        names = [NAV_STATES.get(int(n), f"NAV_STATE_{int(n)}") for n in status["nav_state"]]
-        modes = mode_spans(status["timestamp"].astype(np.int64), names, start_us, end_us)
+    if status is not None and "nav_state" in status and np.any(status_on):
+        names = [NAV_STATES.get(int(n), f"NAV_STATE_{int(n)}") for n in status["nav_state"][status_on]]
+        modes = mode_spans(status["timestamp"][status_on].astype(np.int64), names, start_us, end_us)
     home = _home(data.get("home_position"), data.get("vehicle_local_position"))
     mission = _mission(name, data.get("navigator_mission_item"), data.get("mission"), home)
     return FlightLog(path=name, format="ulog", positions=positions, mission=mission, params=params, modes=modes,
@@ -167,17 +171,16 @@ def _truncated_at(path: str) -> int | None:
     return pos if pos != n else None
 
 
-def _positions(name: str, lp, start_us: int = 0) -> LocalPositions:
+def _positions(name: str, lp, start_us: int = 0, on=None) -> LocalPositions:
+    """The valid local position samples; ``on``: which of them lie on the log's timeline (:func:`on_timeline`)."""
     if lp is None:
         raise LogFormatError(f"no valid local position in {name} (no vehicle_local_position topic)")
     missing = [k for k in ("timestamp", "x", "y", "z") if k not in lp]
     if missing:
         raise LogFormatError(f"no valid local position in {name} (vehicle_local_position lacks {', '.join(missing)})")
     ok = np.isfinite(lp["x"]) & np.isfinite(lp["y"]) & np.isfinite(lp["z"])
-    # timestamps a corrupt file scrambled: before the log started, more than a day after it, or going backwards
-    ts = lp["timestamp"].astype(np.int64)
-    ok &= (ts >= start_us) & (ts <= start_us + 86_400_000_000)
-    ok &= ts >= np.maximum.accumulate(np.where(ok, ts, 0))
+    ok &= on_timeline(lp["timestamp"]) if on is None else on
+    ok &= lp["timestamp"].astype(np.int64) >= start_us
     if not np.any(ok):
         raise LogFormatError(f"no valid local position in {name} (vehicle_local_position x/y/z never finite)")
     for flag in ("xy_valid", "z_valid"):
@@ -190,6 +193,76 @@ def _positions(name: str, lp, start_us: int = 0) -> LocalPositions:
     heading = lp.get("heading", lp.get("yaw"))
     return LocalPositions(lp["timestamp"][ok].astype(np.int64), lp["x"][ok], lp["y"][ok], lp["z"][ok],
                           None if heading is None else heading[ok])
+
+
+def on_timeline(timestamps) -> np.ndarray:
+    """Which samples of a topic lie on the log's timeline: the longest run of timestamps in the order they were
+    logged (a sample whose timestamp jumps backwards or ahead of the rest is off it), without the small islands a
+    gap far beyond the sampling interval cuts off (a flipped high bit moves a timestamp by 2^k us: a sample seconds
+    to days away, alone there). Intact logs (non-decreasing, no such island) keep every sample."""
+    ts = np.asarray(timestamps).astype(np.int64)
+    n = len(ts)
+    keep = np.ones(n, dtype=bool)
+    if n < 3:
+        return keep
+    if np.any(np.diff(ts) < 0):
+        keep = _longest_ordered(ts)
+    kept = np.flatnonzero(keep)
+    if len(kept) < 3:
+        return keep
+    steps = np.diff(ts[kept])
+    gap = max(ISLAND_GAP_US, 100 * float(np.median(steps)))
+    cuts = np.flatnonzero(steps > gap) + 1
+    if len(cuts):
+        smallest = max(3, len(kept) // 100)  # a stretch of fewer samples between such gaps is an island
+        for run in np.split(kept, cuts):
+            if len(run) < smallest:
+                keep[run] = False
+    return keep
+
+
+ISLAND_GAP_US = 10_000_000  # [us] samples cut off from the rest by over 10 s (or 100 sampling intervals)
+
+
+def _longest_ordered(ts: np.ndarray) -> np.ndarray:
+    """A mask of a longest non-decreasing subsequence of ``ts`` (patience sorting, O(n log n))."""
+    import bisect
+
+    tails, tail_at, parent = [], [], np.full(len(ts), -1)
+    for i, t in enumerate(ts.tolist()):
+        k = bisect.bisect_right(tails, t)
+        if k == len(tails):
+            tails.append(t)
+            tail_at.append(i)
+        else:
+            tails[k], tail_at[k] = t, i
+        parent[i] = tail_at[k - 1] if k else -1
+    keep = np.zeros(len(ts), dtype=bool)
+    i = tail_at[-1]
+    while i >= 0:
+        keep[i] = True
+        i = parent[i]
+    return keep
+
+
+def _span(ulog, topics) -> tuple[int, int, str]:
+    """The log's start and end [us] and what lies off its timeline ("" when nothing does): the header's start and
+    last timestamp, unless they lie beyond the first and last samples on the timeline by more than the island gap
+    (a damaged timestamp), in which case the samples bound the log."""
+    start, end = int(ulog.start_timestamp), int(ulog.last_timestamp)
+    dropped = sum(int(len(on) - np.count_nonzero(on)) for data, on in topics if on is not None)
+    times = [data["timestamp"][on].astype(np.int64) for data, on in topics if on is not None and np.any(on)]
+    if not times:
+        return start, end, ""
+    first, last = min(int(t[0]) for t in times), max(int(t[-1]) for t in times)
+    off = [f"{dropped} sample{'s' if dropped > 1 else ''}"] if dropped else []
+    if first - start > ISLAND_GAP_US or start - first > ISLAND_GAP_US:
+        off.append("the header's start time")
+        start = first
+    if end - last > ISLAND_GAP_US or end < start:
+        off.append("the log's last timestamp")
+        end = last
+    return start, end, " and ".join(off)
 
 
 def _home(hp, lp) -> tuple[float, float, float] | None:

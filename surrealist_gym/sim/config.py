@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
 from ..frozendict import FrozenDict
+from ..ranges import UAV_SETTING_PREFIX  # a test's params uav.<setting> set the simulated UAV (sim/profiles.py)
 from typing import Any, Mapping
 
 # PX4 v1.12 defaults of the parameters the simulated UAV reads (sources: the *_params.c / *_params.yaml of
@@ -205,10 +206,6 @@ def _log_params(path: str) -> Mapping[str, float]:
     except Exception:  # pyulog raises assorted errors on corrupt files; the reference is then ignored
         return FrozenDict({})
     return FrozenDict({k: float(v) for k, v in ulog.initial_parameters.items()})
-
-
-# A test's params named ``uav.<setting>`` set the simulated UAV rather than PX4 (sim/profiles.py: UAV settings)
-UAV_SETTING_PREFIX = "uav."
 
 
 def resolve_params(test, config: SimConfig) -> dict[str, float]:

@@ -26,8 +26,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import InvalidProfile, InvalidTestCase
+from ..errors import InvalidProfile, InvalidTestCase, regular_file
 from ..frozendict import FrozenDict
+from ..ranges import UAV_TIMINGS, param_problem, problem
 from .config import AvoidanceModel, SimConfig, VehicleModel
 
 __all__ = ["PRESETS", "SETTINGS", "Setting", "UavProfile", "default_profile", "load_profile", "save_profile",
@@ -71,20 +72,15 @@ class UavProfile:
                 raise InvalidProfile(f"{where}: field {key!r}: expected a mapping, got {value!r}")
             object.__setattr__(self, key, FrozenDict(dict(value)))
         for k, v in self.params.items():
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise InvalidProfile(f"{where}: field 'params.{k}': expected a finite number, got {v!r}")
-        if not _number(self.takeoff_delay_s) or self.takeoff_delay_s < 0:
-            raise InvalidProfile(f"{where}: field 'takeoff_delay_s': expected a number >= 0, got "
-                                 f"{self.takeoff_delay_s!r}")
-        if not _number(self.takeoff_hold_s) or self.takeoff_hold_s < 0:
-            raise InvalidProfile(f"{where}: field 'takeoff_hold_s': expected a number >= 0, got "
-                                 f"{self.takeoff_hold_s!r}")
-        if self.timeout_s is not None and (not _number(self.timeout_s) or self.timeout_s <= 0):
-            raise InvalidProfile(f"{where}: field 'timeout_s': expected a positive number or null, got "
-                                 f"{self.timeout_s!r}")
-        if not _number(self.obstacle_collision_scale) or not 0 < self.obstacle_collision_scale <= 1:
-            raise InvalidProfile(f"{where}: field 'obstacle_collision_scale': expected a number in (0, 1], got "
-                                 f"{self.obstacle_collision_scale!r}")
+            bad = param_problem(k, v)
+            if bad:
+                raise InvalidProfile(f"{where}: field 'params.{k}': {bad}")
+        for name in ("takeoff_delay_s", "takeoff_hold_s", "timeout_s", "obstacle_collision_scale"):
+            value = getattr(self, name)
+            bad = None if value is None and name == "timeout_s" else problem(name, value)
+            if bad:
+                raise InvalidProfile(f"{where}: field {name!r}: {bad}" + ("; or null for the mission's default"
+                                                                       if name == "timeout_s" else ""))
         self.planner_config()  # checks the planner's, the camera's and the noise's fields
         self.sensor_config()
         self.noise_config()
@@ -95,19 +91,19 @@ class UavProfile:
             from .px4_avoidance import Px4AvoidanceConfig as cls
         else:
             from .avoidance import AvoidanceConfig as cls
-        return _construct(cls, self.planner, f"profile {self.name!r}: field 'planner")
+        return _construct(cls, self.planner, f"profile {self.name!r}", "planner")
 
     def sensor_config(self):
         """The depth camera of the profile."""
         from .sensor import DepthSensorConfig
 
-        return _construct(DepthSensorConfig, self.sensor, f"profile {self.name!r}: field 'sensor")
+        return _construct(DepthSensorConfig, self.sensor, f"profile {self.name!r}", "sensor")
 
     def noise_config(self):
         """The run-to-run variation of the profile (:class:`~surrealist_gym.sim.config.NoiseConfig` fields)."""
         from .config import NoiseConfig
 
-        return _construct(NoiseConfig, self.noise, f"profile {self.name!r}: field 'noise")
+        return _construct(NoiseConfig, self.noise, f"profile {self.name!r}", "noise")
 
     def sim_config(self, base: SimConfig | None = None) -> SimConfig:
         """``base`` (default :class:`SimConfig`) flying this UAV."""
@@ -124,7 +120,7 @@ class UavProfile:
         """This profile with UAV settings (``takeoff_delay_s``, ``takeoff_hold_s``, ``planner.<field>``: what a
         test's ``uav.*`` params or a calibration set) written into it."""
         timing, planner = _split_settings(
-            settings, lambda key: InvalidProfile(f"profile {self.name!r}: unknown UAV setting {key!r}"))
+            settings, lambda key, bad: InvalidProfile(f"profile {self.name!r}: UAV setting {key!r}: {bad}"))
         return dataclasses.replace(self, name=name or self.name, planner={**self.planner, **planner},
                                    **{k: float(v) for k, v in timing.items()},
                                    description=self.description if description is None else description)
@@ -138,7 +134,7 @@ class UavProfile:
                 "timeout_s": self.timeout_s, "obstacle_collision_scale": self.obstacle_collision_scale}
 
 
-TIMING_SETTINGS = ("takeoff_delay_s", "takeoff_hold_s")  # UAV settings that are profile fields, not the planner's
+TIMING_SETTINGS = UAV_TIMINGS  # UAV settings that are profile fields, not the planner's
 
 
 @dataclass(frozen=True, slots=True)
@@ -207,16 +203,8 @@ def with_uav_settings(config: SimConfig, settings: Mapping[str, float]) -> SimCo
     or invalid one raises :class:`InvalidTestCase` naming the test's param."""
     if not settings:
         return config
-    for name, value in settings.items():
-        if not _number(value):
-            raise InvalidTestCase(f"params.uav.{name}: expected a finite number, got {value!r}")
-    timing, planner = _split_settings(settings, lambda name: InvalidTestCase(
-        f"params.uav.{name}: unknown UAV setting (expected one of {list(TIMING_SETTINGS)} or planner.<field>)"))
-    changes: dict[str, Any] = {}
-    for name, value in timing.items():
-        if value < 0:
-            raise InvalidTestCase(f"params.uav.{name}: expected a number >= 0, got {value!r}")
-        changes[name] = float(value)
+    timing, planner = _split_settings(settings, lambda name, bad: InvalidTestCase(f"params.uav.{name}: {bad}"))
+    changes: dict[str, Any] = {name: float(value) for name, value in timing.items()}
     if planner:
         base = config.avoidance_config
         if base is None:
@@ -234,17 +222,21 @@ def with_uav_settings(config: SimConfig, settings: Mapping[str, float]) -> SimCo
     return dataclasses.replace(config, **changes)
 
 
-def _split_settings(settings: Mapping[str, float], unknown) -> tuple[dict[str, float], dict[str, float]]:
-    """UAV settings as (profile timings, planner fields without their ``planner.`` prefix); ``unknown(name)`` is
-    the error raised for anything else."""
+def _split_settings(settings: Mapping[str, float], error) -> tuple[dict[str, float], dict[str, float]]:
+    """UAV settings as (profile timings, planner fields without their ``planner.`` prefix), each a finite number in
+    its physical range (ranges.RANGES); ``error(name, what is wrong)`` is the error raised otherwise, and for a
+    name that is no setting."""
     timing, planner = {}, {}
     for name, value in settings.items():
+        if name not in TIMING_SETTINGS and not name.startswith("planner."):
+            raise error(name, f"unknown UAV setting (expected one of {list(TIMING_SETTINGS)} or planner.<field>)")
+        bad = problem(name, value) or (None if _number(value) else f"expected a finite number, got {value!r}")
+        if bad:
+            raise error(name, bad)
         if name in TIMING_SETTINGS:
             timing[name] = value
-        elif name.startswith("planner."):
-            planner[name.removeprefix("planner.")] = value
         else:
-            raise unknown(name)
+            planner[name.removeprefix("planner.")] = value
     return timing, planner
 
 
@@ -252,15 +244,20 @@ def _number(value) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
 
 
-def _construct(cls, values: Mapping[str, Any], where: str):
+def _construct(cls, values: Mapping[str, Any], where: str, section: str):
+    """``cls(**values)`` for the profile's ``section`` (planner, sensor, noise): each value in its physical range
+    (ranges.RANGES), else a one-line InvalidProfile naming ``section.key``."""
     names = {f.name for f in dataclasses.fields(cls)}
-    for key in values:
+    for key, value in values.items():
         if key not in names:
-            raise InvalidProfile(f"{where}.{key}': unknown key (expected one of {sorted(names)})")
+            raise InvalidProfile(f"{where}: field '{section}.{key}': unknown key (expected one of {sorted(names)})")
+        bad = problem(f"{section}.{key}", value)
+        if bad:
+            raise InvalidProfile(f"{where}: field '{section}.{key}': {bad}")
     try:
         return cls(**dict(values))
     except (TypeError, ValueError) as err:
-        raise InvalidProfile(f"{where}': {err}") from None
+        raise InvalidProfile(f"{where}: field '{section}': {err}") from None
 
 
 # PX4 v1.12.3 SITL + PX4-Avoidance + Gazebo Iris, as Aerialist and the UAV Testing Competition fly it
@@ -319,6 +316,7 @@ def load_profile(name_or_path) -> UavProfile:
         raise InvalidProfile(f"--uav {key!r}: not a preset ({', '.join(PRESETS)}) nor a .yaml file")
     from ..testcase import safe_yaml
 
+    regular_file(path, "profile", InvalidProfile)
     try:
         doc = safe_yaml(path.read_text(encoding="utf-8"), key)
     except OSError as err:

@@ -76,7 +76,7 @@ def test_cli_train_and_eval(rq1_stores, tmp_path, capsys):
     assert main(["surrogate", "eval", str(tmp_path / "nope"), str(rq1_stores[1])]) == 2
     assert "not a surrogate model" in capsys.readouterr().err
     assert main(["surrogate", "eval", str(out), str(rq1_stores[1]), "--plot", "/proc/no/eval.png"]) == 2
-    assert "/proc/no/eval.png: cannot write the plot" in capsys.readouterr().err
+    assert "--plot /proc/no/eval.png: cannot write in /proc" in capsys.readouterr().err
     assert main(["surrogate", "train", str(rq1_stores[0]), "--out", str(out), "--holdout", "1"]) == 2
     assert "needs at least 2 stores" in capsys.readouterr().err
 
