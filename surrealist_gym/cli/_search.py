@@ -12,7 +12,7 @@ from contextlib import closing, contextmanager
 from datetime import datetime
 from pathlib import Path
 
-from ..errors import InfrastructureError, SurrealistError, one_line
+from ..errors import InfrastructureError, SurrealistError, one_line, regular_file
 from .options import RUN_FILE, SearchOptions, check_writable
 
 
@@ -171,8 +171,9 @@ def measured_prescreen(options: SearchOptions) -> SearchOptions:
     if not options.surrogate or options.surrogate == "online" or expert:
         return options
     try:
-        common = json.loads((Path(options.surrogate) / "meta.json").read_text()).get("common_noise")
-    except (OSError, ValueError, AttributeError):
+        meta = regular_file(Path(options.surrogate) / "meta.json", "surrogate model file")
+        common = json.loads(Path(meta).read_text()).get("common_noise")
+    except (SurrealistError, OSError, ValueError, AttributeError):
         return options  # the model's own loading reports what is wrong with it
     settings = dict(MEASURED_PRESCREEN.get((common, options.command), {}))
     if not settings:

@@ -18,6 +18,7 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from .. import data_path
     from ..envs.generate import GenerateEnv
+    from ..errors import InvalidTestCase
     from ..mutators import AUTHORS_ORDER, default_mutators
     from ..testcase import load_test
 
@@ -36,10 +37,15 @@ def run(args) -> int:
         if options.wind:
             from ..mutators import MOVE_KINDS, wind_mutators
             mutators = (mutators or default_mutators(seed, MOVE_KINDS, obstacles=[0])) + wind_mutators()
-        env = GenerateEnv(seed_test=options.test, runs=options.runs, budget=options.budget, mutators=mutators,
-                          aggregate=options.aggregate, executor=options.dask_scheduler,
-                          store=out / "evaluations.sqlite", random_seed=options.random_seed,
-                          workers=options.workers, sim_config=sim_config_of(options))
+        try:
+            env = GenerateEnv(seed_test=options.test, runs=options.runs, budget=options.budget, mutators=mutators,
+                              aggregate=options.aggregate, executor=options.dask_scheduler,
+                              store=out / "evaluations.sqlite", random_seed=options.random_seed,
+                              workers=options.workers, sim_config=sim_config_of(options))
+        except InvalidTestCase as err:  # a uav.* field of the seed test: name its file
+            if options.test and not str(err).startswith(str(options.test)):
+                raise InvalidTestCase(f"{options.test}: {err}") from None
+            raise
         return run_search(env, options, out, "generate")
 
 

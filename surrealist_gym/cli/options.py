@@ -201,6 +201,9 @@ class GenerateOptions(SearchOptions):
         super().check(where)
         if self.confirm < 0 or isinstance(self.confirm, bool):
             raise SurrealistError(f"{where('confirm')}: expected a whole number >= 0, got {self.confirm!r}")
+        if self.case_study is not None and not str(self.case_study).strip():
+            raise SurrealistError(f"{where('case_study')}: expected mission1, mission2, mission3 or a case study "
+                                  f"YAML, got an empty name")
         if self.case_study is not None and self.test is not None:
             raise SurrealistError(f"{where('case_study')}: a case study brings its own mission; give it or a seed "
                                   f"test, not both")
