@@ -92,6 +92,23 @@ def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, Te
     return out
 
 
+def flight_configs(tests: Sequence[tuple[Path, TestCase]], profiles: Sequence) -> list:
+    """The SimConfig each test flies with (its profile's); a test whose ``uav.*`` settings its UAV cannot take
+    (an unknown planner field, a value out of range) is a one-line InvalidTestCase naming its file, before any
+    flight."""
+    from .sim.profiles import test_uav_settings, with_uav_settings
+
+    configs = []
+    for (path, test), profile in zip(tests, profiles):
+        config = profile.sim_config()
+        try:
+            with_uav_settings(config, test_uav_settings(test))
+        except InvalidTestCase as err:
+            raise InvalidTestCase(f"{path}: {err}") from None
+        configs.append(config)
+    return configs
+
+
 def rule_broken(test: TestCase) -> str:
     """The first of the competition's rules the test breaks (and how many more), or "" when it keeps them all."""
     from .competition import violations
@@ -357,7 +374,7 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
         raise SurrealistError(f"runs: expected a whole number >= 1, got {runs!r}")
     given = None if uav is None else load_profile(uav)
     profiles = [given or default_profile(test) for _, test in tests]
-    configs = [p.sim_config() for p in profiles]
+    configs = flight_configs(tests, profiles)
     workers = workers or max(1, min(os.cpu_count() or 1, 8))
     have: list[dict] = [{} for _ in tests]
     db = None

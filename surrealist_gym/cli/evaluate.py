@@ -143,9 +143,9 @@ def _m(value, digits: int = 2) -> str:
 def run(args: argparse.Namespace) -> int:
     """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
     summary and write the report."""
-    from ..reevaluation import load_tests, rule_broken
+    from ..reevaluation import flight_configs, load_tests, rule_broken
     from ..scoring import edition
-    from ..sim.profiles import load_profile
+    from ..sim.profiles import default_profile, load_profile
     from ._search import _unlock
     from .options import check_at_least
 
@@ -164,6 +164,7 @@ def run(args: argparse.Namespace) -> int:
     tests = load_tests(args.tests if not (args.resume or scored) else options.files,
                        any_layout=options.any_layout or scored)
     tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
+    flight_configs(tests, [uav or default_profile(test) for _, test in tests])  # uav.* settings the UAV takes
     invalid = {path: broken for path, test in tests if scored and not options.any_layout
                and (broken := rule_broken(test))}
     if scored and len(invalid) == len(tests):
