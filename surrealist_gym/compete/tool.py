@@ -25,7 +25,6 @@ import hashlib
 import json
 import math
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -36,6 +35,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, one_line
+from ..scoring import writing_order
 from .locate import AerialistSource, find_aerialist, tool_apis
 from .server import Flight, SimulationServer
 
@@ -324,10 +324,6 @@ def _problem(plan, returncode, stopped, refused, output, stdout, stderr) -> str 
     return None
 
 
-def _natural(path: Path):
-    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
-
-
 def _digest(path) -> str:
     return hashlib.sha1(Path(path).read_bytes()).hexdigest()
 
@@ -337,7 +333,7 @@ def _written_tests(folder: Path, flights) -> tuple[WrittenTest, ...]:
     obstacles of the flight it came from (the tool copies our ULog as it is)."""
     by_log = {_digest(log): flight for flight in flights for log in flight.logs if Path(log).is_file()}
     tests = []
-    for yaml_file in sorted(folder.glob("*.yaml"), key=_natural):
+    for yaml_file in writing_order(folder.glob("*.yaml")):
         ulg, png = yaml_file.with_suffix(".ulg"), yaml_file.with_suffix(".png")
         ulg, png = (ulg if ulg.is_file() else None), (png if png.is_file() else None)
         flight = by_log.get(_digest(ulg)) if ulg is not None else None
