@@ -26,6 +26,7 @@ COMMANDS = {
     "fidelity": ("surrealist_gym.cli.fidelity", "fly a labelled set of tests and report how far our UAV agrees"),
     "evaluate": ("surrealist_gym.cli.evaluate", "re-fly a suite of tests N times: failure odds, points, diversity"),
     "compete": ("surrealist_gym.cli.compete", "run a UAV Testing Competition tool, unedited, on our simulator"),
+    "export-tool": ("surrealist_gym.cli.export_tool", "write a competition tool that picks its tests on our simulator"),
 }
 
 

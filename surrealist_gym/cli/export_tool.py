@@ -1,0 +1,52 @@
+"""``surrealist export-tool DIR``: write a UAV Testing Competition tool folder that chooses its tests with
+surrealist-gym's simulator and spends the real (PX4 SITL) budget on the best of them.
+
+``python3 DIR/cli.py generate CASE_STUDY BUDGET`` searches the case study in our simulator (``surrealist generate
+--case-study``, ``--sim-budget-factor`` x BUDGET evaluations), executes its ranked failures through Aerialist's agents,
+best first, at most BUDGET, and writes those that fail in their real flight (docs/export-tool.md).
+
+Example::
+
+    surrealist export-tool tmp/tool
+    surrealist compete tmp/tool mission2 10      # the tool, unedited, with our simulator standing in for PX4
+"""
+from __future__ import annotations
+
+import argparse
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``surrealist export-tool``."""
+    from ..export_tool import ToolSettings
+
+    default = ToolSettings()
+    parser.add_argument("dir", metavar="DIR", help="the tool's folder to write (new or empty)")
+    parser.add_argument("--sim-budget-factor", type=int, default=default.sim_budget_factor,
+                        help="the simulator's evaluations per real simulation: the tool's search flies this times "
+                             "BUDGET (default %(default)s)")
+    parser.add_argument("--obstacles", type=int, default=default.obstacles,
+                        help="boxes per test, 1-3 (default %(default)s)")
+    parser.add_argument("--confirm", type=int, default=default.confirm,
+                        help="re-runs of each failure in the simulator before ranking (default %(default)s)")
+    parser.add_argument("--seed", type=int, default=default.seed,
+                        help="seed of the tool's search and of the simulator's noise (default %(default)s)")
+    parser.add_argument("--workers", type=int, default=default.workers,
+                        help="simulator processes the tool uses (default %(default)s: the competition gives a tool "
+                             "1.5 vCPU)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the command; returns the exit code."""
+    from ..export_tool import SETTINGS_FILE, ToolSettings, write_tool
+    from .options import check_writable
+
+    settings = ToolSettings(args.sim_budget_factor, args.obstacles, args.confirm, args.seed, args.workers).check()
+    check_writable(args.dir, "DIR")
+    folder = write_tool(args.dir, settings)
+    print(f"tool written to {folder}/: cli.py, testcase.py, Dockerfile, requirements.txt, README.md, {SETTINGS_FILE}, "
+          f"case_studies/, the surrealist-gym source it installs")
+    print(f"search: {settings.sim_budget_factor} x BUDGET simulator evaluations, {settings.obstacles} boxes, "
+          f"{settings.confirm} re-runs per failure, seed {settings.seed}, {settings.workers} worker(s)")
+    print(f"run it on our simulator: surrealist compete {folder} mission2 10; in the competition: "
+          f"python3 cli.py generate case_studies/mission2.yaml 100 (README.md)")
+    return 0
