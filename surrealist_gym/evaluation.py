@@ -21,7 +21,7 @@ import numpy as np
 from .errors import SurrealistError
 from .fitness import average_runs, generation_fitness
 from .metrics import dtw, frechet
-from .outcomes import outcomes
+from .outcomes import Measure, judged_distance, outcomes
 from .store import EvaluationStore, StoredEvaluation
 from .testcase import TestCase
 from .trajectory import Trajectory
@@ -134,8 +134,9 @@ class GenerationObjective:
         flown = [r for r in runs if len(r.trajectory) > 0]
         if not flown or not test.obstacles:
             return NO_SCORE
+        kept = [judged_distance(r, Measure.COMPETITION) for r in flown]  # each run's own, as it was flown
         result = generation_fitness([r.trajectory for r in flown], test.obstacles, self.aggregate,
-                                    measure=self.measure)
+                                    measure=self.measure, competition=None if np.isnan(kept).any() else kept)
         judged = outcomes(flown, self.measure)
         terms = {"sum_dist": list(result.sum_dist), "min_dist": list(result.min_dist), "riskiest": result.riskiest,
                  "unsafe": judged.unsafe, "crash": judged.crashes}

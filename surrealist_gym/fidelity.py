@@ -23,7 +23,7 @@ import math
 import os
 import time
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -33,7 +33,6 @@ from .errors import SurrealistError
 from .outcomes import BLOCKED as _BLOCKED
 from .outcomes import UNSAFE_DISTANCE_M, RunStatus
 from .frozendict import FrozenDict
-from .geometry import competition_distance
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
 from .statistics import vargha_delaney_a12
 from .testcase import TestCase
@@ -81,13 +80,15 @@ def sim_config_for(uav=None, config=None):
 
 
 def fly_test(test: TestCase, runs: int, seed: int, config=None, buffer: float = 0.0) -> tuple[RunOutcome, ...]:
-    """Fly ``runs`` runs of a test and reduce each to a :class:`RunOutcome` (the function the workers call)."""
+    """Fly ``runs`` runs of a test and reduce each to a :class:`RunOutcome` (the function the workers call); the
+    distance is the run's competition distance with its polyline buffered by ``buffer`` [m]."""
     from .executors import fly
+    from .sim import SimConfig
 
     out = []
+    config = replace(config or SimConfig(), competition_buffer_m=buffer)
     for r in fly(test, range(runs), seed, config):
-        traj = r.trajectory
-        distance = competition_distance(traj, test.obstacles, buffer) if len(traj) else math.nan
+        distance = r.competition_distance if len(r.trajectory) else math.nan
         out.append(RunOutcome(str(getattr(r.status, "value", r.status)), distance,
                               airborne_time(r.true_t, r.true_xyz), float(r.duration), r.message))
     return tuple(out)

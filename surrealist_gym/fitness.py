@@ -129,7 +129,8 @@ def run_distances(run: TrajectoryLike, obstacles: Sequence[Obstacle], dims: int 
 
 def generation_fitness(runs: Sequence[TrajectoryLike], obstacles: Sequence[Obstacle],
                        aggregate: Aggregate | str = Aggregate.RISKIEST, dims: int = 2,
-                       measure: Measure | str = Measure.PAPER) -> GenerationFitness:
+                       measure: Measure | str = Measure.PAPER,
+                       competition: Sequence[float] | None = None) -> GenerationFitness:
     """Fitness of a generation test (paper eq. 2): ``-(sum_dist + 2 * min_dist)`` of its riskiest run.
 
     Args:
@@ -139,6 +140,8 @@ def generation_fitness(runs: Sequence[TrajectoryLike], obstacles: Sequence[Obsta
         dims: 2 for the paper's footprint distance, 3 to account for obstacle base and top.
         measure: ``"paper"`` (default) or ``"competition"``: the run's ``min_dist`` is then the competition's
             distance (footprint to the trajectory's polyline).
+        competition: with ``measure="competition"``, the runs' competition distances as flown (a simulated run's
+            ``competition_distance``: Aerialist's pipeline on its logged samples); default: measured on ``runs``.
 
     Returns:
         A :class:`GenerationFitness`.
@@ -149,7 +152,9 @@ def generation_fitness(runs: Sequence[TrajectoryLike], obstacles: Sequence[Obsta
         raise ValueError("runs: expected at least one run, got none")
     per_run = [run_distances(r, obstacles, dims) for r in runs]
     sums = tuple(s for s, _ in per_run)
-    if Measure(measure) is Measure.COMPETITION:
+    if Measure(measure) is Measure.COMPETITION and competition is not None:
+        mins = tuple(float(d) for d in competition)
+    elif Measure(measure) is Measure.COMPETITION:
         mins = tuple(competition_distance(r, obstacles) for r in runs)
     else:
         mins = tuple(m for _, m in per_run)

@@ -358,7 +358,7 @@ class Evaluation:
 
 def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 0, uav=None,
              workers: int | None = None, progress: Callable[[int, int], None] | None = None, store=None,
-             identity: dict | None = None) -> Evaluation:
+             identity: dict | None = None, buffer: float = 0.0) -> Evaluation:
     """Fly ``runs`` runs of each (file, test) (from :func:`load_tests`) and compute the report's figures.
 
     ``uav``: a profile name, YAML or :class:`~surrealist_gym.sim.profiles.UavProfile` for every test (default: each
@@ -366,7 +366,8 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     (:class:`~surrealist_gym.store.EvaluationStore`) that holds this evaluation's runs: those it holds are read back,
     not flown, and each chunk flown is written to it as it completes. It records the evaluation's identity
     (:func:`evaluation_identity`, with ``identity``: anything else the runs depend on), so a store of another
-    evaluation is refused in one line."""
+    evaluation is refused in one line. ``buffer``: the competition distance's polyline buffer [m] (``--buffer``,
+    ``SimConfig.competition_buffer_m``)."""
     from .sim.profiles import default_profile, load_profile
     from .suite import Suite
 
@@ -374,7 +375,7 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
         raise SurrealistError(f"runs: expected a whole number >= 1, got {runs!r}")
     given = None if uav is None else load_profile(uav)
     profiles = [given or default_profile(test) for _, test in tests]
-    configs = flight_configs(tests, profiles)
+    configs = [replace(c, competition_buffer_m=buffer) for c in flight_configs(tests, profiles)]
     workers = workers or max(1, min(os.cpu_count() or 1, 8))
     have: list[dict] = [{} for _ in tests]
     db = None

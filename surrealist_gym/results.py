@@ -1,4 +1,4 @@
-"""The results folder of a search: best test (Aerialist YAML + its mission), evaluations.csv, summary.json, and
+"""The results folder of a search: best test (Aerialist YAML + its files), evaluations.csv, summary.json, and
 plots in the paper's style (Figure 1: real vs seed vs best, top view and altitude, horizontal speed and distance
 to the goal over time; Figure 2: fitness over evaluations and per-run minimum distances of seed and best).
 
@@ -10,16 +10,14 @@ from __future__ import annotations
 
 import csv
 import json
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
-from .mission import write_plan
 from .store import EvaluationStore
 from .sim.profiles import save_profile, test_uav_settings
-from .testcase import save_test
+from .testcase import export_test
 from .trajectory import Profile, profile
 
 
@@ -29,11 +27,7 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
     out.mkdir(parents=True, exist_ok=True)
     env = env.unwrapped
     seed_eval, best_eval = env.seed_evaluation, env.best
-    best_test = best_eval.test
-    if best_test.mission is not None:
-        write_plan(best_test.mission, out / "best-mission.plan")
-        best_test = replace(best_test, mission_file=str((out / "best-mission.plan").resolve()), params_file=None)
-    save_test(best_test, out / "best.yaml")
+    export_test(best_eval.test, out / "best.yaml")  # its files copied into the folder: Aerialist loads it from there
     measure = Measure(getattr(env, "distance_measure", Measure.PAPER))
     rows = write_evaluations_csv(env.evaluator.store, out / "evaluations.csv", measure)
     best_outcomes = outcomes(best_eval.runs, measure)

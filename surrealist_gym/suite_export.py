@@ -1,40 +1,21 @@
 """A suite of distinct failures as files: Aerialist YAMLs ready to re-run on PX4, a table, and a top view of each.
 
-``export_suite(suite, folder, order)`` writes each member twice, with the current Aerialist keys
-(``robot``/``mission``) in ``folder/`` and with the competition's keys (``drone``/``test``, Aerialist before 2024) in
-``folder/legacy/``, as ``failure-01.yaml``, ``failure-02.yaml``, ... in the given order (the best first: the 2025
-edition evaluates the first 20 a tool wrote). The mission, parameter and command files are copied into
-``folder/case_studies/`` (and ``legacy/case_studies/``), so each YAML names them by the relative path the
-competition's own YAMLs use and the folder can be moved as a whole.
+``export_suite(suite, folder, order)`` writes each member as ``failure-01.yaml``, ``failure-02.yaml``, ... in the
+given order (the best first: the 2025 edition evaluates the first 20 a tool wrote), each loading in Aerialist master
+and 0.2.x alike (:func:`~surrealist_gym.testcase.save_test`). The mission, parameter and command files are copied
+into ``folder/case_studies/`` (:func:`~surrealist_gym.testcase.export_test`), so each YAML names them by the relative
+path the competition's own YAMLs use; the folder's README says to run Aerialist from it, and the folder moves as a
+whole.
 """
 from __future__ import annotations
 
 import csv
 import math
-import shutil
-from dataclasses import replace
 from pathlib import Path
 from typing import Sequence
 
 from .suite import Member, Suite, layout_distance, trajectory_distance
-from .testcase import TestCase, save_test
-
-FILES_FOLDER = "case_studies"
-
-
-def _with_copied_files(test: TestCase, folder: Path) -> TestCase:
-    """The test naming copies of its mission/params/commands files in ``folder/case_studies``."""
-    files = folder / FILES_FOLDER
-    changes = {}
-    for key in ("mission_file", "params_file", "commands_file"):
-        source = getattr(test, key)
-        if source:
-            files.mkdir(parents=True, exist_ok=True)
-            target = files / Path(source).name
-            if not target.exists():
-                shutil.copyfile(source, target)
-            changes[key] = str(target.resolve())
-    return replace(test, **changes)
+from .testcase import export_test
 
 
 def member_name(index: int) -> str:
@@ -44,19 +25,16 @@ def member_name(index: int) -> str:
 def export_suite(suite: Suite, folder, order: Sequence[int] | None = None,
                  expected: Sequence[float] | None = None) -> list[Path]:
     """Write the members in ``order`` (indices into ``suite.members``; default: as they are) as ``failure-NN.yaml``
-    (robot/mission keys) and ``legacy/failure-NN.yaml`` (drone/test keys), plus ``suite.csv`` (with each member's
-    ``expected`` test score, when given); returns the current-key YAMLs in that order."""
+    with their files (:func:`~surrealist_gym.testcase.export_test`), plus ``suite.csv`` (with each member's
+    ``expected`` test score, when given); returns the YAMLs in that order."""
     folder = Path(folder)
-    legacy = folder / "legacy"
-    legacy.mkdir(parents=True, exist_ok=True)
+    folder.mkdir(parents=True, exist_ok=True)
     order = list(range(len(suite.members)) if order is None else order)
     paths = []
     for k, i in enumerate(order):
-        name = member_name(k) + ".yaml"
-        member = suite.members[i]
-        save_test(_with_copied_files(member.test, folder), folder / name)
-        save_test(_with_copied_files(member.test, legacy), legacy / name, legacy=True)
-        paths.append(folder / name)
+        path = folder / (member_name(k) + ".yaml")
+        export_test(suite.members[i].test, path)
+        paths.append(path)
     with open(folder / "suite.csv", "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(["test", "evaluation", "status", "distance_m", "points", "obstacles",

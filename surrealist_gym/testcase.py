@@ -2,7 +2,13 @@
 
 Obstacle frame (PRODUCT.md): ``x, y`` = footprint centre (x north, y east), ``z`` = base height (0 = on the ground),
 ``r`` = yaw in degrees, positive from north toward east; ``l`` along the obstacle's x axis, ``w`` along y, ``h`` up.
-A cylinder (Aerialist's TREE) has diameter ``l`` (= ``w``).
+A cylinder has diameter ``l`` (= ``w``); Aerialist's YAML gives its radius as ``size.r``.
+
+The YAML is Aerialist's, as both generations in use read and write it (docs/aerialist-yaml.md): :func:`save_test`
+writes what Aerialist master (``robot``/``mission``) and 0.2.x (``drone``/``test``) both load with geometry, and
+:func:`load_test` reads what either writes; a field that changes the flight and cannot be simulated is a one-line
+error, one that Aerialist's own flight would not miss a one-line warning naming the file. :func:`export_test` writes
+a YAML whose files travel with its folder.
 """
 from __future__ import annotations
 
@@ -10,6 +16,8 @@ import csv
 import functools
 import json
 import math
+import shutil
+import warnings
 from dataclasses import dataclass, field, fields, replace
 from enum import Enum
 from pathlib import Path
@@ -26,6 +34,9 @@ class Shape(str, Enum):
     CYLINDER = "cylinder"
 
 
+#: Shape names read (in any case), by the shape they mean. Aerialist compares ``box`` and ``cylinder`` with ``==``
+#: and builds any other name without geometry: the YAML loader reads the others (surrealist-gym's earlier ``BOX``
+#: and ``TREE``) with a warning.
 _SHAPE_NAMES = {"box": Shape.BOX, "apartment": Shape.BOX, "cylinder": Shape.CYLINDER, "tree": Shape.CYLINDER}
 MAX_EXTENT_M = 10_000.0  # [m] obstacles beyond this size or distance are a typo, not a test
 
@@ -59,6 +70,8 @@ class Obstacle:
         if self.z < 0:
             raise InvalidTestCase(f"obstacle position 'z' (base height) must be >= 0, got {self.z:g}")
         object.__setattr__(self, "shape", _parse_shape(self.shape))
+        if self.shape == Shape.CYLINDER:
+            object.__setattr__(self, "w", self.l)  # a cylinder's size is its diameter l
 
     # --- geometry -----------------------------------------------------------------------------------------------
     def footprint(self) -> list[tuple[float, float]]:
@@ -95,18 +108,19 @@ class Obstacle:
         return [self.l, self.w, self.h, self.x, self.y, self.z, self.r]
 
     def to_dict(self) -> dict:
-        """Aerialist's dict form."""
-        shape = "BOX" if self.shape == Shape.BOX else "TREE"
-        return {"size": {"l": self.l, "w": self.w, "h": self.h},
-                "position": {"x": self.x, "y": self.y, "z": self.z, "r": self.r}, "shape": shape}
+        """Aerialist's dict form, as both generations read it: ``shape`` ``box`` or ``cylinder`` (lower case),
+        ``size.r`` a cylinder's radius (0 for a box)."""
+        return {"shape": self.shape.value,
+                "size": {"l": self.l, "w": self.w, "h": self.h, "r": self.l / 2 if self.shape == Shape.CYLINDER else 0},
+                "position": {"x": self.x, "y": self.y, "z": self.z, "r": self.r}}
 
 
 def _parse_shape(value) -> Shape:
     if isinstance(value, Shape):
         return value
-    shape = _SHAPE_NAMES.get(str(value).lower())
+    shape = _SHAPE_NAMES.get(value.lower()) if isinstance(value, str) else None
     if shape is None:
-        raise InvalidTestCase(f"obstacle field 'shape': unknown shape {value!r} (expected BOX or TREE/CYLINDER)")
+        raise InvalidTestCase(f"obstacle field 'shape': unknown shape {value!r} (expected box or cylinder)")
     return shape
 
 
@@ -237,7 +251,8 @@ class TestCase:
     File references are kept as absolute paths (``mission_file``, ``params_file``, ``commands_file``,
     ``reference_log``); ``mission`` and ``params`` hold their loaded contents. ``assertion_log`` is the real flight
     the YAML's assertion names, as written, when the file is not at hand (else ``reference_log`` holds it).
-    A mutation makes a new value (``dataclasses.replace`` or :meth:`with_obstacles`).
+    ``timeout`` is the test's own time limit [s of simulated time] (Aerialist's ``simulation.timeout``), None when it
+    gives none. A mutation makes a new value (``dataclasses.replace`` or :meth:`with_obstacles`).
     """
 
     __test__ = False  # not a pytest class
@@ -253,8 +268,13 @@ class TestCase:
     reference_log: str | None = None
     home: tuple[float, float, float] | None = None
     assertion_log: str | None = None
+    timeout: float | None = None
 
     def __post_init__(self):
+        if self.timeout is not None:
+            if not _finite(self.timeout) or self.timeout <= 0:
+                raise InvalidTestCase(f"timeout: expected a positive number of seconds, got {self.timeout!r}")
+            object.__setattr__(self, "timeout", float(self.timeout))
         obstacles = tuple(self.obstacles)
         for i, o in enumerate(obstacles):
             if not isinstance(o, Obstacle):
@@ -289,30 +309,52 @@ class TestCase:
 
     def key(self) -> str:
         """A canonical JSON string of what the simulation depends on (memo and store key)."""
-        return json.dumps({
+        what = {
             "mission": None if self.mission is None else self.mission.to_plan()["mission"]["items"],
             "home": None if self.mission is None else list(self.mission.home),
             "obstacles": [[round(v, 9) for v in o.to_list()] + [o.shape.value] for o in self.obstacles],
             "params": dict(sorted(self.params.items())),
             "wind": None if self.wind is None else self.wind.to_dict(),
             "commands": [c.to_dict() for c in self.commands],
-        }, sort_keys=True)
+        }
+        if self.timeout is not None:  # only then: the keys of tests without one stay as they were
+            what["timeout"] = self.timeout
+        return json.dumps(what, sort_keys=True)
 
 
 # --- YAML --------------------------------------------------------------------------------------------------------
-_SECTIONS = {"robot", "drone", "simulation", "mission", "test", "assertion", "agent"}
+#: Top-level sections: Aerialist master's (robot, simulation, mission, assertion, agent), 0.2.x's (drone, test) and
+#: ``surrealist``, which both Aerialist generations ignore: it names a real flight the assertion cannot (not at hand).
+_SECTIONS = {"robot", "drone", "simulation", "mission", "test", "assertion", "agent", "surrealist"}
 _ROBOT_KEYS = {"port", "params", "params_file", "mission_file"}
-_SIM_KEYS = {"simulator", "world", "speed", "headless", "obstacles", "home_position", "wind", "timeout",
-             "world_file_name"}
+_SIM_KEYS = {"simulator", "world", "speed", "headless", "obstacles", "home_position", "wind", "timeout"}
 _MISSION_KEYS = {"commands", "commands_file", "speed", "waypoints"}
-_ASSERT_KEYS = {"log_file", "variable", "expectation"}
+_ASSERT_KEYS = {"log_file", "variable"}
+_AGENT_KEYS = {"engine", "count", "path", "id"}
+_OWN_KEYS = {"assertion_log"}
+#: Aerialist's PX4 ports (RobotConfig, DroneConfig) by the names both generations read; 14550 is a real vehicle's.
+PORTS = {"sitl": 14540, "sim": 14540, "px4_sitl": 14540, "ros": 14541, "avoidance": 14541, "px4_ros": 14541,
+         "cf": 14550, "hw": 14550, "px4_cf": 14550}
+SITL_PORT, AVOIDANCE_PORT, VEHICLE_PORT = 14540, 14541, 14550
+SIMULATORS = ("gazebo", "ros", "jmavsim")
+AGENTS = ("local", "docker", "k8s")
+#: Where :func:`export_test` copies the files a test names (the folder the competition's own YAMLs name them in).
+FILES_FOLDER = "case_studies"
+_FILE_FIELDS = ("mission_file", "params_file", "commands_file", "reference_log")
+README_TITLE = "# Aerialist test cases"
 
 
 def load_test(path) -> TestCase:
-    """Load an Aerialist test-case YAML (legacy ``drone``/``test`` or current ``robot``/``mission`` keys).
+    """Load an Aerialist test-case YAML, as Aerialist master or 0.2.x writes it (docs/aerialist-yaml.md).
 
-    Relative file paths are resolved against the YAML's folder, then its parents (the paper's seeds name paths
-    relative to their repository root), then by file name in the YAML's folder.
+    Sections under either generation's names (``robot``/``drone``, ``mission``/``test``; both given: they must be
+    equal). Obstacles in the flat form ``[l,w,h,x,y,z,r]*`` or as dicts (``shape`` box or cylinder, ``size.r`` a
+    cylinder's radius). The simulation's ``timeout`` (times its ``speed``: Aerialist's clock is the wall's) limits the
+    flight. What cannot be flown is a one-line error naming the file and field (a real vehicle's port, an unknown
+    simulator or field); what Aerialist's flight would not miss is read with one warning line naming the file
+    (a shape name Aerialist reads without geometry, jMAVSim, ``agent.count``). Relative file paths are resolved
+    against the YAML's folder, then its parents (the paper's seeds name paths relative to their repository root),
+    then by file name in the YAML's folder.
     """
     path = Path(path)
     name = regular_file(path, "test case", InvalidTestCase)
@@ -328,10 +370,15 @@ def load_test(path) -> TestCase:
     unknown = set(doc) - _SECTIONS
     if unknown:
         raise InvalidTestCase(f"{name}: unknown section {sorted(unknown)[0]!r} (expected {sorted(_SECTIONS)})")
-    robot = _section(doc, name, "robot", "drone", _ROBOT_KEYS)
-    sim = _section(doc, name, "simulation", None, _SIM_KEYS)
-    mis = _section(doc, name, "mission", "test", _MISSION_KEYS)
-    assertion = _section(doc, name, "assertion", None, _ASSERT_KEYS)
+    robot, robot_key = _section(doc, name, "robot", "drone", _ROBOT_KEYS)
+    sim, _ = _section(doc, name, "simulation", None, _SIM_KEYS)
+    mis, mission_key = _section(doc, name, "mission", "test", _MISSION_KEYS)
+    assertion, _ = _section(doc, name, "assertion", None, _ASSERT_KEYS)
+    agent, _ = _section(doc, name, "agent", None, _AGENT_KEYS)
+    own, _ = _section(doc, name, "surrealist", None, _OWN_KEYS)
+    notes: list[str] = []  # read with a warning: one line for the file
+    avoidance = _uses_avoidance(robot, robot_key, sim, name, notes)
+    speed = _check_run_settings(sim, mis, mission_key, assertion, agent, name, notes)
     base = path.resolve().parent
 
     def resolve(key: str, value) -> str | None:
@@ -358,14 +405,14 @@ def load_test(path) -> TestCase:
         if not isinstance(inline, dict):
             raise InvalidTestCase(f"{name}: field 'params': expected a mapping NAME: value, got {inline!r}")
         params.update(inline)
-    if _uses_avoidance(robot, sim) and "COM_OBS_AVOID" not in params:
+    if avoidance and "COM_OBS_AVOID" not in params:
         params["COM_OBS_AVOID"] = 1  # Aerialist's ROS set-up flies PX4-Avoidance
     commands_file = resolve("commands_file", mis.get("commands_file"))
     if mis.get("commands") is not None:
         commands = _parse_commands(mis["commands"], name)
     else:
         commands = _read_commands(commands_file) if commands_file else ()
-    obstacles = _parse_obstacles(sim.get("obstacles"), name)
+    obstacles = _parse_obstacles(sim.get("obstacles"), name, notes)
     wind = None
     if sim.get("wind") is not None:
         if not isinstance(sim["wind"], dict):
@@ -379,23 +426,39 @@ def load_test(path) -> TestCase:
             raise InvalidTestCase(f"{name}: field 'home_position': expected [lat, lon, alt] as numbers (lat in "
                                   f"[-90, 90], lon in [-180, 180]), got {home!r}")
         home = tuple(float(v) for v in home)
-    log = assertion.get("log_file")
-    reference_log = _resolve_path(log, base) if isinstance(log, str) else None
+    timeout = sim.get("timeout")
+    if timeout is not None and not _finite(timeout):
+        raise InvalidTestCase(f"{name}: simulation.timeout: expected a number of seconds (0 or less: none), got "
+                              f"{timeout!r}")
+    log = assertion.get("log_file") if assertion.get("log_file") is not None else own.get("assertion_log")
+    if log is not None and not isinstance(log, str):
+        raise InvalidTestCase(f"{name}: field 'log_file': expected a file path, got {log!r}")
+    reference_log = _resolve_path(log, base) if log else None
+    if notes:
+        warnings.warn(f"{name}: " + "; ".join(notes), stacklevel=2)
     try:
         return TestCase(mission=mission, obstacles=obstacles, params=params, wind=wind, commands=commands,
                         mission_file=mission_file, params_file=params_file, commands_file=commands_file,
                         reference_log=reference_log, home=home,
-                        assertion_log=log if isinstance(log, str) and log and reference_log is None else None)
+                        assertion_log=log if log and reference_log is None else None,
+                        timeout=timeout * speed if timeout is not None and timeout > 0 else None)
     except InvalidTestCase as err:
         raise InvalidTestCase(f"{name}: {err}") from err
 
 
-def save_test(test: TestCase, path, legacy: bool = False) -> None:
-    """Save as Aerialist YAML (current ``robot``/``mission`` keys, or legacy ``drone``/``test``).
+def save_test(test: TestCase, path) -> None:
+    """Save as an Aerialist YAML that Aerialist master and 0.2.x both load with geometry, and :func:`load_test`
+    reads back to an equal test case.
 
-    Obstacles are written in the dict form; parameters inline; file paths relative to the YAML's folder when
-    possible. :func:`load_test` reads the file back to an equal test case.
+    Master reads ``robot``/``mission`` and, given them, ignores ``drone``/``test`` without a warning; 0.2.x reads
+    only ``drone``/``test``: so those sections are written under both names. Obstacles in the dict form with
+    ``shape`` ``box`` or ``cylinder`` and ``size.r`` (:meth:`Obstacle.to_dict`); parameters inline; file paths
+    relative to the YAML's folder when the file lies in it, else absolute (:func:`export_test` copies them in). A
+    real flight named but not at hand goes to the ``surrealist`` section, which Aerialist ignores (its assertion
+    would fail to load). A test with ``wind`` or a ``timeout`` is master's only: 0.2.x has neither.
     """
+    import copy
+
     import yaml
 
     path = Path(path)
@@ -414,39 +477,168 @@ def save_test(test: TestCase, path, legacy: bool = False) -> None:
         sim["home_position"] = list(test.home)
     if test.wind is not None:
         sim["wind"] = test.wind.to_dict()
+    if test.timeout is not None:
+        sim["timeout"] = test.timeout
     mission: dict = {}
     if test.commands:
         mission["commands"] = [c.to_dict() for c in test.commands]
     if test.commands_file:
         mission["commands_file"] = _relative(test.commands_file, base)
-    doc = {"drone" if legacy else "robot": robot, "simulation": sim, "test" if legacy else "mission": mission}
+    # each section its own copy: YAML would write a shared one as an alias, which Aerialist reads and we refuse
+    doc = {"robot": robot, "drone": copy.deepcopy(robot), "simulation": sim,
+           "mission": mission, "test": copy.deepcopy(mission)}
     if test.reference_log:
         doc["assertion"] = {"log_file": _relative(test.reference_log, base), "variable": "trajectory"}
     elif test.assertion_log:
-        doc["assertion"] = {"log_file": test.assertion_log, "variable": "trajectory"}
+        doc["surrealist"] = {"assertion_log": test.assertion_log}
     with open(path, "w", encoding="utf-8") as f:
         yaml.safe_dump(doc, f, sort_keys=False)
 
 
-def _uses_avoidance(robot: dict, sim: dict) -> bool:
-    """Aerialist runs PX4 with PX4-Avoidance when the robot port or the simulator is 'ros' (or 'avoidance')."""
-    return str(robot.get("port", "")).lower() in {"ros", "px4_ros", "avoidance"} or \
-        str(sim.get("simulator", "")).lower() == "ros"
+def export_test(test: TestCase, path) -> None:
+    """Save the test at ``path`` (:func:`save_test`) as a file that travels with its folder: every file it names
+    (mission, parameters, commands, the assertion's flight log) is copied into ``FILES_FOLDER`` beside it and named
+    by a path relative to the YAML's folder, and the folder gets a README saying to run Aerialist from it (Aerialist
+    opens relative paths from its working directory). Files of the same name and other content get ``-2``, ``-3``,
+    ... A copy that fails is a one-line SurrealistError.
+
+    Example::
+
+        >>> export_test(load_test("seed.yaml"), "out/best.yaml")  # out/case_studies/auto1.plan, ...  # doctest: +SKIP
+    """
+    path = Path(path)
+    folder = path.parent
+    copies = {key: _copy_into(getattr(test, key), folder / FILES_FOLDER)
+              for key in _FILE_FIELDS if getattr(test, key)}
+    save_test(replace(test, **copies), path)
+    _write_readme(folder)
 
 
-def _section(doc, name, key, legacy, allowed) -> dict:
+def _copy_into(source: str, files: Path) -> str:
+    """``source`` copied into the folder ``files`` under its own name (or ``NAME-2`` ... when another file holds
+    it); the copy's absolute path. A file already there with the same bytes is the copy."""
+    from .errors import SurrealistError
+
+    source_path = Path(source)
+    try:
+        data = source_path.read_bytes()
+        files.mkdir(parents=True, exist_ok=True)
+        target, n = files / source_path.name, 1
+        while target.exists() and target.read_bytes() != data:
+            n += 1
+            target = files / f"{source_path.stem}-{n}{source_path.suffix}"
+        if not target.exists():
+            shutil.copyfile(source_path, target)
+    except OSError as err:
+        raise SurrealistError(f"{source}: cannot copy it into {files} ({err.strerror or err})") from None
+    return str(target.resolve())
+
+
+def _write_readme(folder: Path) -> None:
+    """The folder's README (not written over one that is not ours)."""
+    readme = folder / "README.md"
+    if readme.exists() and not readme.read_text(encoding="utf-8", errors="replace").startswith(README_TITLE):
+        return
+    readme.write_text(
+        f"{README_TITLE}\n\n"
+        f"The YAML files in this folder load in Aerialist master (`robot`/`mission` keys), Aerialist 0.2.x "
+        f"(`drone`/`test` keys) and surrealist-gym. They name their mission, parameter and command files (and any "
+        f"flight log) by paths relative to this folder, in `{FILES_FOLDER}/`.\n\n"
+        f"Aerialist opens relative paths from its working directory: run it from this folder, e.g.\n\n"
+        f"    cd {folder.name}\n"
+        f"    python3 -m aerialist exec --test NAME.yaml\n\n"
+        f"surrealist-gym resolves them against the YAML's folder, from anywhere: "
+        f"`surrealist simulate {folder.name}/NAME.yaml`. The folder moves as a whole.\n", encoding="utf-8")
+
+
+def _port(value) -> int | None:
+    """The port number Aerialist makes of a ``port`` field (None: Aerialist's RobotConfig sets none)."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int):
+        return value
+    if isinstance(value, str):
+        return int(value) if value.isdigit() else PORTS.get(value)
+    return None
+
+
+def _uses_avoidance(robot: dict, key: str, sim: dict, name: str, notes: list) -> bool:
+    """Whether Aerialist's set-up flies PX4-Avoidance: the robot's port is ``ros`` (14541) or the simulator is
+    ``ros``. A port or simulator that cannot be simulated is an error; jMAVSim is flown with a warning."""
+    port = robot.get("port")
+    if port is not None:
+        number = _port(port)
+        if number == VEHICLE_PORT:
+            raise InvalidTestCase(f"{name}: {key}.port: {port!r} is a real vehicle's (Aerialist's cf/hw port "
+                                  f"{VEHICLE_PORT}), which cannot be simulated; expected sitl ({SITL_PORT}) or ros "
+                                  f"({AVOIDANCE_PORT}, PX4-Avoidance)")
+        if number not in (SITL_PORT, AVOIDANCE_PORT):
+            raise InvalidTestCase(f"{name}: {key}.port: {port!r} is no PX4 SITL port of Aerialist's; expected sitl "
+                                  f"({SITL_PORT}) or ros ({AVOIDANCE_PORT}, PX4-Avoidance)")
+        port = number
+    simulator = sim.get("simulator")
+    if simulator is not None and simulator not in SIMULATORS:
+        raise InvalidTestCase(f"{name}: simulation.simulator: {simulator!r}: expected gazebo, ros (with "
+                              f"PX4-Avoidance) or jmavsim")
+    if simulator == "jmavsim":
+        notes.append("simulation.simulator jmavsim: flown as gazebo is, on the UAV profile's vehicle (--uav), not "
+                     "jMAVSim's quadrotor")
+    return port == AVOIDANCE_PORT or simulator == "ros"
+
+
+def _check_run_settings(sim: dict, mis: dict, mission_key: str, assertion: dict, agent: dict, name: str,
+                        notes: list) -> float:
+    """Check the fields that say how Aerialist runs PX4, not what it flies (docs/aerialist-yaml.md: world, speed,
+    headless, waypoints, agent, the assertion's variable); returns the simulation's speed factor."""
+    def positive(where: str, value) -> float:
+        if not _finite(value) or value <= 0:
+            raise InvalidTestCase(f"{name}: {where}: expected a positive number, got {value!r}")
+        return float(value)
+
+    speed = positive("simulation.speed", sim["speed"]) if sim.get("speed") is not None else 1.0
+    if mis.get("speed") is not None:
+        positive(f"{mission_key}.speed", mis["speed"])
+    for key, kind, what in (("headless", bool, "true or false"), ("world", str, "a world's name")):
+        if sim.get(key) is not None and not isinstance(sim[key], kind):
+            raise InvalidTestCase(f"{name}: simulation.{key}: expected {what}, got {sim[key]!r}")
+    waypoints = mis.get("waypoints")
+    if waypoints is not None and not (isinstance(waypoints, list) and all(
+            isinstance(w, dict) and _finite(w.get("x")) and _finite(w.get("y")) for w in waypoints)):
+        raise InvalidTestCase(f"{name}: {mission_key}.waypoints: expected a list of positions {{x, y, z, r}}, got "
+                              f"{waypoints!r}")
+    if agent:
+        if agent.get("engine") not in AGENTS:
+            raise InvalidTestCase(f"{name}: agent.engine: {agent.get('engine')!r}: expected one of {', '.join(AGENTS)}")
+        count = agent.get("count", 1)
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+            raise InvalidTestCase(f"{name}: agent.count: expected a whole number >= 1, got {count!r}")
+        if count != 1:
+            notes.append(f"agent.count {count}: Aerialist's agent would fly {count} runs; the command's --runs sets "
+                         f"them here")
+    variable = assertion.get("variable")
+    if variable is not None and variable != "trajectory":
+        raise InvalidTestCase(f"{name}: assertion.variable: {variable!r}: only 'trajectory' is supported")
+    return speed
+
+
+def _section(doc, name, key, legacy, allowed) -> tuple[dict, str]:
+    """A section and the name it was read under; given under both names (Aerialist master reads ``key``, 0.2.x
+    ``legacy``), the two must be equal."""
     value = doc.get(key)
-    if value is None and legacy is not None:
-        value = doc.get(legacy)
-        key = legacy if value is not None else key
+    if legacy is not None and doc.get(legacy) is not None:
+        if value is None:
+            value, key = doc[legacy], legacy
+        elif value != doc[legacy]:
+            raise InvalidTestCase(f"{name}: sections {key!r} and {legacy!r} differ (Aerialist master reads {key}, "
+                                  f"0.2.x {legacy}): give one, or the same in both")
     if value is None:
-        return {}
+        return {}, key
     if not isinstance(value, dict):
         raise InvalidTestCase(f"{name}: section {key!r}: expected a mapping, got {value!r}")
     unknown = set(value) - allowed
     if unknown:
         raise InvalidTestCase(f"{name}: {key}.{sorted(unknown)[0]}: unknown field (expected one of {sorted(allowed)})")
-    return value
+    return value, key
 
 
 def _resolve_path(value: str, base: Path) -> str | None:
@@ -489,9 +681,14 @@ def safe_yaml(text: str, name: str):
         raise InvalidTestCase(f"{name}: YAML nested too deeply") from None
 
 
+#: The tag Aerialist master's ``to_yaml`` gives an assertion's variable (its Trajectory class), read as its name.
+TRAJECTORY_TAG = "tag:yaml.org,2002:python/name:aerialist.px4.trajectory.Trajectory"
+
+
 @functools.cache
 def _loader():
-    """A SafeLoader whose floats include exponents without a dot (``1e9``, ``-2E-3``), as in YAML 1.2."""
+    """A SafeLoader whose floats include exponents without a dot (``1e9``, ``-2E-3``), as in YAML 1.2, and that
+    reads Aerialist master's tag of the trajectory variable as ``trajectory`` (no other Python tag)."""
     import re
 
     import yaml
@@ -501,6 +698,7 @@ def _loader():
 
     exponent = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
     Loader.add_implicit_resolver("tag:yaml.org,2002:float", exponent, list("-+0123456789"))
+    Loader.add_constructor(TRAJECTORY_TAG, lambda loader, node: "trajectory")
     return Loader
 
 
@@ -518,7 +716,8 @@ def _construct(cls, values: dict, where: str):
         raise InvalidTestCase(f"{where}: missing field {missing[0] if missing else '?'!r}") from None
 
 
-def _parse_obstacles(raw, name) -> tuple[Obstacle, ...]:
+def _parse_obstacles(raw, name, notes: list | None = None) -> tuple[Obstacle, ...]:
+    """The obstacles of a YAML's ``simulation.obstacles``; what Aerialist reads otherwise is added to ``notes``."""
     if raw is None:
         return ()
     if not isinstance(raw, list):
@@ -534,7 +733,7 @@ def _parse_obstacles(raw, name) -> tuple[Obstacle, ...]:
             except InvalidTestCase as err:
                 raise InvalidTestCase(f"{name}: obstacles[{i // 7}]: {err}") from err
         return tuple(out)
-    out = []
+    out, odd = [], {}  # odd: what Aerialist reads otherwise -> the obstacles concerned
     for i, item in enumerate(raw):
         where = f"{name}: obstacles[{i}]"
         if not isinstance(item, dict):
@@ -544,19 +743,41 @@ def _parse_obstacles(raw, name) -> tuple[Obstacle, ...]:
             raise InvalidTestCase(f"{where}.{sorted(unknown)[0]}: unknown field (expected size, position, shape)")
         size, pos = item.get("size"), item.get("position")
         if not isinstance(size, dict) or not isinstance(pos, dict):
-            raise InvalidTestCase(f"{where}: needs 'size' {{l, w, h}} and 'position' {{x, y, z, r}}")
-        bad = (set(size) - {"l", "w", "h"}) or (set(pos) - {"x", "y", "z", "r", "angle"})
+            raise InvalidTestCase(f"{where}: needs 'size' {{l, w, h, r}} and 'position' {{x, y, z, r}}")
+        bad = (set(size) - {"l", "w", "h", "r"}) or (set(pos) - {"x", "y", "z", "r", "angle"})
         if bad:
             raise InvalidTestCase(f"{where}: unknown field {sorted(bad)[0]!r}")
         try:
-            shape = _parse_shape(item.get("shape", "BOX"))
-            length = size.get("l")
-            width = size.get("w", length if shape == Shape.CYLINDER else None)
-            r = pos.get("r", pos.get("angle", 0.0))
+            given = item.get("shape")
+            shape = _parse_shape("box" if given is None else given)
+            if given not in (None, "box", "cylinder"):
+                odd.setdefault(f"shape {given!r} is read as {shape.value}, but Aerialist builds no geometry for it "
+                               f"(write {shape.value!r})", []).append(i)
+            if "angle" in pos:
+                odd.setdefault("position.angle is read as r, which is what Aerialist reads", []).append(i)
+            length, width = size.get("l"), size.get("w")
+            radius = size.get("r", 0)
+            if not _finite(radius) or radius < 0:
+                raise InvalidTestCase(f"size 'r': expected a number >= 0 (a cylinder's radius), got {radius!r}")
+            if shape == Shape.CYLINDER and radius > 0:
+                if any(_finite(v) and v and abs(v - 2 * radius) > 1e-9 for v in (length, width)):
+                    odd.setdefault("a cylinder's l and w other than 2 r are ignored (its size is its radius r, as "
+                                   "Aerialist measures it)", []).append(i)
+                length = width = 2 * radius
+            elif shape == Shape.CYLINDER and given == "cylinder":
+                raise InvalidTestCase("size 'r': a cylinder needs its radius r > 0 (Aerialist gives it no area "
+                                      "otherwise)")
+            elif shape == Shape.CYLINDER:
+                width = length  # surrealist-gym's earlier TREE: diameter l
+            elif radius:
+                odd.setdefault("size.r of a box is ignored (it is a cylinder's radius; Aerialist ignores it too)",
+                               []).append(i)
             out.append(Obstacle(length, width, size.get("h"), pos.get("x"), pos.get("y"), pos.get("z", 0.0),
-                                r, shape))
+                                pos.get("r", pos.get("angle", 0.0)), shape))
         except InvalidTestCase as err:
             raise InvalidTestCase(f"{where}: {err}") from err
+    if notes is not None:
+        notes.extend(f"obstacles {', '.join(map(str, which))}: {what}" for what, which in odd.items())
     return tuple(out)
 
 

@@ -2,7 +2,9 @@
 
 Frame: local, metres, x north, y east, z UP, origin at the first logged position; time in seconds from the first
 sample. Real and simulated flights go through the same pipeline (:meth:`Trajectory.from_local_position`):
-subtract the first timestamp and the first position, then average consecutive 0.5 s windows.
+subtract the first timestamp and the first position, then average consecutive 0.5 s windows. The competition's
+distance is measured on Aerialist's own pipeline (:meth:`Trajectory.aerialist`), whose windows are closed on the
+right instead.
 """
 from __future__ import annotations
 
@@ -65,21 +67,28 @@ class Trajectory:
         if ts.size == 0:
             raise ValueError("no samples")
         order = np.argsort(ts, kind="stable")
-        ts = ts[order]
-        cols = [np.asarray(c, dtype=np.float64)[order] for c in (x, y, z)]
-        rel_t = ts - ts[0]
-        rel = np.column_stack([cols[0] - cols[0][0], cols[1] - cols[1][0], -(cols[2] - cols[2][0])])
-        h = None if heading is None else np.asarray(heading, dtype=np.float64)[order]
-        if h is not None:
-            h = h - h[0]
-        window_us = int(round(window_s * 1e6))
-        bins = rel_t // window_us
-        starts = np.flatnonzero(np.r_[True, bins[1:] != bins[:-1]])
-        counts = np.diff(np.r_[starts, bins.size])
-        mean_t = np.add.reduceat(rel_t.astype(np.float64), starts) / counts
-        mean_xyz = np.add.reduceat(rel, starts, axis=0) / counts[:, None]
-        mean_h = None if h is None else np.add.reduceat(h, starts) / counts
-        return cls(mean_t / 1e6, mean_xyz, mean_h)
+        rel_t, rel, h = _relative(ts[order], x, y, z, heading, order)
+        return _window_means(cls, rel_t, rel, h, rel_t // int(round(window_s * 1e6)))
+
+    @classmethod
+    def aerialist(cls, timestamp_us, x, y, z, heading=None) -> "Trajectory":
+        """Aerialist's pipeline on raw NED local-position samples: what ``Trajectory.extract_from_log`` of Aerialist
+        0.2.1 and master make of a ULog's ``vehicle_local_position`` (with their defaults), on which they measure
+        the competition's distance.
+
+        As the paper's pipeline, but with Aerialist's ``downsample_time``: the samples are taken in log order (not
+        sorted), and a window takes every next sample whose time is at most its end, so the 0.5 s windows are closed
+        on the right, ``[0, 0.5], (0.5, 1.0], ...`` from the first sample (a window with no sample gives no point;
+        a sample earlier than its predecessor joins the open window). The paper's are ``[0, 0.5), [0.5, 1.0),
+        ...``: on a 10 Hz log each of Aerialist's points lies one sample later than the paper's.
+        """
+        ts = np.asarray(timestamp_us, dtype=np.int64)
+        if ts.size == 0:
+            raise ValueError("no samples")
+        rel_t, rel, h = _relative(ts, x, y, z, heading)
+        period_us = int(round(WINDOW_S * 1e6))  # Aerialist's TRJ_SMPL_PRD, 500000 us
+        bins = np.maximum.accumulate(np.maximum((rel_t - 1) // period_us, 0))  # ceil(t / P) - 1, at least 0
+        return _window_means(cls, rel_t, rel, h, bins)
 
     @classmethod
     def from_array(cls, xyz, dt: float = WINDOW_S) -> "Trajectory":
@@ -153,6 +162,26 @@ class Trajectory:
     def extent(self) -> dict[str, tuple[float, float]]:
         """(min, max) of x, y and z."""
         return {k: (float(self.xyz[:, i].min()), float(self.xyz[:, i].max())) for i, k in enumerate("xyz")}
+
+
+def _relative(ts, x, y, z, heading=None, order=None):
+    """Times [us] and positions (z flipped up) relative to the first sample, and headings relative to its heading,
+    in the given ``order`` of the samples (default: as given)."""
+    take = (lambda a: a) if order is None else (lambda a: a[order])
+    cols = [take(np.asarray(c, dtype=np.float64)) for c in (x, y, z)]
+    rel = np.column_stack([cols[0] - cols[0][0], cols[1] - cols[1][0], -(cols[2] - cols[2][0])])
+    h = None if heading is None else take(np.asarray(heading, dtype=np.float64))
+    return ts - ts[0], rel, None if h is None else h - h[0]
+
+
+def _window_means(cls, rel_t, rel, h, bins) -> Trajectory:
+    """One point per run of equal consecutive ``bins``: the mean time [s], position and heading of its samples."""
+    starts = np.flatnonzero(np.r_[True, bins[1:] != bins[:-1]])
+    counts = np.diff(np.r_[starts, bins.size])
+    mean_t = np.add.reduceat(rel_t.astype(np.float64), starts) / counts
+    mean_xyz = np.add.reduceat(rel, starts, axis=0) / counts[:, None]
+    mean_h = None if h is None else np.add.reduceat(h, starts) / counts
+    return cls(mean_t / 1e6, mean_xyz, mean_h)
 
 
 def as_points(trajectory) -> np.ndarray:

@@ -40,8 +40,8 @@ DEFAULT_RUNS = 5  # runs per test without --competition
 class EvaluateOptions:
     """What an evaluation is run with, as ``run.json`` keeps it: the tests (absolute paths as given), runs per test,
     base seed, UAV profile (a preset's name or a YAML's absolute path), whether the competition's rules are skipped,
-    the workers (the one option ``--resume`` may change) and, with ``--competition``, the edition and each folder's
-    draw (so that a resume flies the same tests)."""
+    the workers (the one option ``--resume`` may change), with ``--competition``, the edition and each folder's
+    draw (so that a resume flies the same tests), and the competition distance's ``--buffer``."""
 
     tests: tuple[str, ...]
     runs: int = 5
@@ -51,6 +51,7 @@ class EvaluateOptions:
     workers: int | None = None
     competition: str | None = None
     draws: tuple[Draw, ...] = ()
+    buffer: float = 0.0
 
     @classmethod
     def from_args(cls, args: argparse.Namespace) -> "EvaluateOptions":
@@ -64,7 +65,7 @@ class EvaluateOptions:
             draw_folder(folder, ed, args.random_seed)
             for folder in dict.fromkeys(str(Path(t).absolute()) for t in args.tests))  # each folder once
         return cls(tuple(str(Path(t).absolute()) for t in args.tests), runs, args.random_seed,
-                   _uav_option(args.uav), args.any_layout, args.workers, ed and ed.name, draws)
+                   _uav_option(args.uav), args.any_layout, args.workers, ed and ed.name, draws, args.buffer)
 
     @property
     def files(self) -> tuple[str, ...]:
@@ -96,6 +97,8 @@ def _uav_option(uav: str | None) -> str | None:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist evaluate``."""
+    from .options import add_buffer_argument
+
     parser.add_argument("tests", metavar="TESTS", nargs="*", help="Aerialist test YAMLs, or folders of them")
     parser.add_argument("--runs", type=int, default=None,
                         help="runs per test (default 5; with --competition the edition's: 2024 5, 2025 3)")
@@ -109,6 +112,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
                         help="UAV profile for every test: px4-v1.12-sitl-iris, px4-vision-case0 or a profile YAML "
                              "(default: each test's own, px4-v1.12-sitl-iris for competition tests)")
+    add_buffer_argument(parser)
     parser.add_argument("--any-layout", action="store_true",
                         help="accept tests outside the competition's rules on obstacles (count, bounds, boxes only)")
     parser.add_argument("--out", metavar="DIR", default=None,
@@ -147,9 +151,10 @@ def run(args: argparse.Namespace) -> int:
     from ..scoring import edition
     from ..sim.profiles import default_profile, load_profile
     from ._search import _unlock
-    from .options import check_at_least
+    from .options import check_at_least, check_buffer
 
     check_at_least(args, runs=1, workers=1)
+    check_buffer(args.buffer)
     if args.resume:
         out, options = _resumed(args)
     else:
@@ -237,7 +242,8 @@ def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
     flags = getattr(args, "_flags", frozenset())
     given = {"tests": (tuple(str(Path(t).absolute()) for t in args.tests) if args.tests else None, None),
              "runs": (args.runs, None), "random_seed": (args.random_seed, 0), "uav": (_uav_option(args.uav), None),
-             "any_layout": (args.any_layout, False), "competition": (args.competition, None)}
+             "any_layout": (args.any_layout, False), "competition": (args.competition, None),
+             "buffer": (args.buffer, 0.0)}
     for name, (value, default) in given.items():
         flag = "TESTS" if name == "tests" else "--" + name.replace("_", "-")
         if (flag in flags or value != default) and value != getattr(options, name):
@@ -271,7 +277,8 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict) ->
         try:
             ev = evaluate(flying, runs=options.runs, seed=options.random_seed, uav=uav, workers=options.workers,
                           progress=progress, store=store,
-                          identity={"any_layout": options.any_layout, "competition": options.competition})
+                          identity={"any_layout": options.any_layout, "competition": options.competition},
+                          buffer=options.buffer)
         finally:
             bar.close()
         board = _board(options, ev, dict(tests), invalid) if options.competition else None

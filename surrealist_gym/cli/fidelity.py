@@ -20,6 +20,8 @@ from ..errors import SurrealistError
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist fidelity``."""
+    from .options import add_buffer_argument
+
     parser.add_argument("labels_set", metavar="LABELS", help="tests CSV, or a folder of Aerialist YAMLs")
     parser.add_argument("--labels", metavar="FILE", help="labels of a YAML folder (default <folder>/labels.csv)")
     parser.add_argument("--mission", metavar="YAML",
@@ -35,22 +37,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--every", type=int, default=1, metavar="K", help="fly every K-th test (default 1)")
     parser.add_argument("--close", type=float, default=3.0, metavar="M",
                         help="the close region: their distance below M metres (default 3)")
-    parser.add_argument("--buffer", type=float, default=0.0, metavar="M",
-                        help="polyline buffer of our competition distance (Aerialist since Oct 2024: 0.125; "
-                             "default 0, as the labels before then)")
+    add_buffer_argument(parser)
     parser.add_argument("--out", metavar="DIR", default="fidelity_out", help="output folder (default fidelity_out)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
 
 def _check(args) -> None:
-    from .options import check_at_least, check_writable
+    from .options import check_at_least, check_buffer, check_writable
 
     check_at_least(args, runs=1, every=1, workers=1, limit=1)
     check_writable(args.out, "--out", "folder")
     if not args.close > 0 or not math.isfinite(args.close):
         raise SurrealistError(f"--close: expected a positive number of metres, got {args.close:g}")
-    if not args.buffer >= 0 or not math.isfinite(args.buffer):
-        raise SurrealistError(f"--buffer: expected a non-negative number of metres, got {args.buffer:g}")
+    check_buffer(args.buffer)
 
 
 def summary_text(report) -> str:

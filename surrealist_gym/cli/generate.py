@@ -41,12 +41,19 @@ def run(args) -> int:
             env = GenerateEnv(seed_test=options.test, runs=options.runs, budget=options.budget, mutators=mutators,
                               aggregate=options.aggregate, executor=options.dask_scheduler,
                               store=out / "evaluations.sqlite", random_seed=options.random_seed,
-                              workers=options.workers, sim_config=sim_config_of(options))
+                              workers=options.workers, sim_config=_sim_config(options))
         except InvalidTestCase as err:  # a uav.* field of the seed test: name its file
             if options.test and not str(err).startswith(str(options.test)):
                 raise InvalidTestCase(f"{options.test}: {err}") from None
             raise
         return run_search(env, options, out, "generate")
+
+
+def _sim_config(options):
+    """The search's SimConfig (``sim_config_of``) with its ``--buffer``."""
+    from dataclasses import replace
+
+    return replace(sim_config_of(options), competition_buffer_m=options.buffer)
 
 
 def _case_study(args) -> int:
@@ -76,7 +83,7 @@ def _case_study_search(out, options) -> int:
                                    budget=options.budget, aggregate=options.aggregate,
                                    executor=options.dask_scheduler, store=out / "evaluations.sqlite",
                                    random_seed=options.random_seed, workers=options.workers,
-                                   sim_config=sim_config_of(options), wind=options.wind))
+                                   sim_config=_sim_config(options), wind=options.wind))
     code = run_search(env, options, out, "generate")
     if code == 0:
         _write_suite(out, env.suite, options)
@@ -104,7 +111,8 @@ def _write_suite(out, suite, options) -> None:
         try:  # named by member order until they are ranked
             ev = evaluate([(folder / f"{member_name(i)}.yaml", m.test) for i, m in enumerate(members)],
                           runs=options.confirm, seed=options.random_seed + 1, uav=options.uav,
-                          workers=options.workers, progress=lambda done, total: bar.update(done - bar.n))
+                          workers=options.workers, progress=lambda done, total: bar.update(done - bar.n),
+                          buffer=options.buffer)
         finally:
             bar.close()
     runs = ([t.runs for t in ev.tests] if ev is not None
@@ -140,8 +148,8 @@ def _write_suite(out, suite, options) -> None:
         print(f"confirmation: {confirmed} of {len(suite)} fail in >= {CONFIRMED_P:.0%} of {options.confirm} re-runs "
               + (f"({errors} re-runs ended in error and are not counted) " if errors else "")
               + f"(report in {folder / 'confirmation'}/report.md)")
-    print(f"suite in {folder}/: failure-NN.yaml (robot/mission keys, the best first), legacy/ (drone/test keys), "
-          f"suite.csv, suite.png")
+    print(f"suite in {folder}/: failure-NN.yaml (the best first; Aerialist master and 0.2.x load them, run from "
+          f"{folder.name}/: README.md), case_studies/, suite.csv, suite.png")
 
 
 CONFIRMED_P = 0.6  # a failure probability at least this high over the re-runs: the failure is confirmed

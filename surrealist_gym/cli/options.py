@@ -36,6 +36,12 @@ def _opt(default, help: str, **argparse_kwargs):
     return field(default=default, metadata={"help": help, **argparse_kwargs})
 
 
+#: ``--buffer`` of generate, evaluate and fidelity: one meaning, one default (sim.SimConfig.competition_buffer_m).
+BUFFER_HELP = ("half width added to the flight's polyline in the competition distance [m]: 0.125 is Aerialist's since "
+               "Oct 2024, whose figures read that much lower; default 0, Aerialist's before then (and the labelled "
+               "PX4 flights')")
+
+
 @dataclass(frozen=True)
 class SearchOptions:
     """What steers one search (the fields both commands share)."""
@@ -196,6 +202,7 @@ class GenerateOptions(SearchOptions):
                       action="store_true")
     confirm: int = _opt(5, "with --case-study: re-fly each failure of the suite this many times with fresh noise and "
                            "report its failure probability (default {default}; 0: do not)", type=int)
+    buffer: float = _opt(0.0, BUFFER_HELP, type=float, metavar="M")
 
     def check(self, where=lambda name: "--" + name.replace("_", "-")) -> "GenerateOptions":
         super().check(where)
@@ -207,9 +214,22 @@ class GenerateOptions(SearchOptions):
         if self.case_study is not None and self.test is not None:
             raise SurrealistError(f"{where('case_study')}: a case study brings its own mission; give it or a seed "
                                   f"test, not both")
+        check_buffer(self.buffer, where("buffer"))
         if self.case_study is not None and not 1 <= self.obstacles <= 3:
             raise SurrealistError(f"{where('obstacles')}: the competition allows 1 to 3 boxes, got {self.obstacles}")
         return self
+
+
+def add_buffer_argument(parser: argparse.ArgumentParser) -> None:
+    """``--buffer M`` (:data:`BUFFER_HELP`)."""
+    parser.add_argument("--buffer", type=float, default=0.0, metavar="M", help=BUFFER_HELP)
+
+
+def check_buffer(value, where: str = "--buffer") -> float:
+    """``value`` if it is a buffer [m] (a finite number >= 0), else a one-line SurrealistError naming ``where``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
+        raise SurrealistError(f"{where}: expected a non-negative number of metres, got {value!r}")
+    return float(value)
 
 
 def check_at_least(args: argparse.Namespace, **lowest) -> None:
@@ -258,5 +278,5 @@ def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tu
     return path
 
 
-__all__ = ["GenerateOptions", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "check_at_least",
-           "check_writable", "race_stages"]
+__all__ = ["BUFFER_HELP", "GenerateOptions", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions",
+           "add_buffer_argument", "check_at_least", "check_buffer", "check_writable", "race_stages"]

@@ -69,7 +69,6 @@ def _params(items: list[str]) -> dict:
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from .. import load_test
-    from ..geometry import competition_distance
     from ..sim import SimConfig, simulate
 
     from .options import check_at_least, check_writable
@@ -110,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     for r in results:
         row = {"run": r.index, "status": r.status.value, "min_distance_m": round(r.min_distance, 3),
                "min_distance_2d_m": round(r.min_distance_2d, 3),
-               "competition_distance_m": round(competition_distance(r.trajectory, test.obstacles), 3),
+               "competition_distance_m": round(r.competition_distance, 3),
                "duration_s": round(r.duration, 2), "message": r.message}
         if reference is not None:
             from ..metrics import dtw, frechet

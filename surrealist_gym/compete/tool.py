@@ -357,13 +357,16 @@ def _written_tests(folder: Path, flights) -> tuple[WrittenTest, ...]:
 
 def ulog_distance(ulg, test_file) -> float:
     """The competition distance [m] of a ULog's flight to the obstacles of a test (our YAML): the least over the
-    boxes of the distance from the footprint to the 0.5 s trajectory's polyline (unbuffered)."""
+    boxes of the distance from the footprint to the polyline of Aerialist's 0.5 s trajectory of the log
+    (:meth:`~surrealist_gym.trajectory.Trajectory.aerialist`; unbuffered)."""
     from ..competition import load_competition_test
     from ..geometry import competition_distance
     from ..logs import read_flight
+    from ..trajectory import Trajectory
 
     test = load_competition_test(test_file)
-    return float(competition_distance(read_flight(ulg).trajectory, test.obstacles))
+    p = read_flight(ulg).positions
+    return float(competition_distance(Trajectory.aerialist(p.timestamp_us, p.x, p.y, p.z, p.heading), test.obstacles))
 
 
 def _write_records(result: CompeteResult) -> None:

@@ -123,6 +123,9 @@ class SimConfig:
             model's defaults: :class:`~surrealist_gym.sim.px4_avoidance.Px4AvoidanceConfig` and the SITL Iris depth
             camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.AvoidanceConfig` and the PX4 Vision's camera
             for ``simple``).
+        competition_buffer_m: half width added to the flight's polyline in each run's competition distance [m]
+            (``--buffer``): 0.125 is Aerialist's since Oct 2024, whose figures read that much lower; 0 (default) is
+            Aerialist's before then, as the labelled PX4 flights were measured.
     """
 
     vehicle: VehicleModel = VehicleModel.PX4_VISION
@@ -147,8 +150,12 @@ class SimConfig:
     obstacle_collision_scale: float = 1.0
     avoidance_config: Any = None
     sensor_config: Any = None
+    competition_buffer_m: float = 0.0
 
     def __post_init__(self):
+        if not (isinstance(self.competition_buffer_m, (int, float)) and 0 <= self.competition_buffer_m < math.inf):
+            raise ValueError(f"SimConfig.competition_buffer_m must be a finite number >= 0, got "
+                             f"{self.competition_buffer_m!r}")
         object.__setattr__(self, "vehicle", VehicleModel(self.vehicle))
         object.__setattr__(self, "avoidance_model", AvoidanceModel(self.avoidance_model))
         object.__setattr__(self, "params", FrozenDict(dict(self.params)))

@@ -69,8 +69,11 @@ class RunResult:
         status: how the run ended. message: a one-line description of the end.
         min_distance / min_distance_2d: smallest 3-D / 2-D distance from the vehicle's centre to any obstacle
             [m] (inf without obstacles), from ``true_xyz`` with :func:`~surrealist_gym.geometry.obstacle_distances`.
-        competition_distance: the competition's (Aerialist's) distance of ``trajectory`` [m]
-            (:func:`~surrealist_gym.geometry.competition_distance`; inf without obstacles).
+        competition_distance: the competition's (Aerialist's) distance of the run [m]: Aerialist's distance on
+            Aerialist's trajectory of the logged samples (:meth:`~surrealist_gym.trajectory.Trajectory.aerialist`,
+            :func:`~surrealist_gym.geometry.competition_distance`), its polyline buffered by
+            ``SimConfig.competition_buffer_m``; inf without obstacles. Every command's competition distance of a
+            simulated run is this one.
         clearances: per-obstacle closest approach.
         duration: simulated time from arming to the end of the run [s].
         seed, index: base seed and run index (the run's seed derives from them and the test's key).
@@ -153,6 +156,8 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     avoidance = bool(params["COM_OBS_AVOID"]) if cfg.avoidance is None else cfg.avoidance
     vehicle = preset(cfg.vehicle)
     timeout = cfg.timeout_s if cfg.timeout_s is not None else auto_timeout(mission)
+    if test.timeout is not None:  # the test's own limit (Aerialist's simulation.timeout) ends it sooner
+        timeout = min(timeout, test.timeout)
     outer_dt = 1.0 / cfg.outer_hz
     noise_key = "" if cfg.common_noise else test.key()
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
@@ -380,7 +385,10 @@ def _result(r: _Run, test, cfg: SimConfig, params, seed: int) -> RunResult:
     true_t.setflags(write=False)
     true_xyz = np.ascontiguousarray(true_xyz)
     true_xyz.setflags(write=False)
-    compet = competition_distance(traj, test.obstacles) if test.obstacles and len(traj) else math.inf
+    compet = math.inf
+    if test.obstacles and len(ts):  # on Aerialist's windows, as its get_distances() on the run's ULog
+        compet = competition_distance(Trajectory.aerialist(ts, lp.x, lp.y, lp.z, lp.heading), test.obstacles,
+                                      cfg.competition_buffer_m)
     return RunResult(trajectory=traj, status=r.status, min_distance=min3, min_distance_2d=min2,
                      competition_distance=compet, clearances=tuple(clearances), duration=float(r.end_t), seed=int(seed), index=r.index,
                      local_position=lp, true_t=true_t, true_xyz=true_xyz, message=r.message,

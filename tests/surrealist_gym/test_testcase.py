@@ -51,12 +51,11 @@ def test_bundled_seed_resolves_by_file_name():
     assert test.mission.items == sg.load_test(EXPERIMENTS / "rq1-seed1.yaml").mission.items
 
 
-@pytest.mark.parametrize("legacy", [False, True])
-def test_save_load_round_trip(tmp_path, legacy):
+def test_save_load_round_trip(tmp_path):
     test = sg.load_test(EXPERIMENTS / "rq2-seed.yaml")
     test = dataclasses.replace(test, wind=sg.Wind(velocity_mean=2.0, direction=(0, 1, 0)),
                                obstacles=test.obstacles + (Obstacle(2, 2, 5, 40, -20, 0, 0, Shape.CYLINDER),))
-    sg.save_test(test, tmp_path / "t.yaml", legacy=legacy)
+    sg.save_test(test, tmp_path / "t.yaml")
     again = sg.load_test(tmp_path / "t.yaml")
     assert again == test
     assert again.key() == test.key()

@@ -161,10 +161,9 @@ def test_wind_changes_the_key_and_round_trips(mission1, tmp_path):
             speed.apply(mission1, 8.5).key()}
     assert len(keys) == 4
     windy = direction.apply(speed.apply(mission1, 7.3), -63.0)
-    for legacy in (False, True):
-        sg.save_test(windy, tmp_path / "windy.yaml", legacy=legacy)
-        again = sg.load_test(tmp_path / "windy.yaml")
-        assert again.wind == windy.wind and again.key() == windy.key()
+    sg.save_test(windy, tmp_path / "windy.yaml")
+    again = sg.load_test(tmp_path / "windy.yaml")
+    assert again.wind == windy.wind and again.key() == windy.key()
 
 
 def test_apply_action_with_obstacle_and_wind_mutators(mission1):

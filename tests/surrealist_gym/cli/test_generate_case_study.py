@@ -1,5 +1,5 @@
-"""``surrealist generate --case-study``: a tiny search end to end, the suite's export in both key sets, and the
-case-study options' bad input (one line, exit 2)."""
+"""``surrealist generate --case-study``: a tiny search end to end, the suite's export (both Aerialist key sets in one
+file), and the case-study options' bad input (one line, exit 2)."""
 import csv
 import json
 
@@ -42,7 +42,8 @@ def test_tiny_case_study_search_writes_results_and_suite(tmp_path, capsys):
 
 
 def test_suite_exports_both_key_sets_ready_for_aerialist(tmp_path):
-    """A real failing flight (a box across mission1's track, flown in PyBullet) exported and read back."""
+    """A real failing flight (a box across mission1's track, flown in PyBullet) exported and read back; Aerialist's
+    own loaders read the export in tests/surrealist_gym/test_aerialist_yaml.py."""
     base = load_case_study(CASE_STUDIES / "mission1.yaml")
     test = base.with_obstacles([Obstacle(10, 3, 20, 4.5, 25, 0, 0)])
     run = simulate(test, runs=1, seed=0, config=load_profile("px4-v1.12-sitl-iris").sim_config())[0]
@@ -50,16 +51,15 @@ def test_suite_exports_both_key_sets_ready_for_aerialist(tmp_path):
     suite, _ = Suite(threshold_m=np.inf).offer(member)  # kept whatever the distance: this tests the export
     paths = export_suite(suite, tmp_path / "suite")
     assert [p.name for p in paths] == ["failure-01.yaml"]
-    current = yaml.safe_load(paths[0].read_text())
-    legacy = yaml.safe_load((tmp_path / "suite" / "legacy" / "failure-01.yaml").read_text())
-    assert {"robot", "simulation", "mission"} <= set(current) and "drone" not in current
-    assert {"drone", "simulation", "test"} <= set(legacy) and "robot" not in legacy
-    assert current["robot"]["mission_file"] == "case_studies/mission1.plan"
-    assert legacy["drone"]["mission_file"] == "case_studies/mission1.plan"
-    for path in (paths[0], tmp_path / "suite" / "legacy" / "failure-01.yaml"):
-        again = load_test(path)
-        assert again.obstacles == test.obstacles and again.mission.items == test.mission.items
-        assert again.commands == test.commands
+    doc = yaml.safe_load(paths[0].read_text())
+    assert {"robot", "drone", "simulation", "mission", "test"} <= set(doc)  # master's keys and 0.2.x's
+    assert doc["robot"] == doc["drone"] and doc["mission"] == doc["test"]
+    assert doc["robot"]["mission_file"] == "case_studies/mission1.plan"
+    assert doc["simulation"]["obstacles"][0]["shape"] == "box" and doc["simulation"]["obstacles"][0]["size"]["r"] == 0
+    assert not (tmp_path / "suite" / "legacy").exists()
+    again = load_test(paths[0])
+    assert again.obstacles == test.obstacles and again.mission.items == test.mission.items
+    assert again.commands == test.commands
     with open(tmp_path / "suite" / "suite.csv", newline="") as f:
         row = next(csv.DictReader(f))
     assert row["test"] == "failure-01" and float(row["distance_m"]) == pytest.approx(run.competition_distance, abs=1e-3)
@@ -122,7 +122,8 @@ def _write(out, suite, confirm: int, capsys) -> str:
 
     from surrealist_gym.cli.generate import _write_suite
 
-    _write_suite(out, suite, SimpleNamespace(confirm=confirm, random_seed=0, uav="px4-v1.12-sitl-iris", workers=1))
+    _write_suite(out, suite, SimpleNamespace(confirm=confirm, random_seed=0, uav="px4-v1.12-sitl-iris", workers=1,
+                                             buffer=0.0))
     return capsys.readouterr().out
 
 
