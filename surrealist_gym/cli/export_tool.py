@@ -28,6 +28,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="boxes per test, 1-3 (default %(default)s)")
     parser.add_argument("--confirm", type=int, default=default.confirm,
                         help="re-runs of each failure in the simulator before ranking (default %(default)s)")
+    parser.add_argument("--buffer", type=float, default=default.buffer, metavar="M",
+                        help="the search's competition distance: half width added to the flight's polyline [m] "
+                             "(default %(default)s, Aerialist master's, as the competition measures)")
     parser.add_argument("--seed", type=int, default=default.seed,
                         help="seed of the tool's search and of the simulator's noise (default %(default)s)")
     parser.add_argument("--workers", type=int, default=default.workers,
@@ -40,13 +43,15 @@ def run(args: argparse.Namespace) -> int:
     from ..export_tool import SETTINGS_FILE, ToolSettings, write_tool
     from .options import check_writable
 
-    settings = ToolSettings(args.sim_budget_factor, args.obstacles, args.confirm, args.seed, args.workers).check()
+    settings = ToolSettings(args.sim_budget_factor, args.obstacles, args.confirm, args.buffer, args.seed,
+                            args.workers).check()
     check_writable(args.dir, "DIR")
     folder = write_tool(args.dir, settings)
     print(f"tool written to {folder}/: cli.py, testcase.py, Dockerfile, requirements.txt, README.md, {SETTINGS_FILE}, "
           f"case_studies/, the surrealist-gym source it installs")
     print(f"search: {settings.sim_budget_factor} x BUDGET simulator evaluations, {settings.obstacles} boxes, "
-          f"{settings.confirm} re-runs per failure, seed {settings.seed}, {settings.workers} worker(s)")
+          f"{settings.confirm} re-runs per failure, buffer {settings.buffer:g} m, seed {settings.seed}, "
+          f"{settings.workers} worker(s)")
     print(f"run it on our simulator: surrealist compete {folder} mission2 10; in the competition: "
           f"python3 cli.py generate case_studies/mission2.yaml 100 (README.md)")
     return 0

@@ -46,15 +46,19 @@ class ToolSettings:
     sim_budget_factor: int = 10  # the simulator's evaluations per real simulation of BUDGET
     obstacles: int = 1  # boxes per test (generate --obstacles)
     confirm: int = 5  # re-runs of each failure in the simulator, which rank them (generate --confirm)
+    buffer: float = 0.125  # generate --buffer: Aerialist master's competition distance (the platform's since 2024)
     seed: int = 0  # generate --random-seed: the search's choices and the simulator's noise
     workers: int = 1  # simulator processes (the competition gives a tool 1.5 vCPU)
 
     def check(self) -> "ToolSettings":
+        from ..cli.options import check_buffer
+
         lowest = {"sim_budget_factor": 1, "obstacles": 1, "confirm": 0, "seed": 0, "workers": 1}
         for name, low in lowest.items():
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise SurrealistError(f"--{name.replace('_', '-')}: expected a whole number >= {low}, got {value!r}")
+        check_buffer(self.buffer)
         if self.obstacles > 3:
             raise SurrealistError(f"--obstacles: the competition allows 1 to 3 boxes, got {self.obstacles}")
         return self

@@ -8,11 +8,13 @@
    run by the Python in ``$SURREALIST_PYTHON`` (default: this one). It keeps every distinct failure, re-flies
    each ``confirm`` times and ranks them by expected test score (``suite/suite.csv``).
 2. **Spend the real budget**: the ranked failures, best first, each executed once through
-   ``TestCase(case_study, obstacles).execute()`` (the Aerialist agent chosen by ``AGENT``), at most BUDGET
-   executions; an execution that raises still counts.
-3. **Write** the executed tests whose real flight came closer than 1.5 m to a box (the competition's soft failure),
-   ordered by the points of that flight (5, 2, 1), then by the simulator's rank, as ``test_i.yaml``, ``.ulg`` and
-   ``.png`` in a new folder under ``generated_tests/``, and print ``output folder: PATH``.
+   ``TestCase(case_study, obstacles).execute()`` (the Aerialist agent chosen by ``AGENT``); then, while budget is
+   left, the search's other failing evaluations (``evaluations.csv``), those nearest to a test that failed in its
+   execution first. At most BUDGET executions; one that raises still counts.
+3. **Write** the executed tests whose real flight came closer than 1.5 m to a box (the competition's soft failure, by
+   Aerialist's own distance), ordered by the points of that flight (5, 2, 1), then in the order executed, as
+   ``test_i.yaml``, ``.ulg`` and ``.png`` in a new folder under ``generated_tests/``, and print
+   ``output folder: PATH``.
 
 The settings are in ``surrealist-tool.json`` beside this file; the search's results folder and a record of every
 execution (``executions.csv``) are in ``results/surrealist-<time>/``.
@@ -21,6 +23,7 @@ import argparse
 import csv
 import json
 import logging
+import math
 import os
 import shutil
 import subprocess
@@ -40,6 +43,7 @@ PYTHON_ENV = "SURREALIST_PYTHON"  # the interpreter of a virtual environment hol
 TESTS_FOLDER = Path("generated_tests")
 RESULTS_FOLDER = Path("results")
 POINTS = ((0.25, 5), (1.0, 2), (1.5, 1))  # the competition's points of a run closer than each distance [m]
+MAX_BOXES = 3
 
 logger = logging.getLogger("surrealist-tool")
 
@@ -49,12 +53,12 @@ def points(distance):
 
 
 def search(case_study, budget, settings, out):
-    """Run surrealist-gym's suite search on the case study; its ranked failures as (name, obstacle dicts)."""
+    """Run surrealist-gym's suite search on the case study, writing its results folder ``out``."""
     python = os.environ.get(PYTHON_ENV) or sys.executable
     command = [python, "-m", "surrealist_gym.cli", "generate", "--case-study", str(case_study),
                "--budget", str(settings["sim_budget_factor"] * budget), "--obstacles", str(settings["obstacles"]),
-               "--confirm", str(settings["confirm"]), "--random-seed", str(settings["seed"]),
-               "--workers", str(settings["workers"]), "--out", str(out)]
+               "--confirm", str(settings["confirm"]), "--buffer", str(settings["buffer"]),
+               "--random-seed", str(settings["seed"]), "--workers", str(settings["workers"]), "--out", str(out)]
     # surrealist-gym has its own dependencies (numpy 2, shapely 2): nothing on this process's PYTHONPATH is passed on
     env = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
     logger.info("searching in surrealist-gym's simulator: %s", " ".join(command))
@@ -62,13 +66,49 @@ def search(case_study, budget, settings, out):
     if code != 0:
         raise RuntimeError(f"surrealist generate ended with exit code {code} (interpreter {python}; set "
                            f"{PYTHON_ENV} to the Python of a virtual environment holding surrealist-gym)")
+
+
+def ranked_suite(out):
+    """The search's distinct failures, best first, as (name, obstacles); and the evaluations that found them."""
     table = out / "suite" / "suite.csv"
     if not table.is_file():
-        return []
+        return [], set()
     with open(table, newline="", encoding="utf-8") as f:
-        names = [row["test"] for row in csv.DictReader(f)]
-    return [(name, yaml.safe_load((out / "suite" / f"{name}.yaml").read_text(encoding="utf-8"))
-             ["simulation"]["obstacles"]) for name in names]
+        rows = list(csv.DictReader(f))
+    return ([(row["test"], yaml.safe_load((out / "suite" / f"{row['test']}.yaml").read_text(encoding="utf-8"))
+              ["simulation"]["obstacles"]) for row in rows], {row["evaluation"] for row in rows})
+
+
+def neighbours(out, members, executed, failed):
+    """The search's other failing evaluations (``evaluations.csv``: not suite members, not executed), as (name,
+    obstacles): the nearest to a layout that failed in its execution first (the farthest of its boxes from the
+    nearest box of that layout), then the closest in the simulator."""
+    with open(out / "evaluations.csv", newline="", encoding="utf-8") as f:
+        rows = [row for row in csv.DictReader(f) if row["evaluation"] not in members
+                and int(row["unsafe"]) + int(row["collisions"]) > 0]
+    found = {}
+    for row in rows:
+        obstacles = [{"size": {k: float(row[f"o{i}_{k}"]) for k in "lwh"},
+                      "position": {k: float(row[f"o{i}_{k}"]) for k in "xyzr"}}
+                     for i in range(MAX_BOXES) if row.get(f"o{i}_l")]
+        if layout(obstacles) not in executed:
+            found.setdefault(layout(obstacles), (f"evaluation-{row['evaluation']}", obstacles,
+                                                 float(row["min_distance"])))
+
+    def gap(obstacles, other):
+        return max(min(math.dist(centre(a), centre(b)) for b in other) for a in obstacles)
+
+    order = sorted(found.values(), key=lambda item: (min((gap(item[1], f) for f in failed), default=0.0), item[2]))
+    return [(name, obstacles) for name, obstacles, _ in order]
+
+
+def layout(obstacles):
+    return tuple((o["position"]["x"], o["position"]["y"], o["position"]["r"], o["size"]["l"], o["size"]["w"],
+                  o["size"]["h"]) for o in obstacles)
+
+
+def centre(obstacle):
+    return obstacle["position"]["x"], obstacle["position"]["y"]
 
 
 def box(found):
@@ -79,27 +119,42 @@ def box(found):
                                       r=float(position["r"])))
 
 
-def spend(case_study, ranked, budget, record):
-    """Execute the ranked tests, best first, at most ``budget``; the real failures, best first."""
+def execute(case, name, obstacles, writer, phase):
+    """Execute one test (one simulation of the budget); its TestCase and distance [m], None when it failed."""
+    test = TestCase(case, [box(o) for o in obstacles])
+    try:
+        test.execute()
+        distance = min(test.get_distances())
+    except Exception as err:  # a simulation that gives no flight: skipped, as the competition asks
+        logger.warning("%s: execution failed, skipped: %s", name, err)
+        writer.writerow([phase, name, "", "", " ".join(str(err).split())])
+        return test, None
+    logger.info("%s (%s): %.2f m, %d points", name, phase, distance, points(distance))
+    writer.writerow([phase, name, f"{distance:.3f}", points(distance), ""])
+    return test, distance
+
+
+def spend(case_study, out, budget):
+    """At most ``budget`` executions: the ranked suite, best first, then the search's other failures nearest to
+    those that failed in their execution. The tests that failed in their execution, by their points, then in the
+    order executed."""
     case = AerialistTest.from_yaml(str(case_study))
-    failures = []
-    with open(record, "w", newline="", encoding="utf-8") as f:
+    ranked, members = ranked_suite(out)
+    logger.info("%d distinct failures in the simulator; budget %d", len(ranked), budget)
+    flown = []  # (obstacles, test, distance) in the order executed
+    with open(out / "executions.csv", "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
-        writer.writerow(["rank", "suite_test", "distance_m", "points", "error"])
-        for rank, (name, obstacles) in enumerate(ranked[:budget], start=1):
-            test = TestCase(case, [box(o) for o in obstacles])
-            try:
-                test.execute()
-                distance = min(test.get_distances())
-            except Exception as err:  # a simulation that gives no flight: skipped, as the competition asks
-                logger.warning("%s: execution failed, skipped: %s", name, err)
-                writer.writerow([rank, name, "", "", " ".join(str(err).split())])
-                continue
-            logger.info("%s (rank %d): %.2f m, %d points", name, rank, distance, points(distance))
-            writer.writerow([rank, name, f"{distance:.3f}", points(distance), ""])
-            if points(distance):
-                failures.append((-points(distance), rank, test))
-    return [test for _, _, test in sorted(failures, key=lambda item: item[:2])]
+        writer.writerow(["phase", "test", "distance_m", "points", "error"])
+        for name, obstacles in ranked[:budget]:
+            flown.append((obstacles, *execute(case, name, obstacles, writer, "suite")))
+        if len(flown) < budget:
+            failed = [obstacles for obstacles, _, distance in flown if distance is not None and points(distance)]
+            executed = {layout(obstacles) for obstacles, _, _ in flown}
+            for name, obstacles in neighbours(out, members, executed, failed)[:budget - len(flown)]:
+                flown.append((obstacles, *execute(case, name, obstacles, writer, "neighbour")))
+    failures = [(-points(distance), k, test) for k, (_, test, distance) in enumerate(flown)
+                if distance is not None and points(distance)]
+    return len(flown), [test for _, _, test in sorted(failures, key=lambda item: item[:2])]
 
 
 def write(tests, folder):
@@ -123,12 +178,11 @@ def generate(case_study, budget):
     settings = json.loads(SETTINGS_FILE.read_text(encoding="utf-8"))
     stamp = datetime.now().strftime("%Y%m%d-%H%M%S")
     results = RESULTS_FOLDER / f"surrealist-{stamp}"
-    ranked = search(Path(case_study).resolve(), budget, settings, results)
-    logger.info("%d distinct failures in the simulator; executing up to %d of them", len(ranked), budget)
-    failures = spend(case_study, ranked, budget, results / "executions.csv")
+    search(Path(case_study).resolve(), budget, settings, results)
+    executed, failures = spend(case_study, results, budget)
     folder = TESTS_FOLDER / f"surrealist-{stamp}"
     written = write(failures, folder)
-    print(f"{written} test cases generated ({min(budget, len(ranked))} executed of budget {budget}; record in "
+    print(f"{written} test cases generated ({executed} executed of budget {budget}; record in "
           f"{results / 'executions.csv'})")
     print(f"output folder: {folder}/")
 
