@@ -44,7 +44,8 @@ def test_the_tool_folder_follows_the_submission_rules(tmp_path, capsys):
     settings = json.loads((tool / SETTINGS_FILE).read_text())
     assert settings == {"sim_budget_factor": 7, "obstacles": 2, "confirm": 5, "buffer": 0.125, "seed": 0, "workers": 1}
     docker = (tool / "Dockerfile").read_text()
-    assert "\nFROM skhatiri/aerialist:latest\n" in docker and "ENV SURREALIST_PYTHON /opt/surrealist/bin/python" in docker
+    assert "\nFROM skhatiri/aerialist:latest\n" in docker
+    assert "ENV SURREALIST_PYTHON /opt/surrealist/bin/python" in docker
     assert "@ARCHIVE@" not in docker and "@PYTHON_VERSION@" not in docker
     cli = (tool / "cli.py").read_text()
     assert "aerialist.px4.aerialist_test" in cli and "aerialist.px4.drone_test" not in cli
@@ -135,4 +136,12 @@ def test_an_unwritable_folder_is_refused(tmp_path, capsys, target, message):
 def test_bad_settings_are_refused_before_anything_is_written(tmp_path, capsys, option, value, message):
     assert main(["export-tool", str(tmp_path / "tool"), option, value]) == 2
     assert _one_line(capsys) == f"error: {message}"
+    assert not (tmp_path / "tool").exists()
+
+
+def test_case_studies_not_found_are_refused_before_anything_is_written(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("SURREALIST_CASE_STUDIES", raising=False)
+    assert main(["export-tool", "tool"]) == 2
+    assert _one_line(capsys).startswith("error: case study 'mission1': not found in case_studies")
     assert not (tmp_path / "tool").exists()
