@@ -165,8 +165,8 @@ class EvaluationStore:
 
     def count_simulations(self, n: int, commit: bool = True) -> None:
         """Add ``n`` to the simulations this search has flown (kept as evaluations or not: racing drops some), so
-        a resumed search reports all of them."""
-        self._upgrade()
+        a resumed search reports all of them (the meta table exists: a new store is made with it, an older one
+        gains it when a search claims it)."""
         self._db.execute("INSERT INTO meta (key, value) VALUES (?, ?) ON CONFLICT(key) DO UPDATE SET "
                          "value = CAST(value AS INTEGER) + excluded.value", (f"simulations:{self.search}", int(n)))
         if commit:
