@@ -1,0 +1,376 @@
+"""The compiled kernels of PX4-Avoidance's local planner (:mod:`surrealist_gym.sim.px4_avoidance`): the point cloud
+memory, the polar histogram, its smoothing and cost matrix, and the look-ahead tree search (``_build_tree``).
+
+The behaviour and its sources are described in :mod:`surrealist_gym.sim.px4_avoidance`, which re-exports these
+names; the planner class there calls them once per cycle.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+ALPHA_RES = 6.0  # histogram cell [deg] (avoidance/include/avoidance/histogram.h)
+N_E, N_Z = 30, 60
+SUB_RES = 2.0  # subsampling cell of the point cloud [deg] (ALPHA_RES / 3)
+N_E2, N_Z2 = 90, 180
+MAX_NODES = 512
+
+
+# --- compiled kernels --------------------------------------------------------------------------------------------
+_R2D = 180.0 / math.pi
+
+
+@njit(cache=True, inline="always")
+def _atan2_deg(y, x):  # pragma: no cover - compiled
+    """atan2 in degrees by a minimax polynomial (error < 1e-4 deg): 3x faster than math.atan2 here."""
+    ax, ay = abs(x), abs(y)
+    if ax == 0.0 and ay == 0.0:
+        return 0.0
+    swap = ay > ax
+    a = ax / ay if swap else ay / ax
+    s = a * a
+    r = ((((((-0.0040540580 * s + 0.0218612288) * s - 0.0559098861) * s + 0.0964200441) * s - 0.1390853351) * s
+          + 0.1994653599) * s - 0.3332985605) * s * a + a
+    if swap:
+        r = 1.5707963267948966 - r
+    if x < 0.0:
+        r = 3.141592653589793 - r
+    if y < 0.0:
+        r = -r
+    return r * 57.29577951308232
+
+
+@njit(cache=True, inline="always")
+def _hist_index(dx, dy, dz, res):  # pragma: no cover - compiled
+    """(elevation index, azimuth index) of a direction in a histogram of ``res`` degree cells."""
+    h = math.sqrt(dx * dx + dy * dy)
+    az = _atan2_deg(dy, dx)
+    el = _atan2_deg(dz, h)
+    n_z = int(round(360.0 / res))
+    n_e = int(round(180.0 / res))
+    iz = int(math.floor(az / res + 180.0 / res))
+    ie = int(math.floor(el / res + 90.0 / res))
+    if iz >= n_z:
+        iz -= n_z
+    if iz < 0:
+        iz += n_z
+    if ie >= n_e:
+        ie = n_e - 1
+    if ie < 0:
+        ie = 0
+    return ie, iz
+
+
+@njit(cache=True)
+def _process_cloud(new, old, old_age, px, py, pz, yaw_deg, pitch_deg, elapsed, params, out, out_age):
+    # pragma: no cover - compiled
+    rmin, rmax, max_age, hfov, vfov = params[0], params[1], params[11], params[12], params[13]
+    occupied = np.zeros((N_E2, N_Z2), dtype=np.bool_)
+    k = 0
+    for i in range(new.shape[0]):
+        dx, dy, dz = new[i, 0] - px, new[i, 1] - py, new[i, 2] - pz
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if d <= rmin or d >= rmax:
+            continue
+        ie, iz = _hist_index(dx, dy, dz, SUB_RES)
+        if occupied[ie, iz]:
+            continue
+        occupied[ie, iz] = True
+        out[k, 0], out[k, 1], out[k, 2] = new[i, 0], new[i, 1], new[i, 2]
+        out_age[k] = 0.0
+        k += 1
+    half_h, half_v = 0.5 * hfov, 0.5 * vfov
+    for i in range(old.shape[0]):
+        if old_age[i] >= max_age:
+            continue
+        dx, dy, dz = old[i, 0] - px, old[i, 1] - py, old[i, 2] - pz
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if d >= rmax:
+            continue
+        ie, iz = _hist_index(dx, dy, dz, SUB_RES)
+        if occupied[ie, iz]:
+            continue
+        # pointInsideFOV in the body frame: the camera would see the point if it were still there
+        off_az = (_atan2_deg(dy, dx) - yaw_deg + 180.0) % 360.0 - 180.0
+        off_el = _atan2_deg(dz, math.sqrt(dx * dx + dy * dy)) - pitch_deg
+        if abs(off_az) <= half_h and abs(off_el) <= half_v:
+            continue
+        occupied[ie, iz] = True
+        out[k, 0], out[k, 1], out[k, 2] = old[i, 0], old[i, 1], old[i, 2]
+        out_age[k] = old_age[i] + elapsed
+        k += 1
+    return k
+
+
+@njit(cache=True)
+def _histogram(cloud, ox, oy, oz, dist, count):  # pragma: no cover - compiled
+    """Fill ``dist`` (N_E x N_Z) with the mean distance of the cloud's points per cell seen from (ox, oy, oz);
+    ``count`` is a work buffer of the same shape."""
+    count[:, :] = 0.0
+    dist[:, :] = 0.0
+    for i in range(cloud.shape[0]):
+        dx, dy, dz = cloud[i, 0] - ox, cloud[i, 1] - oy, cloud[i, 2] - oz
+        ie, iz = _hist_index(dx, dy, dz, ALPHA_RES)
+        dist[ie, iz] += math.sqrt(dx * dx + dy * dy + dz * dz)
+        count[ie, iz] += 1.0
+    n = 0
+    for e in range(N_E):
+        for z in range(N_Z):
+            if count[e, z] > 0:
+                dist[e, z] /= count[e, z]
+                n += 1
+    return n
+
+
+@njit(cache=True)
+def _smooth_columns(matrix, radius, padded, box):  # pragma: no cover - compiled
+    """smoothPolarMatrix, first half: pad with the polar wrap rules, then the conic kernel (1, r/(r+1), ...,
+    1/(r+1)), summed, along elevation, as two running box sums of length r + 1. ``padded`` (ne + 2r, nz + 2r)
+    holds the result; ``box`` (>= max(ne, nz) + r) is a work buffer. :func:`_smooth_row` finishes a row."""
+    r = radius
+    ne, nz = matrix.shape
+    half = nz // 2
+    length = r + 1
+    padded[:, :] = 0.0
+    padded[r:r + ne, r:r + nz] = matrix
+    for i in range(r):  # rows beyond the poles: the opposite azimuth, mirrored in elevation
+        for z in range(nz):
+            zs = (z + half) % nz
+            padded[r - 1 - i, r + z] = matrix[i, zs]
+            padded[r + ne + i, r + z] = matrix[ne - 1 - i, zs]
+    for row in range(ne + 2 * r):  # azimuth wrap
+        for i in range(r):
+            padded[row, i] = padded[row, nz + i]
+            padded[row, r + nz + i] = padded[row, r + i]
+    m = ne + r
+    for z in range(nz + 2 * r):  # all-zero columns stay zero
+        nonzero = False
+        for row in range(ne + 2 * r):
+            if padded[row, z] != 0.0:
+                nonzero = True
+                break
+        if not nonzero:
+            continue
+        s = 0.0
+        for j in range(length):
+            s += padded[j, z]
+        box[0] = s
+        for j in range(1, m):
+            s += padded[j + length - 1, z] - padded[j - 1, z]
+            box[j] = s
+        s = 0.0
+        for j in range(length):
+            s += box[j]
+        padded[r, z] = s / length
+        for i in range(1, ne):  # writes row r + i, reads box only: safe in place
+            s += box[i + length - 1] - box[i - 1]
+            padded[r + i, z] = s / length
+
+
+@njit(cache=True)
+def _smooth_row(padded, radius, e, box, out):  # pragma: no cover - compiled
+    """smoothPolarMatrix, second half for elevation row ``e``: the conic kernel along azimuth into ``out``."""
+    r = radius
+    nz = out.shape[0]
+    length = r + 1
+    row = r + e
+    m = nz + r
+    s = 0.0
+    for j in range(length):
+        s += padded[row, j]
+    box[0] = s
+    for j in range(1, m):
+        s += padded[row, j + length - 1] - padded[row, j - 1]
+        box[j] = s
+    s = 0.0
+    for j in range(length):
+        s += box[j]
+    out[0] = s / length
+    for i in range(1, nz):
+        s += box[i + length - 1] - box[i - 1]
+        out[i] = s / length
+
+
+@njit(cache=True)
+def _best_cells(cloud, ox, oy, oz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, dist, count, obst, padded, box,
+                cand_e, cand_z, cand_c):
+    # pragma: no cover - compiled
+    """Histogram and cost matrix at (ox, oy, oz) with velocity v; fill the cheapest cells; return their count."""
+    rmin, rmax = params[0], params[1]
+    w_pitch, w_yaw, w_vel, obst_param = params[2], params[3], params[4], params[5]
+    radius = int(params[7])
+    n_best = int(params[8])
+    _histogram(cloud, ox, oy, oz, dist, count)
+    obst[:, :] = 0.0
+    any_obstacle = False
+    for e in range(N_E):
+        for z in range(N_Z):
+            d = dist[e, z]
+            if d > 0.0:
+                x = obst_param - d
+                obst[e, z] = 5000.0 * (1.0 + x / math.sqrt(1.0 + x * x))
+                any_obstacle = True
+    smooth = any_obstacle and radius > 0
+    if smooth:
+        _smooth_columns(obst, radius, padded, box)
+    # goal and line directions from the origin
+    dgx, dgy, dgz = gx - ox, gy - oy, gz - oz
+    dist_goal = math.sqrt(dgx * dgx + dgy * dgy + dgz * dgz)
+    az_goal = math.atan2(dgy, dgx) * _R2D
+    el_goal = math.atan2(dgz, math.sqrt(dgx * dgx + dgy * dgy)) * _R2D
+    az_line = math.atan2(cy - oy, cx - ox) * _R2D
+    # obstacle in the goal's window (goal cell +-5 azimuth, +-2 elevation cells, distance in (0.2, 15) m)?
+    ge, gz_i = _hist_index(dgx, dgy, dgz, ALPHA_RES)
+    blocked = False
+    for de in range(-2, 3):
+        e = ge + de
+        if e < 0 or e >= N_E:
+            continue
+        for dz_ in range(-5, 6):
+            z = (gz_i + dz_) % N_Z
+            if rmin < dist[e, z] < rmax:
+                blocked = True
+    w_line = 0.0 if blocked else 0.5
+    pitch_scale = 1.0
+    if dist_goal < 5.0:
+        pitch_scale = 1.0 / max((0.2 * dist_goal) ** 2, 1e-6)
+    speed = math.sqrt(vx * vx + vy * vy + vz * vz)
+    yaw_cost = np.empty(N_Z)
+    cos_a = np.empty(N_Z)
+    sin_a = np.empty(N_Z)
+    for z in range(N_Z):
+        az = z * ALPHA_RES + 0.5 * ALPHA_RES - 180.0
+        a = (az - az_goal + 180.0) % 360.0 - 180.0
+        b = (az - az_line + 180.0) % 360.0 - 180.0
+        yaw_cost[z] = w_yaw * ((1.0 - w_line) * a * a + w_line * b * b)
+        cos_a[z] = math.cos(az / _R2D)
+        sin_a[z] = math.sin(az / _R2D)
+    min_yaw = yaw_cost.min()
+    row_cost = np.empty(N_E)
+    for e in range(N_E):
+        de = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0 - el_goal
+        row_cost[e] = w_pitch * de * de * pitch_scale
+    obst_row = np.zeros(N_Z)
+    n = 0
+    # rows by increasing pitch cost; a row whose every cost is at least its pitch cost plus the least yaw cost
+    # (obstacle and velocity costs are >= 0) cannot beat a full candidate list, and is skipped
+    for e in np.argsort(row_cost, kind="mergesort"):
+        pitch_cost = row_cost[e]
+        if n == n_best and pitch_cost + min_yaw >= cand_c[n - 1]:
+            break
+        el = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0
+        ce, se = math.cos(el / _R2D), math.sin(el / _R2D)
+        if smooth:
+            _smooth_row(padded, radius, e, box, obst_row)
+        else:
+            for z in range(N_Z):
+                obst_row[z] = obst[e, z]
+        for z in range(N_Z):
+            dot = ce * (cos_a[z] * vx + sin_a[z] * vy) + se * vz
+            cost = obst_row[z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
+            # keep the n_best cheapest, sorted ascending
+            if n < n_best:
+                j = n
+                n += 1
+            elif cost < cand_c[n - 1]:
+                j = n - 1
+            else:
+                continue
+            while j > 0 and cand_c[j - 1] > cost:
+                cand_c[j], cand_e[j], cand_z[j] = cand_c[j - 1], cand_e[j - 1], cand_z[j - 1]
+                j -= 1
+            cand_c[j], cand_e[j], cand_z[j] = cost, e, z
+    return n
+
+
+@njit(cache=True)
+def _build_tree(cloud, px, py, pz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, path):
+    # pragma: no cover - compiled
+    """StarPlanner::buildLookAheadTree; writes the path deepest node first into ``path``, returns its length
+    (0 when the vehicle's histogram is empty)."""
+    rmax, w_h, n_best, n_exp, step = params[1], params[6], int(params[8]), int(params[9]), params[10]
+    pos = np.empty((MAX_NODES, 3))
+    parent = np.empty(MAX_NODES, dtype=np.int64)
+    depth = np.empty(MAX_NODES, dtype=np.int64)
+    total = np.empty(MAX_NODES)
+    heur = np.empty(MAX_NODES)
+    closed = np.zeros(MAX_NODES, dtype=np.bool_)
+    dist = np.empty((N_E, N_Z))
+    count = np.empty((N_E, N_Z))
+    obst = np.empty((N_E, N_Z))
+    radius = int(params[7])
+    padded = np.empty((N_E + 2 * radius, N_Z + 2 * radius))
+    box = np.empty(N_Z + 2 * radius)
+    cand_e = np.empty(n_best, dtype=np.int64)
+    cand_z = np.empty(n_best, dtype=np.int64)
+    cand_c = np.empty(n_best)
+    pos[0, 0], pos[0, 1], pos[0, 2] = px, py, pz
+    parent[0], depth[0] = -1, 0
+    h0 = w_h * math.sqrt((gx - px) ** 2 + (gy - py) ** 2 + (gz - pz) ** 2)
+    total[0], heur[0] = h0, h0
+    size = 1
+    origin = 0
+    for it in range(n_exp):
+        ox, oy, oz = pos[origin, 0], pos[origin, 1], pos[origin, 2]
+        if origin == 0:
+            ux, uy, uz = vx, vy, vz
+        else:
+            p = parent[origin]
+            ux, uy, uz = ox - pos[p, 0], oy - pos[p, 1], oz - pos[p, 2]
+        k = _best_cells(cloud, ox, oy, oz, ux, uy, uz, gx, gy, gz, cx, cy, cz, params, dist, count, obst, padded,
+                        box, cand_e, cand_z, cand_c)
+        if it == 0:
+            empty = True
+            for e in range(N_E):
+                for z in range(N_Z):
+                    if dist[e, z] > 0.0:
+                        empty = False
+            if empty:
+                return 0
+        for j in range(k):
+            if size >= MAX_NODES:
+                break
+            el = (cand_e[j] * ALPHA_RES + 0.5 * ALPHA_RES - 90.0) / _R2D
+            az = (cand_z[j] * ALPHA_RES + 0.5 * ALPHA_RES - 180.0) / _R2D
+            nx = ox + step * math.cos(el) * math.cos(az)
+            ny = oy + step * math.cos(el) * math.sin(az)
+            nz = oz + step * math.sin(el)
+            close = False
+            for i in range(size):
+                if (pos[i, 0] - nx) ** 2 + (pos[i, 1] - ny) ** 2 + (pos[i, 2] - nz) ** 2 < 0.04:
+                    close = True
+                    break
+            if close:
+                continue
+            pos[size, 0], pos[size, 1], pos[size, 2] = nx, ny, nz
+            parent[size], depth[size] = origin, depth[origin] + 1
+            h = w_h * math.sqrt((gx - nx) ** 2 + (gy - ny) ** 2 + (gz - nz) ** 2)
+            heur[size] = h
+            total[size] = total[origin] - heur[origin] + cand_c[j] + h
+            size += 1
+        closed[origin] = True
+        best = -1
+        best_cost = np.inf
+        for i in range(size):
+            if closed[i]:
+                continue
+            d2 = (pos[i, 0] - px) ** 2 + (pos[i, 1] - py) ** 2 + (pos[i, 2] - pz) ** 2
+            if total[i] < best_cost and d2 < rmax * rmax:
+                best_cost = total[i]
+                best = i
+        if best < 0:
+            break
+        origin = best
+    # the path ends at the first open node of the greatest depth (PR #555), the root when none is open
+    end, deepest = 0, 0
+    for i in range(size):
+        if not closed[i] and depth[i] > deepest:
+            end, deepest = i, depth[i]
+    n = 0
+    while end >= 0:
+        path[n, 0], path[n, 1], path[n, 2] = pos[end, 0], pos[end, 1], pos[end, 2]
+        n += 1
+        end = parent[end]
+    return n
