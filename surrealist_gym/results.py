@@ -17,7 +17,7 @@ import numpy as np
 from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
 from .store import EvaluationStore
 from .sim.profiles import save_profile, test_uav_settings
-from .testcase import export_test
+from .aerialist_yaml import export_test
 from .trajectory import Profile, profile
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Sequence
 
 from .suite import Member, Suite, layout_distance, trajectory_distance
-from .testcase import export_test
+from .aerialist_yaml import export_test
 
 
 def member_name(index: int) -> str:

@@ -38,7 +38,8 @@ from surrealist_gym.evaluation import flown_with_common_noise
 from surrealist_gym.geometry import obstacle_distances
 from surrealist_gym.outcomes import outcomes
 from surrealist_gym.store import EvaluationStore
-from surrealist_gym.testcase import Obstacle, TestCase, _parse_obstacles
+from surrealist_gym.aerialist_yaml import parse_obstacles
+from surrealist_gym.testcase import Obstacle, TestCase
 
 from .lowfi import NAMES as LOWFI_NAMES
 from .lowfi import LowFidelity
@@ -213,7 +214,7 @@ def _obstacles_of(item) -> tuple[Obstacle, ...]:
     if isinstance(item, TestCase):
         return item.obstacles
     if isinstance(item, dict):
-        return _parse_obstacles(item.get("obstacles"), "stored test")
+        return parse_obstacles(item.get("obstacles"), "stored test")
     return tuple(item)
 
 

@@ -314,7 +314,7 @@ def load_profile(name_or_path) -> UavProfile:
     path = Path(key)
     if not path.suffix.lower() in (".yaml", ".yml"):
         raise InvalidProfile(f"--uav {key!r}: not a preset ({', '.join(PRESETS)}) nor a .yaml file")
-    from ..testcase import safe_yaml
+    from ..yaml_loading import safe_yaml
 
     regular_file(path, "profile", InvalidProfile)
     try:
