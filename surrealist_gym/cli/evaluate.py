@@ -124,7 +124,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def summary_text(ev) -> str:
     """The table ``surrealist evaluate`` prints: one row per test, then the suite's figures."""
-    from ..reevaluation import suite_lines
+    from ..reevaluation_report import suite_lines
 
     width = max([len("test"), *(len(t.name) for t in ev.tests)])
     head = (f"{'test':{width}}  {'fail':>5}  {'err':>3}  {'p':>5}  {'95% CI':>12}  {'pts/run':>7}  {'median':>6}  "
@@ -261,7 +261,8 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict) ->
     breaks)."""
     from tqdm import tqdm
 
-    from ..reevaluation import evaluate, scoring_lines, write_report
+    from ..reevaluation import evaluate
+    from ..reevaluation_report import scoring_lines, write_report
 
     store = out / STORE_FILE
     resume = f"surrealist evaluate --resume {out}"

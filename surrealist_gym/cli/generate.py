@@ -98,7 +98,8 @@ def _write_suite(out, suite, options) -> None:
 
     from tqdm import tqdm
 
-    from ..reevaluation import evaluate, regroup, stored_runs, write_report
+    from ..reevaluation import evaluate, regroup, stored_runs
+    from ..reevaluation_report import write_report
     from ..scoring import EDITIONS, Draw, case_study_of, score_suite, test_score
     from ..suite import diversity
     from ..suite_export import export_suite, member_name, plot_suite
