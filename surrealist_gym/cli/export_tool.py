@@ -17,7 +17,7 @@ import argparse
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist export-tool``."""
-    from ..export_tool import ToolSettings
+    from ..export_tool import AGENTS, ToolSettings
 
     default = ToolSettings()
     parser.add_argument("dir", metavar="DIR", help="the tool's folder to write (new or empty)")
@@ -36,6 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--workers", type=int, default=default.workers,
                         help="simulator processes the tool uses (default %(default)s: the competition gives a tool "
                              "1.5 vCPU)")
+    parser.add_argument("--agent", default=default.agent, choices=AGENTS,
+                        help="the tool's search in the simulator: suite (default: distinct failures), or cmaes, "
+                             "random, greedy, to compare searches under the competition's rules")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,15 +46,15 @@ def run(args: argparse.Namespace) -> int:
     from ..export_tool import SETTINGS_FILE, ToolSettings, write_tool
     from .options import check_writable
 
-    settings = ToolSettings(args.sim_budget_factor, args.obstacles, args.confirm, args.buffer, args.seed,
-                            args.workers).check()
+    settings = ToolSettings(sim_budget_factor=args.sim_budget_factor, obstacles=args.obstacles, confirm=args.confirm,
+                            buffer=args.buffer, seed=args.seed, workers=args.workers, agent=args.agent).check()
     check_writable(args.dir, "DIR")
     folder = write_tool(args.dir, settings)
     print(f"tool written to {folder}/: cli.py, testcase.py, Dockerfile, requirements.txt, README.md, {SETTINGS_FILE}, "
           f"case_studies/, the surrealist-gym source it installs")
     print(f"search: {settings.sim_budget_factor} x BUDGET simulator evaluations, {settings.obstacles} boxes, "
           f"{settings.confirm} re-runs per failure, buffer {settings.buffer:g} m, seed {settings.seed}, "
-          f"{settings.workers} worker(s)")
+          f"{settings.workers} worker(s), agent {settings.agent}")
     print(f"run it on our simulator: surrealist compete {folder} mission2 10; in the competition: "
           f"python3 cli.py generate case_studies/mission2.yaml 100 (README.md)")
     return 0

@@ -35,6 +35,7 @@ TEMPLATES = Path(__file__).resolve().parent / "templates"
 TOOL_FILES = ("cli.py", "testcase.py", "Dockerfile", "requirements.txt", "README.md")
 SETTINGS_FILE = "surrealist-tool.json"
 CASE_STUDIES = ("mission1", "mission2", "mission3")
+AGENTS = ("suite", "cmaes", "random", "greedy")  # the searches generate --case-study runs
 #: What the source archive holds: what pyproject.toml builds the package from.
 SOURCE_ITEMS = ("pyproject.toml", "README.md", "surrealist_gym", "search", "surrogates")
 
@@ -49,6 +50,7 @@ class ToolSettings:
     buffer: float = 0.125  # generate --buffer: Aerialist master's competition distance (the platform's since 2024)
     seed: int = 0  # generate --random-seed: the search's choices and the simulator's noise
     workers: int = 1  # simulator processes (the competition gives a tool 1.5 vCPU)
+    agent: str = "suite"  # generate --agent: the search (suite, the default; cmaes, random, greedy to compare)
 
     def check(self) -> "ToolSettings":
         from ..cli.options import check_buffer
@@ -59,6 +61,8 @@ class ToolSettings:
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise SurrealistError(f"--{name.replace('_', '-')}: expected a whole number >= {low}, got {value!r}")
         check_buffer(self.buffer)
+        if self.agent not in AGENTS:
+            raise SurrealistError(f"--agent: expected one of {', '.join(AGENTS)}, got {self.agent!r}")
         if self.obstacles > 3:
             raise SurrealistError(f"--obstacles: the competition allows 1 to 3 boxes, got {self.obstacles}")
         return self

@@ -42,7 +42,8 @@ def test_the_tool_folder_follows_the_submission_rules(tmp_path, capsys):
     for name in ("mission1", "mission2", "mission3"):
         assert (tool / "case_studies" / f"{name}.yaml").is_file() and (tool / "case_studies" / f"{name}.plan").is_file()
     settings = json.loads((tool / SETTINGS_FILE).read_text())
-    assert settings == {"sim_budget_factor": 7, "obstacles": 2, "confirm": 5, "buffer": 0.125, "seed": 0, "workers": 1}
+    assert settings == {"sim_budget_factor": 7, "obstacles": 2, "confirm": 5, "buffer": 0.125, "seed": 0, "workers": 1,
+                        "agent": "suite"}
     docker = (tool / "Dockerfile").read_text()
     assert "\nFROM skhatiri/aerialist:latest\n" in docker
     assert "ENV SURREALIST_PYTHON /opt/surrealist/bin/python" in docker
@@ -132,6 +133,7 @@ def test_an_unwritable_folder_is_refused(tmp_path, capsys, target, message):
     ("--confirm", "-1", "--confirm: expected a whole number >= 0, got -1"),
     ("--workers", "0", "--workers: expected a whole number >= 1, got 0"),
     ("--buffer", "-0.1", "--buffer: expected a non-negative number of metres, got -0.1"),
+    ("--agent", "ppo", "surrealist export-tool: argument --agent: invalid choice: 'ppo' (choose from 'suite', 'cmaes', 'random', 'greedy')"),
 ])
 def test_bad_settings_are_refused_before_anything_is_written(tmp_path, capsys, option, value, message):
     assert main(["export-tool", str(tmp_path / "tool"), option, value]) == 2

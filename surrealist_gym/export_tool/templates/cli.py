@@ -58,7 +58,8 @@ def search(case_study, budget, settings, out):
     command = [python, "-m", "surrealist_gym.cli", "generate", "--case-study", str(case_study),
                "--budget", str(settings["sim_budget_factor"] * budget), "--obstacles", str(settings["obstacles"]),
                "--confirm", str(settings["confirm"]), "--buffer", str(settings["buffer"]),
-               "--random-seed", str(settings["seed"]), "--workers", str(settings["workers"]), "--out", str(out)]
+               "--random-seed", str(settings["seed"]), "--workers", str(settings["workers"]),
+               "--agent", settings.get("agent", "suite"), "--out", str(out)]
     # surrealist-gym has its own dependencies (numpy 2, shapely 2): nothing on this process's PYTHONPATH is passed on
     env = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
     logger.info("searching in surrealist-gym's simulator: %s", " ".join(command))
