@@ -10,7 +10,7 @@
 2. **Spend the real budget**: the ranked failures, best first, each executed once through
    ``TestCase(case_study, obstacles).execute()`` (the Aerialist agent chosen by ``AGENT``); then, while budget is
    left, the search's other failing evaluations (``evaluations.csv``), those nearest to a test that failed in its
-   execution first. At most BUDGET executions; one that raises still counts.
+   execution first; then its near misses, closest first. At most BUDGET executions; one that raises still counts.
 3. **Write** the executed tests whose real flight came closer than 1.5 m to a box (the competition's soft failure, by
    Aerialist's own distance), ordered by the points of that flight (5, 2, 1), then in the order executed, as
    ``test_i.yaml``, ``.ulg`` and ``.png`` in a new folder under ``generated_tests/``, and print
@@ -81,12 +81,13 @@ def ranked_suite(out):
 
 
 def neighbours(out, members, executed, failed):
-    """The search's other failing evaluations (``evaluations.csv``: not suite members, not executed), as (name,
-    obstacles): the nearest to a layout that failed in its execution first (the farthest of its boxes from the
-    nearest box of that layout), then the closest in the simulator."""
+    """The search's other evaluations (``evaluations.csv``: not suite members, not executed), as (name, obstacles):
+    those that failed in the simulator first, the nearest to a layout that failed in its execution first (the
+    farthest of its boxes from the nearest box of that layout), then the closest in the simulator; then the near
+    misses, closest first."""
     with open(out / "evaluations.csv", newline="", encoding="utf-8") as f:
-        rows = [row for row in csv.DictReader(f) if row["evaluation"] not in members
-                and int(row["unsafe"]) + int(row["collisions"]) > 0]
+        rows = [row for row in csv.DictReader(f) if row["evaluation"] not in members and row.get("o0_l")
+                and math.isfinite(float(row["min_distance"] or "nan"))]  # flown, not refused
     found = {}
     for row in rows:
         obstacles = [{"size": {k: float(row[f"o{i}_{k}"]) for k in "lwh"},
@@ -94,13 +95,17 @@ def neighbours(out, members, executed, failed):
                      for i in range(MAX_BOXES) if row.get(f"o{i}_l")]
         if layout(obstacles) not in executed:
             found.setdefault(layout(obstacles), (f"evaluation-{row['evaluation']}", obstacles,
-                                                 float(row["min_distance"])))
+                                                 float(row["min_distance"]),
+                                                 int(row["unsafe"]) + int(row["collisions"]) > 0))
 
     def gap(obstacles, other):
         return max(min(math.dist(centre(a), centre(b)) for b in other) for a in obstacles)
 
-    order = sorted(found.values(), key=lambda item: (min((gap(item[1], f) for f in failed), default=0.0), item[2]))
-    return [(name, obstacles) for name, obstacles, _ in order]
+    def nearest(item):
+        _, obstacles, distance, failing = item
+        return (not failing, min((gap(obstacles, f) for f in failed), default=0.0) if failing else 0.0, distance)
+
+    return [(name, obstacles) for name, obstacles, _, _ in sorted(found.values(), key=nearest)]
 
 
 def layout(obstacles):
