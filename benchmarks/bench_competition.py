@@ -167,7 +167,7 @@ def summarise(records: list[dict], missions, tools) -> str:
     """The leaderboard table (markdown) over the repetitions."""
     import numpy as np
 
-    from surrealist_gym.statistics import compare, vargha_delaney_a12
+    from search.statistics import compare, vargha_delaney_a12
 
     def stat(ours, theirs, sign):
         if len(ours) < 3 or len(theirs) < 3:

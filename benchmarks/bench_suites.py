@@ -83,7 +83,7 @@ def one_search(mission: str, agent: str, rep: int, budget: int, confirm: int, ou
 def summarise(records: list[dict], missions, agents) -> str:
     import numpy as np
 
-    from surrealist_gym.statistics import vargha_delaney_a12
+    from search.statistics import vargha_delaney_a12
     from scipy.stats import mannwhitneyu
 
     lines = ["| case study | agent | searches | distinct failures found | confirmed among those re-flown | "

@@ -52,7 +52,7 @@ from reproduce_paper import paper_agent, paper_env, run_one
 from search.metrics import SearchMetrics
 from search.repetitions import run_repetition
 from surrealist_gym.cli.options import race_stages
-from surrealist_gym.statistics import compare, vargha_delaney_a12
+from search.statistics import compare, vargha_delaney_a12
 from surrogates.config import RULES, SkipAccounting
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model

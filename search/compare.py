@@ -179,7 +179,7 @@ def _values(records, agent: str, key: str) -> list[float]:
 
 
 def _summarise(records, agents: list[str]) -> tuple[list[dict], list[dict]]:
-    from surrealist_gym.statistics import a12_magnitude, compare as significance, vargha_delaney_a12
+    from .statistics import a12_magnitude, compare as significance, vargha_delaney_a12
 
     summary = []
     for agent in agents:

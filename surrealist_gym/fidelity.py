@@ -29,12 +29,13 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from search.statistics import vargha_delaney_a12
+
 from .errors import SurrealistError
 from .outcomes import BLOCKED as _BLOCKED
 from .outcomes import UNSAFE_DISTANCE_M, RunStatus
 from .frozendict import FrozenDict
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
-from .statistics import vargha_delaney_a12
 from .testcase import TestCase
 
 __all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "RunOutcome",
