@@ -28,67 +28,12 @@ import numpy as np
 
 from .errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
 from .frozendict import FrozenDict
-from .sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig, VehicleModel
-from .sim.profiles import SETTINGS, SITL_IRIS, TIMING_SETTINGS, VISION_CASE0, UavProfile
+from .sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
+from .sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, profile_for_flight, vehicle_of
 from .testcase import TestCase
-from .trajectory import Trajectory, profile as time_profile
+from .trajectory import Phases, Trajectory, phases, profile as time_profile
 
-__all__ = ["Calibration", "FITS", "Fit", "Phases", "calibrate", "phases", "profile_for_flight"]
-
-AIRBORNE_M = 0.3   # above the start: airborne [m]
-MOVING_MPS = 0.3   # horizontal speed: moving [m/s]
-LIFTOFF_LAG_S = 1.0  # measured: both vehicles' 0.5 s trajectories leave the ground ~1 s after the mission starts
-PX4_VISION_AIRFRAMES = (4016,)  # Holybro PX4 Vision DevKit
-IRIS_AIRFRAMES = tuple(range(1010, 1020)) + tuple(range(10015, 10020))  # PX4 SITL Gazebo Iris variants
-
-
-def vehicle_of(flight) -> VehicleModel | None:
-    """The vehicle preset of the log's PX4 airframe (SYS_AUTOSTART), None when the airframe is not one we know."""
-    airframe = int(flight.params.get("SYS_AUTOSTART", 0) or 0)
-    if airframe in PX4_VISION_AIRFRAMES:
-        return VehicleModel.PX4_VISION
-    return VehicleModel.IRIS if airframe in IRIS_AIRFRAMES else None
-
-
-@dataclass(frozen=True, slots=True)
-class Phases:
-    """The figures of a flight that calibration matches (from its 0.5 s trajectory, time from its first sample).
-
-    Attributes:
-        liftoff_s: first sample more than 0.3 m above the start [s].
-        touchdown_s: last such sample [s].
-        leg_start_s: first airborne sample moving faster than 0.3 m/s [s].
-        cruise_speed_mps: median horizontal speed while moving (airborne, > 0.3 m/s).
-        cruise_altitude_m: median altitude while moving.
-        climb_s: from lift-off to the first sample within 0.3 m of the altitude at which the UAV starts to move [s].
-        descent_s: from the last moving sample to touchdown [s].
-    """
-
-    liftoff_s: float
-    touchdown_s: float
-    leg_start_s: float
-    cruise_speed_mps: float
-    cruise_altitude_m: float
-    climb_s: float
-    descent_s: float
-
-
-def phases(trajectory: Trajectory, where: str = "flight") -> Phases:
-    """The phases of a flight; a flight that never lifts off or never moves raises :class:`LogFormatError`."""
-    p = time_profile(trajectory)
-    z, v, t = p.altitude, p.horizontal_speed, p.t
-    air = np.nonzero(z > AIRBORNE_M)[0]
-    if len(air) < 4:
-        raise LogFormatError(f"{where}: the flight never rises {AIRBORNE_M} m above its start: no take-off to fit")
-    moving = np.nonzero((z > AIRBORNE_M) & (v > MOVING_MPS))[0]
-    if len(moving) < 4:
-        raise LogFormatError(f"{where}: the UAV never moves faster than {MOVING_MPS} m/s in the air: no cruise to fit")
-    first_move, last_move = moving[0], moving[-1]
-    at_height = np.nonzero(z[air[0]:] >= z[first_move] - 0.3)[0]
-    climb_end = air[0] + (at_height[0] if len(at_height) else 0)
-    return Phases(float(t[air[0]]), float(t[air[-1]]), float(t[first_move]), float(np.median(v[moving])),
-                  float(np.median(z[moving])), float(t[climb_end] - t[air[0]]),
-                  float(max(t[air[-1]] - t[last_move], 0.0)))
+__all__ = ["Calibration", "FITS", "Fit", "calibrate"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -144,29 +89,6 @@ class Calibration:
     simulations: int
 
 
-def profile_for_flight(flight) -> UavProfile:
-    """The preset of the log's vehicle (a PX4 Vision airframe: the case0 PX4 Vision; else PX4 SITL Iris with
-    PX4-Avoidance), on the ground as long as the log is before it lifts off; no simulation."""
-    _check_multirotor(flight)
-    base = VISION_CASE0 if vehicle_of(flight) == VehicleModel.PX4_VISION else SITL_IRIS
-    try:
-        liftoff = phases(flight.trajectory, str(flight.path)).liftoff_s
-    except LogFormatError:
-        return base
-    delay = round(max(liftoff - LIFTOFF_LAG_S, 0.0), 1)
-    if abs(delay - base.takeoff_delay_s) < 0.05:
-        return base
-    return replace(base, name=f"{base.name}@{Path(str(flight.path)).stem}",
-                   description=f"{base.description}; take-off delay from {Path(str(flight.path)).name}",
-                   takeoff_delay_s=delay)
-
-
-def _check_multirotor(flight) -> None:
-    if not str(flight.vehicle_type).startswith("multirotor"):
-        raise LogFormatError(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be flown "
-                             f"and calibrated")
-
-
 def _check_vehicle(flight, profile: UavProfile) -> None:
     """A log is calibrated on a profile of its own vehicle (when its airframe tells which)."""
     vehicle = vehicle_of(flight)
@@ -204,7 +126,7 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
     if not flights:
         raise LogFormatError("calibrate: no log given")
     for flight in flights:
-        _check_multirotor(flight)
+        check_multirotor(flight)
     base = base or profile_for_flight(flights[0])
     for flight in flights:
         _check_vehicle(flight, base)

@@ -251,3 +251,48 @@ def profile(trajectory, goal=None, dt: float = WINDOW_S) -> Profile:
         speed = np.zeros(1)
     distance = np.hypot(xyz[:, 0] - goal_xy[0], xyz[:, 1] - goal_xy[1])
     return Profile(frozen_array(t), frozen_array(xyz[:, 2]), frozen_array(speed), frozen_array(distance))
+
+
+AIRBORNE_M = 0.3   # above the start: airborne [m]
+MOVING_MPS = 0.3   # horizontal speed: moving [m/s]
+
+
+@dataclass(frozen=True, slots=True)
+class Phases:
+    """The phases of a flight, the figures calibration matches (from its 0.5 s trajectory, time from its first sample).
+
+    Attributes:
+        liftoff_s: first sample more than 0.3 m above the start [s].
+        touchdown_s: last such sample [s].
+        leg_start_s: first airborne sample moving faster than 0.3 m/s [s].
+        cruise_speed_mps: median horizontal speed while moving (airborne, > 0.3 m/s).
+        cruise_altitude_m: median altitude while moving.
+        climb_s: from lift-off to the first sample within 0.3 m of the altitude at which the UAV starts to move [s].
+        descent_s: from the last moving sample to touchdown [s].
+    """
+
+    liftoff_s: float
+    touchdown_s: float
+    leg_start_s: float
+    cruise_speed_mps: float
+    cruise_altitude_m: float
+    climb_s: float
+    descent_s: float
+
+
+def phases(trajectory: Trajectory, where: str = "flight") -> Phases:
+    """The phases of a flight; a flight that never lifts off or never moves raises :class:`LogFormatError`."""
+    p = profile(trajectory)
+    z, v, t = p.altitude, p.horizontal_speed, p.t
+    air = np.nonzero(z > AIRBORNE_M)[0]
+    if len(air) < 4:
+        raise LogFormatError(f"{where}: the flight never rises {AIRBORNE_M} m above its start: no take-off to fit")
+    moving = np.nonzero((z > AIRBORNE_M) & (v > MOVING_MPS))[0]
+    if len(moving) < 4:
+        raise LogFormatError(f"{where}: the UAV never moves faster than {MOVING_MPS} m/s in the air: no cruise to fit")
+    first_move, last_move = moving[0], moving[-1]
+    at_height = np.nonzero(z[air[0]:] >= z[first_move] - 0.3)[0]
+    climb_end = air[0] + (at_height[0] if len(at_height) else 0)
+    return Phases(float(t[air[0]]), float(t[air[-1]]), float(t[first_move]), float(np.median(v[moving])),
+                  float(np.median(z[moving])), float(t[climb_end] - t[air[0]]),
+                  float(max(t[air[-1]] - t[last_move], 0.0)))

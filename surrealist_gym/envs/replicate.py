@@ -15,7 +15,7 @@ from ..errors import InvalidTestCase, LogFormatError
 from ..evaluation import ReplicationObjective
 from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_mutators_of
 from ..sim.config import SimConfig
-from ..sim.profiles import default_profile, load_profile
+from ..sim.profiles import default_profile, load_profile, profile_for_flight
 from ..testcase import Obstacle, TestCase, load_test
 from .base import SurrealistEnv
 
@@ -31,7 +31,7 @@ class ReplicateEnv(SurrealistEnv):
         obstacles that plays the real one; the seed test then must be given. A damaged log (truncated, or with
         corrupt data skipped) is refused unless ``allow_partial``: its flight may be cut short.
 
-        ``uav``: the UAV profile; by default the log's own (:func:`~surrealist_gym.calibration.profile_for_flight`:
+        ``uav``: the UAV profile; by default the log's own (:func:`~surrealist_gym.sim.profiles.profile_for_flight`:
         its vehicle's preset, on the ground as long as the log) unless ``sim_config`` is a full
         :class:`~surrealist_gym.sim.config.SimConfig`. ``uav_mutators``: search the UAV's settings as well as the
         obstacles (paper section 3): True for all of the profile's :data:`~surrealist_gym.sim.profiles.SETTINGS`,
@@ -62,7 +62,6 @@ class ReplicateEnv(SurrealistEnv):
             self.reference = self.flight.trajectory
         self.averaging = averaging
         if uav is None and self.flight is not None and not isinstance(sim_config, SimConfig):
-            from ..calibration import profile_for_flight
             uav = profile_for_flight(self.flight)
         mutators = tuple(mutators or default_mutators(seed_test, AUTHORS_ORDER))
         if uav_mutators:

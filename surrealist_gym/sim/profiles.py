@@ -26,13 +26,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import InvalidProfile, InvalidTestCase, regular_file
+from ..errors import InvalidProfile, InvalidTestCase, LogFormatError, regular_file
 from ..frozendict import FrozenDict
 from ..ranges import UAV_TIMINGS, param_problem, problem
+from ..trajectory import phases
 from .config import AvoidanceModel, SimConfig, VehicleModel
 
-__all__ = ["PRESETS", "SETTINGS", "Setting", "UavProfile", "default_profile", "load_profile", "save_profile",
-           "test_uav_settings", "with_uav_settings"]
+__all__ = ["PRESETS", "SETTINGS", "Setting", "UavProfile", "check_multirotor", "default_profile", "load_profile",
+           "profile_for_flight", "save_profile", "test_uav_settings", "vehicle_of", "with_uav_settings"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -302,6 +303,44 @@ def default_profile(test) -> UavProfile:
     flight (its assertion names a log, as the paper's seeds do), else the PX4 SITL Iris that Aerialist's simulators
     fly (``ros``: with PX4-Avoidance)."""
     return VISION_CASE0 if test.replicates_flight else SITL_IRIS
+
+
+# A log's own vehicle, from its PX4 airframe (SYS_AUTOSTART)
+LIFTOFF_LAG_S = 1.0  # measured: both vehicles' 0.5 s trajectories leave the ground ~1 s after the mission starts
+PX4_VISION_AIRFRAMES = (4016,)  # Holybro PX4 Vision DevKit
+IRIS_AIRFRAMES = tuple(range(1010, 1020)) + tuple(range(10015, 10020))  # PX4 SITL Gazebo Iris variants
+
+
+def vehicle_of(flight) -> VehicleModel | None:
+    """The vehicle preset of the log's PX4 airframe (SYS_AUTOSTART), None when the airframe is not one we know."""
+    airframe = int(flight.params.get("SYS_AUTOSTART", 0) or 0)
+    if airframe in PX4_VISION_AIRFRAMES:
+        return VehicleModel.PX4_VISION
+    return VehicleModel.IRIS if airframe in IRIS_AIRFRAMES else None
+
+
+def profile_for_flight(flight) -> UavProfile:
+    """The preset of the log's vehicle (a PX4 Vision airframe: the case0 PX4 Vision; else PX4 SITL Iris with
+    PX4-Avoidance), on the ground as long as the log is before it lifts off; no simulation."""
+    check_multirotor(flight)
+    base = VISION_CASE0 if vehicle_of(flight) == VehicleModel.PX4_VISION else SITL_IRIS
+    try:
+        liftoff = phases(flight.trajectory, str(flight.path)).liftoff_s
+    except LogFormatError:
+        return base
+    delay = round(max(liftoff - LIFTOFF_LAG_S, 0.0), 1)
+    if abs(delay - base.takeoff_delay_s) < 0.05:
+        return base
+    return dataclasses.replace(base, name=f"{base.name}@{Path(str(flight.path)).stem}",
+                               description=f"{base.description}; take-off delay from {Path(str(flight.path)).name}",
+                               takeoff_delay_s=delay)
+
+
+def check_multirotor(flight) -> None:
+    """Only a multirotor's log is flown or calibrated: any other raises :class:`LogFormatError`."""
+    if not str(flight.vehicle_type).startswith("multirotor"):
+        raise LogFormatError(f"{flight.path}: vehicle {flight.vehicle_type!r}: only multirotor logs can be flown "
+                             f"and calibrated")
 
 
 def load_profile(name_or_path) -> UavProfile:

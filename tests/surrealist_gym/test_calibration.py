@@ -5,15 +5,15 @@ import numpy as np
 import pytest
 import yaml
 
-from surrealist_gym.calibration import calibrate, phases, profile_for_flight
+from surrealist_gym.calibration import calibrate
 from surrealist_gym.cli import main
 from surrealist_gym.errors import InvalidTestCase, LogFormatError
 from surrealist_gym.logs import read_flight
 from surrealist_gym.mutators import uav_mutators
 from surrealist_gym.sim import simulate
-from surrealist_gym.sim.profiles import SITL_IRIS, VISION_CASE0, load_profile
+from surrealist_gym.sim.profiles import SITL_IRIS, VISION_CASE0, load_profile, profile_for_flight
 from surrealist_gym.testcase import TestCase
-from surrealist_gym.trajectory import Trajectory
+from surrealist_gym.trajectory import Trajectory, phases
 from tests.conftest import CASE0_ULG, EXPERIMENTS, FORMATS
 
 M0_ULG = EXPERIMENTS / "m0.ulg"
