@@ -149,7 +149,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         raise SurrealistError(f"tool {tool}: {'not a folder' if tool.exists() else 'no such folder'}")
     if not (tool / "cli.py").is_file():
         raise SurrealistError(f"tool {tool}: no cli.py in it (a competition tool is a folder with cli.py)")
-    out = Path(out) if out is not None else Path("results") / f"compete-{datetime.now():%Y%m%d-%H%M%S}"
+    out = (Path(out) if out is not None else Path("results") / f"compete-{datetime.now():%Y%m%d-%H%M%S}").absolute()
     if out.exists() or out.is_symlink():
         raise SurrealistError(f"--out {out}: exists; give a new folder")
     load_profile(uav)
