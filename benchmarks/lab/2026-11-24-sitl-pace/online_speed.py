@@ -1,6 +1,10 @@
-"""Steady speed on the mission line: PX4's 24 rilast trajectories against our UAV with the planner's cruise capped.
+"""Steady speed on the mission line: PX4's 24 rilast trajectories against our UAV with a given heading offset.
 
-    python benchmarks/lab/2026-11-24-sitl-pace/online_speed.py dev 2.2 2.4 1e9    # dev = runs 0-2, held = 3-4
+    python benchmarks/lab/2026-11-24-sitl-pace/online_speed.py dev -16 0    # dev = runs 0-2, held = 3-4
+
+Each value after the split is a ``planner.heading_offset_deg`` of the px4-v1.12-sitl-iris profile (its own: -16).
+The study first varied the planner's cruise speed cap (``cruise_speed_max``), a setting since removed; that version
+of this script is at commit dd02d7e.
 
 Windows of 0.5 s from 8 s after reaching altitude until the flight first leaves the line by 0.3 m.
 """
@@ -35,11 +39,11 @@ print(split, 'PX4 on-line speed: median %.2f p25 %.2f p75 %.2f n=%d' % (np.media
 base = sg.load_test(DATA + '/competition/case_studies/mission1.yaml')
 prof = load_profile('px4-v1.12-sitl-iris').sim_config()
 for L in [float(v) for v in sys.argv[2:]]:
-    cfg = dataclasses.replace(prof, avoidance_config=dataclasses.replace(prof.avoidance_config, cruise_speed_max=L))
+    cfg = dataclasses.replace(prof, avoidance_config=dataclasses.replace(prof.avoidance_config, heading_offset_deg=L))
     ours = []
     for k in ids:
         t = base.with_obstacles([Obstacle(**o) for o in json.loads(tests[k]['obstacles'])])
         r = sg.simulate(t, runs=1, seed=0, config=cfg)[0]
         tr = r.trajectory
         ours += online(tr.t, tr.x, tr.y, tr.z)
-    print(' lead %.2f ours on-line: median %.2f p25 %.2f p75 %.2f n=%d' % (L, np.median(ours), np.percentile(ours, 25), np.percentile(ours, 75), len(ours)))
+    print(' offset %.2f ours on-line: median %.2f p25 %.2f p75 %.2f n=%d' % (L, np.median(ours), np.percentile(ours, 25), np.percentile(ours, 75), len(ours)))

@@ -1,6 +1,9 @@
 """Close-region agreement of one SimConfig variant on one split of rilast-mission1 (dev = even runs, held = odd).
 
-    python benchmarks/lab/2026-11-24-sitl-pace/variants.py dev close 1 '{"planner": {"cruise_speed_max": 2.3}}'
+    python benchmarks/lab/2026-11-24-sitl-pace/variants.py dev close 1 '{"planner": {"heading_offset_deg": 16}}'
+
+The last argument overrides settings of the px4-v1.12-sitl-iris profile's SimConfig (``planner``: its avoidance
+config). The cap variants of the README (``cruise_speed_max``, since removed) run at commit dd02d7e.
 """
 import sys, json, time, dataclasses, re
 import numpy as np
