@@ -135,7 +135,7 @@ def main() -> None:
     from surrealist_gym.feasibility import FeasibilityConfig, infeasible
     from surrealist_gym.labels import load_labelled_set
     from surrealist_gym.sim.profiles import load_profile
-    from surrealist_gym.testcase import load_test
+    from surrealist_gym.aerialist import load_test
 
     cfg = FeasibilityConfig()
     print(f"{cfg}")

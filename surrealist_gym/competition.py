@@ -139,7 +139,7 @@ def load_competition_test(path) -> TestCase:
     mode) is skipped, as known."""
     import warnings
 
-    from .testcase import load_test
+    from .aerialist import load_test
 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r".*MAV_CMD 530 is not supported")

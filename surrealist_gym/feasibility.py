@@ -11,7 +11,8 @@ every obstacle below the altitude. Everything is in the test's local frame: x no
 and the measurements behind them: ``docs/feasibility.md``.
 
 Example:
-    >>> from surrealist_gym.testcase import Obstacle, load_test
+    >>> from surrealist_gym.aerialist import load_test
+    >>> from surrealist_gym.testcase import Obstacle
     >>> test = load_test("../shared/data/competition/case_studies/mission1.yaml")       # doctest: +SKIP
     >>> wall = [Obstacle(20, 20, 20, x, 26, r=45) for x in (-28.5, 0.0, 28.5)]             # doctest: +SKIP
     >>> infeasible(test.with_obstacles(wall))                                              # doctest: +SKIP

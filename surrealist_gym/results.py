@@ -1,6 +1,7 @@
-"""The results folder of a search: best test (Aerialist YAML + its files), evaluations.csv, summary.json, and
-plots in the paper's style (Figure 1: real vs seed vs best, top view and altitude, horizontal speed and distance
-to the goal over time; Figure 2: fitness over evaluations and per-run minimum distances of seed and best).
+"""The results folder of a search: best test (Aerialist YAML + its files: :func:`export_test`, which the competition's
+suite export uses too), evaluations.csv, summary.json, and plots in the paper's style (Figure 1: real vs seed vs
+best, top view and altitude, horizontal speed and distance to the goal over time; Figure 2: fitness over evaluations
+and per-run minimum distances of seed and best).
 
 Time base of the profiles: the real flight (``env.reference``) keeps its own times; the seed's and best's
 trajectories (one run, or the DBA average of the runs, all from the paper's pipeline of 0.5 s window means) carry
@@ -10,15 +11,24 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from .aerialist import save_test
+from .errors import SurrealistError
 from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
-from .store import EvaluationStore
 from .sim.profiles import save_profile, test_uav_settings
-from .aerialist_yaml import export_test
+from .store import EvaluationStore
+from .testcase import TestCase
 from .trajectory import Profile, profile
+
+#: Where :func:`export_test` copies the files a test names (the folder the competition's own YAMLs name them in).
+FILES_FOLDER = "case_studies"
+_FILE_FIELDS = ("mission_file", "params_file", "commands_file", "reference_log")
+README_TITLE = "# Aerialist test cases"
 
 
 def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> dict:
@@ -93,6 +103,60 @@ def _jsonable(value):
     if isinstance(value, (np.floating, np.integer)):
         return value.item()
     return str(value)
+
+
+def export_test(test: TestCase, path) -> None:
+    """Save the test at ``path`` (:func:`~surrealist_gym.aerialist.save_test`) as a file that travels with its folder:
+    every file it names (mission, parameters, commands, the assertion's flight log) is copied into ``FILES_FOLDER``
+    beside it and named by a path relative to the YAML's folder, and the folder gets a README saying to run Aerialist
+    from it (Aerialist opens relative paths from its working directory). Files of the same name and other content
+    get ``-2``, ``-3``, ... A copy that fails is a one-line SurrealistError.
+
+    Example::
+
+        >>> export_test(load_test("seed.yaml"), "out/best.yaml")  # out/case_studies/auto1.plan, ...  # doctest: +SKIP
+    """
+    path = Path(path)
+    folder = path.parent
+    copies = {key: _copy_into(getattr(test, key), folder / FILES_FOLDER)
+              for key in _FILE_FIELDS if getattr(test, key)}
+    save_test(replace(test, **copies), path)
+    _write_readme(folder)
+
+
+def _copy_into(source: str, files: Path) -> str:
+    """``source`` copied into the folder ``files`` under its own name (or ``NAME-2`` ... when another file holds
+    it); the copy's absolute path. A file already there with the same bytes is the copy."""
+    source_path = Path(source)
+    try:
+        data = source_path.read_bytes()
+        files.mkdir(parents=True, exist_ok=True)
+        target, n = files / source_path.name, 1
+        while target.exists() and target.read_bytes() != data:
+            n += 1
+            target = files / f"{source_path.stem}-{n}{source_path.suffix}"
+        if not target.exists():
+            shutil.copyfile(source_path, target)
+    except OSError as err:
+        raise SurrealistError(f"{source}: cannot copy it into {files} ({err.strerror or err})") from None
+    return str(target.resolve())
+
+
+def _write_readme(folder: Path) -> None:
+    """The folder's README (not written over one that is not ours)."""
+    readme = folder / "README.md"
+    if readme.exists() and not readme.read_text(encoding="utf-8", errors="replace").startswith(README_TITLE):
+        return
+    readme.write_text(
+        f"{README_TITLE}\n\n"
+        f"The YAML files in this folder load in Aerialist master (`robot`/`mission` keys), Aerialist 0.2.x "
+        f"(`drone`/`test` keys) and surrealist-gym. They name their mission, parameter and command files (and any "
+        f"flight log) by paths relative to this folder, in `{FILES_FOLDER}/`.\n\n"
+        f"Aerialist opens relative paths from its working directory: run it from this folder, e.g.\n\n"
+        f"    cd {folder.name}\n"
+        f"    python3 -m aerialist exec --test NAME.yaml\n\n"
+        f"surrealist-gym resolves them against the YAML's folder, from anywhere: "
+        f"`surrealist simulate {folder.name}/NAME.yaml`. The folder moves as a whole.\n", encoding="utf-8")
 
 
 def write_evaluations_csv(store: EvaluationStore | None, path: Path, measure: Measure | str = Measure.PAPER) -> int:

@@ -2,8 +2,8 @@
 
 ``export_suite(suite, folder, order)`` writes each member as ``failure-01.yaml``, ``failure-02.yaml``, ... in the
 given order (the best first: the 2025 edition evaluates the first 20 a tool wrote), each loading in Aerialist master
-and 0.2.x alike (:func:`~surrealist_gym.testcase.save_test`). The mission, parameter and command files are copied
-into ``folder/case_studies/`` (:func:`~surrealist_gym.testcase.export_test`), so each YAML names them by the relative
+and 0.2.x alike (:func:`~surrealist_gym.aerialist.save_test`). The mission, parameter and command files are copied
+into ``folder/case_studies/`` (:func:`~surrealist_gym.results.export_test`), so each YAML names them by the relative
 path the competition's own YAMLs use; the folder's README says to run Aerialist from it, and the folder moves as a
 whole.
 """
@@ -14,8 +14,8 @@ import math
 from pathlib import Path
 from typing import Sequence
 
+from .results import export_test
 from .suite import Member, Suite, layout_distance, trajectory_distance
-from .aerialist_yaml import export_test
 
 
 def member_name(index: int) -> str:
@@ -25,7 +25,7 @@ def member_name(index: int) -> str:
 def export_suite(suite: Suite, folder, order: Sequence[int] | None = None,
                  expected: Sequence[float] | None = None) -> list[Path]:
     """Write the members in ``order`` (indices into ``suite.members``; default: as they are) as ``failure-NN.yaml``
-    with their files (:func:`~surrealist_gym.testcase.export_test`), plus ``suite.csv`` (with each member's
+    with their files (:func:`~surrealist_gym.results.export_test`), plus ``suite.csv`` (with each member's
     ``expected`` test score, when given); returns the YAMLs in that order."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

@@ -4,8 +4,8 @@ Obstacle frame (PRODUCT.md): ``x, y`` = footprint centre (x north, y east), ``z`
 ``r`` = yaw in degrees, positive from north toward east; ``l`` along the obstacle's x axis, ``w`` along y, ``h`` up.
 A cylinder has diameter ``l`` (= ``w``); Aerialist's YAML gives its radius as ``size.r``.
 
-The Aerialist YAML they load from and save to is read and written by :mod:`surrealist_gym.aerialist_yaml`
-(:func:`load_test`, :func:`save_test`, :func:`export_test`, re-exported here).
+The Aerialist YAML they load from and save to is read and written by :mod:`surrealist_gym.aerialist`
+(:func:`~surrealist_gym.aerialist.load_test`, :func:`~surrealist_gym.aerialist.save_test`).
 """
 from __future__ import annotations
 
@@ -316,9 +316,3 @@ class TestCase:
 
 def _finite(value) -> bool:
     return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
-
-
-# The Aerialist YAML (imported last: it builds on the values above). Re-exported so callers keep importing from here.
-from .aerialist_yaml import (AGENTS, AVOIDANCE_PORT, FILES_FOLDER, PORTS, README_TITLE, SIMULATORS,  # noqa: E402
-                             SITL_PORT, VEHICLE_PORT, export_test, load_test, parse_obstacles, save_test)
-from .yaml_loading import TRAJECTORY_TAG, safe_yaml  # noqa: E402

@@ -20,7 +20,7 @@ follow (DTW and Fréchet to the reference, clearances, collision, duration, exte
 Example:
     >>> import surrealist_gym as sg
     >>> featurizer = Featurizer.for_problem("generate")
-    >>> featurizer.transform([sg.testcase.load_test(sg.data_path("rq2-seed.yaml"))]).shape
+    >>> featurizer.transform([sg.load_test(sg.data_path("rq2-seed.yaml"))]).shape
     (1, 53)
 """
 from __future__ import annotations
@@ -33,12 +33,12 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from surrealist_gym.aerialist import parse_obstacles
 from surrealist_gym.errors import SurrealistError
 from surrealist_gym.evaluation import flown_with_common_noise
 from surrealist_gym.geometry import obstacle_distances
 from surrealist_gym.outcomes import outcomes
 from surrealist_gym.store import EvaluationStore
-from surrealist_gym.aerialist_yaml import parse_obstacles
 from surrealist_gym.testcase import Obstacle, TestCase
 
 from .lowfi import NAMES as LOWFI_NAMES
@@ -113,7 +113,7 @@ class Featurizer:
     def for_problem(cls, problem: str = "replicate", seed_test=None, log=None, lowfi: bool = False) -> "Featurizer":
         """The featurizer of the bundled problems: ``replicate`` (case0, its reference) or ``generate`` (RQ2)."""
         import surrealist_gym as sg
-        from surrealist_gym.testcase import load_test
+        from surrealist_gym.aerialist import load_test
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)

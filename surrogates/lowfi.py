@@ -11,7 +11,7 @@ flight's duration and its highest point and lateral extent. Results are cached b
 
 Example:
     >>> import surrealist_gym as sg
-    >>> from surrealist_gym.testcase import load_test
+    >>> from surrealist_gym.aerialist import load_test
     >>> lowfi = LowFidelity(load_test(sg.data_path("rq2-seed.yaml")))
     >>> len(lowfi.outcomes(lowfi.seed_test.obstacles)) == len(NAMES)
     True
@@ -89,7 +89,7 @@ class LowFidelity:
     def save(self, folder) -> None:
         """Write the problem (seed test with its mission and frozen parameters; the reference) to ``folder``."""
         from surrealist_gym.mission import write_plan
-        from surrealist_gym.testcase import save_test
+        from surrealist_gym.aerialist import save_test
 
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
@@ -103,7 +103,7 @@ class LowFidelity:
 
     @classmethod
     def load(cls, folder) -> "LowFidelity":
-        from surrealist_gym.testcase import load_test
+        from surrealist_gym.aerialist import load_test
 
         folder = Path(folder)
         ref = folder / "lowfi-reference.npy"

@@ -34,7 +34,7 @@ def run(args) -> int:
     from ..executors import LocalPoolExecutor
     from ..logs import read_flight
     from ..sim.profiles import load_profile, save_profile
-    from ..testcase import load_test
+    from ..aerialist import load_test
 
     check_at_least(args, runs=1, workers=1)
     out = check_writable(args.out, "--out", "file", (".yaml", ".yml"))  # before any log is read or flown

@@ -20,7 +20,7 @@ def run(args) -> int:
     from ..envs.generate import GenerateEnv
     from ..errors import InvalidTestCase
     from ..mutators import AUTHORS_ORDER, default_mutators
-    from ..testcase import load_test
+    from ..aerialist import load_test
 
     if args.case_study and not args.resume:
         return _case_study(args)

@@ -35,7 +35,7 @@ def run(args) -> int:
     out = Path(args.out)  # stable-baselines3 saves to the path with .zip added unless it ends in .zip
     check_writable(out if out.suffix == ".zip" else out.with_name(out.name + ".zip"), "--out", "file")
     if args.seed:  # the problems' seed test, read before anything is trained or flown
-        from ..testcase import load_test
+        from ..aerialist import load_test
         load_test(args.seed)
 
     from ..errors import DependencyNotInstalled

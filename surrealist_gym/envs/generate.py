@@ -8,10 +8,11 @@ obstacle only.
 """
 from __future__ import annotations
 
+from ..aerialist import load_test
 from ..evaluation import GenerationObjective
-from ..outcomes import Measure, measure_for
 from ..mutators import MOVE_KINDS, default_mutators
-from ..testcase import TestCase, load_test
+from ..outcomes import Measure, measure_for
+from ..testcase import TestCase
 from .base import SurrealistEnv
 
 

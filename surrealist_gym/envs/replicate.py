@@ -11,12 +11,13 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..aerialist import load_test
 from ..errors import InvalidTestCase, LogFormatError
 from ..evaluation import ReplicationObjective
 from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_mutators_of
 from ..sim.config import SimConfig
 from ..sim.profiles import default_profile, load_profile, profile_for_flight
-from ..testcase import Obstacle, TestCase, load_test
+from ..testcase import Obstacle, TestCase
 from .base import SurrealistEnv
 
 

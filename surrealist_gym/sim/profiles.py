@@ -353,7 +353,7 @@ def load_profile(name_or_path) -> UavProfile:
     path = Path(key)
     if not path.suffix.lower() in (".yaml", ".yml"):
         raise InvalidProfile(f"--uav {key!r}: not a preset ({', '.join(PRESETS)}) nor a .yaml file")
-    from ..yaml_loading import safe_yaml
+    from ..aerialist import safe_yaml
 
     regular_file(path, "profile", InvalidProfile)
     try:

@@ -170,7 +170,7 @@ def test_calibrate_refuses_a_profile_of_another_vehicle(tmp_path, capsys):
 
 def test_a_seed_with_an_invalid_uav_setting_is_one_line_naming_its_file(tmp_path, capsys):
     from surrealist_gym import data_path
-    from surrealist_gym.testcase import load_test, save_test
+    from surrealist_gym.aerialist import load_test, save_test
 
     seed = tmp_path / "seed.yaml"
     save_test(replace(load_test(data_path("rq1-seed1.yaml")), params={"uav.planner.nope": 3.0}), seed)

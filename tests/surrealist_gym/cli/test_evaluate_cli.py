@@ -7,9 +7,10 @@ import shutil
 import numpy as np
 import pytest
 
+from surrealist_gym.aerialist import load_test, save_test
 from surrealist_gym.cli import main
 from surrealist_gym.reevaluation import RunRecord, load_tests, summarise_test
-from surrealist_gym.testcase import Obstacle, load_test, save_test
+from surrealist_gym.testcase import Obstacle
 from tests.conftest import SHARED_DATA
 
 COMPETITION = SHARED_DATA / "competition"

@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 import yaml
 
+from surrealist_gym.aerialist import load_test
 from surrealist_gym.cli import main
 from surrealist_gym.competition import load_case_study
 from surrealist_gym.sim.profiles import load_profile
 from surrealist_gym.sim.runner import simulate
 from surrealist_gym.suite import Member, Suite
 from surrealist_gym.suite_export import export_suite
-from surrealist_gym.testcase import Obstacle, load_test
+from surrealist_gym.testcase import Obstacle
 from tests.conftest import CASE_STUDIES
 
 
@@ -43,7 +44,7 @@ def test_tiny_case_study_search_writes_results_and_suite(tmp_path, capsys):
 
 def test_suite_exports_both_key_sets_ready_for_aerialist(tmp_path):
     """A real failing flight (a box across mission1's track, flown in PyBullet) exported and read back; Aerialist's
-    own loaders read the export in tests/surrealist_gym/test_aerialist_yaml.py."""
+    own loaders read the export in tests/surrealist_gym/test_aerialist.py."""
     base = load_case_study(CASE_STUDIES / "mission1.yaml")
     test = base.with_obstacles([Obstacle(10, 3, 20, 4.5, 25, 0, 0)])
     run = simulate(test, runs=1, seed=0, config=load_profile("px4-v1.12-sitl-iris").sim_config())[0]

@@ -1,25 +1,25 @@
-"""The Aerialist test-case YAML: reading (:func:`load_test`), writing (:func:`save_test`) and exporting with its files
-(:func:`export_test`) the :class:`~surrealist_gym.testcase.TestCase` values.
+"""The Aerialist test-case YAML: reading (:func:`load_test`) and writing (:func:`save_test`) the
+:class:`~surrealist_gym.testcase.TestCase` values, and the safe YAML loader for files from anywhere (:func:`safe_yaml`:
+no aliases, YAML 1.2 numbers, Aerialist's tags).
 
 The YAML is Aerialist's, as both generations in use read and write it (docs/aerialist-yaml.md): :func:`save_test`
 writes what Aerialist master (``robot``/``mission``) and 0.2.x (``drone``/``test``) both load with geometry, and
 :func:`load_test` reads what either writes; a field that changes the flight and cannot be simulated is a one-line
-error, one that Aerialist's own flight would not miss a one-line warning naming the file. :func:`export_test` writes
-a YAML whose files travel with its folder.
+error, one that Aerialist's own flight would not miss a one-line warning naming the file.
+:func:`~surrealist_gym.results.export_test` writes a YAML whose files travel with its folder.
 """
 from __future__ import annotations
 
 import csv
-import shutil
+import functools
 import warnings
-from dataclasses import fields, replace
+from dataclasses import fields
 from pathlib import Path
 
 from .errors import InvalidTestCase, MissionError, regular_file
 from .mission import read_mission
 from .ranges import param_problem
 from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, _finite, _parse_shape
-from .yaml_loading import safe_yaml
 
 # --- YAML --------------------------------------------------------------------------------------------------------
 #: Top-level sections: Aerialist master's (robot, simulation, mission, assertion, agent), 0.2.x's (drone, test) and
@@ -37,10 +37,6 @@ PORTS = {"sitl": 14540, "sim": 14540, "px4_sitl": 14540, "ros": 14541, "avoidanc
 SITL_PORT, AVOIDANCE_PORT, VEHICLE_PORT = 14540, 14541, 14550
 SIMULATORS = ("gazebo", "ros", "jmavsim")
 AGENTS = ("local", "docker", "k8s")
-#: Where :func:`export_test` copies the files a test names (the folder the competition's own YAMLs name them in).
-FILES_FOLDER = "case_studies"
-_FILE_FIELDS = ("mission_file", "params_file", "commands_file", "reference_log")
-README_TITLE = "# Aerialist test cases"
 
 
 def load_test(path) -> TestCase:
@@ -152,9 +148,10 @@ def save_test(test: TestCase, path) -> None:
     Master reads ``robot``/``mission`` and, given them, ignores ``drone``/``test`` without a warning; 0.2.x reads
     only ``drone``/``test``: so those sections are written under both names. Obstacles in the dict form with
     ``shape`` ``box`` or ``cylinder`` and ``size.r`` (:meth:`Obstacle.to_dict`); parameters inline; file paths
-    relative to the YAML's folder when the file lies in it, else absolute (:func:`export_test` copies them in). A
-    real flight named but not at hand goes to the ``surrealist`` section, which Aerialist ignores (its assertion
-    would fail to load). A test with ``wind`` or a ``timeout`` is master's only: 0.2.x has neither.
+    relative to the YAML's folder when the file lies in it, else absolute
+    (:func:`~surrealist_gym.results.export_test` copies them in). A real flight named but not at hand goes to the
+    ``surrealist`` section, which Aerialist ignores (its assertion would fail to load). A test with ``wind`` or a
+    ``timeout`` is master's only: 0.2.x has neither.
     """
     import copy
 
@@ -192,62 +189,6 @@ def save_test(test: TestCase, path) -> None:
         doc["surrealist"] = {"assertion_log": test.assertion_log}
     with open(path, "w", encoding="utf-8") as f:
         yaml.safe_dump(doc, f, sort_keys=False)
-
-
-def export_test(test: TestCase, path) -> None:
-    """Save the test at ``path`` (:func:`save_test`) as a file that travels with its folder: every file it names
-    (mission, parameters, commands, the assertion's flight log) is copied into ``FILES_FOLDER`` beside it and named
-    by a path relative to the YAML's folder, and the folder gets a README saying to run Aerialist from it (Aerialist
-    opens relative paths from its working directory). Files of the same name and other content get ``-2``, ``-3``,
-    ... A copy that fails is a one-line SurrealistError.
-
-    Example::
-
-        >>> export_test(load_test("seed.yaml"), "out/best.yaml")  # out/case_studies/auto1.plan, ...  # doctest: +SKIP
-    """
-    path = Path(path)
-    folder = path.parent
-    copies = {key: _copy_into(getattr(test, key), folder / FILES_FOLDER)
-              for key in _FILE_FIELDS if getattr(test, key)}
-    save_test(replace(test, **copies), path)
-    _write_readme(folder)
-
-
-def _copy_into(source: str, files: Path) -> str:
-    """``source`` copied into the folder ``files`` under its own name (or ``NAME-2`` ... when another file holds
-    it); the copy's absolute path. A file already there with the same bytes is the copy."""
-    from .errors import SurrealistError
-
-    source_path = Path(source)
-    try:
-        data = source_path.read_bytes()
-        files.mkdir(parents=True, exist_ok=True)
-        target, n = files / source_path.name, 1
-        while target.exists() and target.read_bytes() != data:
-            n += 1
-            target = files / f"{source_path.stem}-{n}{source_path.suffix}"
-        if not target.exists():
-            shutil.copyfile(source_path, target)
-    except OSError as err:
-        raise SurrealistError(f"{source}: cannot copy it into {files} ({err.strerror or err})") from None
-    return str(target.resolve())
-
-
-def _write_readme(folder: Path) -> None:
-    """The folder's README (not written over one that is not ours)."""
-    readme = folder / "README.md"
-    if readme.exists() and not readme.read_text(encoding="utf-8", errors="replace").startswith(README_TITLE):
-        return
-    readme.write_text(
-        f"{README_TITLE}\n\n"
-        f"The YAML files in this folder load in Aerialist master (`robot`/`mission` keys), Aerialist 0.2.x "
-        f"(`drone`/`test` keys) and surrealist-gym. They name their mission, parameter and command files (and any "
-        f"flight log) by paths relative to this folder, in `{FILES_FOLDER}/`.\n\n"
-        f"Aerialist opens relative paths from its working directory: run it from this folder, e.g.\n\n"
-        f"    cd {folder.name}\n"
-        f"    python3 -m aerialist exec --test NAME.yaml\n\n"
-        f"surrealist-gym resolves them against the YAML's folder, from anywhere: "
-        f"`surrealist simulate {folder.name}/NAME.yaml`. The folder moves as a whole.\n", encoding="utf-8")
 
 
 def _port(value) -> int | None:
@@ -495,3 +436,43 @@ def _parse_commands(raw, name) -> tuple[RuntimeCommand, ...]:
             raise InvalidTestCase(f"{name}: commands[{i}]: expected a mapping timestamp, mode, x, y, z, r")
         out.append(_construct(RuntimeCommand, c, f"{name}: commands[{i}]"))
     return tuple(out)
+
+
+# --- safe loading ------------------------------------------------------------------------------------------------
+def safe_yaml(text: str, name: str):
+    """``yaml.safe_load`` for files from anywhere: no aliases (an alias bomb expands to gigabytes; Aerialist files
+    have none), nesting too deep for the parser is an error, not a crash, and numbers read as YAML 1.2 reads them
+    (``1e9`` is a number, not a string)."""
+    import yaml
+
+    try:
+        if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)):
+            raise InvalidTestCase(f"{name}: YAML aliases (*name) are not supported")
+        return yaml.load(text, Loader=_loader())
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        raise InvalidTestCase(f"{name}: invalid YAML{where}") from None
+    except RecursionError:
+        raise InvalidTestCase(f"{name}: YAML nested too deeply") from None
+
+
+#: The tag Aerialist master's ``to_yaml`` gives an assertion's variable (its Trajectory class), read as its name.
+TRAJECTORY_TAG = "tag:yaml.org,2002:python/name:aerialist.px4.trajectory.Trajectory"
+
+
+@functools.cache
+def _loader():
+    """A SafeLoader whose floats include exponents without a dot (``1e9``, ``-2E-3``), as in YAML 1.2, and that
+    reads Aerialist master's tag of the trajectory variable as ``trajectory`` (no other Python tag)."""
+    import re
+
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    exponent = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", exponent, list("-+0123456789"))
+    Loader.add_constructor(TRAJECTORY_TAG, lambda loader, node: "trajectory")
+    return Loader

@@ -26,15 +26,17 @@ import numpy as np
 import pytest
 import yaml
 
+from surrealist_gym.aerialist import load_test, save_test
 from surrealist_gym.cli import main
 from surrealist_gym.compete import tool_environment
 from surrealist_gym.compete.locate import source_of
 from surrealist_gym.competition import load_competition_test
 from surrealist_gym.errors import InvalidTestCase
 from surrealist_gym.logs import read_flight
+from surrealist_gym.results import export_test
 from surrealist_gym.sim.profiles import load_profile
 from surrealist_gym.sim.runner import simulate
-from surrealist_gym.testcase import Obstacle, Shape, TestCase, export_test, load_test, save_test
+from surrealist_gym.testcase import Obstacle, Shape, TestCase
 from surrealist_gym.trajectory import Trajectory
 from tests.conftest import CASE_STUDIES, EXPERIMENTS, SHARED_DATA
 
