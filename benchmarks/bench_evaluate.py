@@ -38,7 +38,7 @@ RILAST = COMPETITION / "rilast-mission1" / "tests.csv"
 
 def write_rilast(folder: Path, count: int = 9, every: int = 150) -> Path:
     """``count`` rilast tests (every ``every``-th row) as Aerialist YAMLs in ``folder``."""
-    from surrealist_gym.labels import load_labelled_set
+    from surrealist_gym.fidelity.labels import load_labelled_set
     from surrealist_gym.aerialist import save_test
 
     lset = load_labelled_set(RILAST)

@@ -133,7 +133,7 @@ def main() -> None:
     warnings.filterwarnings("ignore", message=".*MAV_CMD 530 is not supported.*")  # mission2/3's camera item
 
     from surrealist_gym.feasibility import FeasibilityConfig, infeasible
-    from surrealist_gym.labels import load_labelled_set
+    from surrealist_gym.fidelity.labels import load_labelled_set
     from surrealist_gym.sim.profiles import load_profile
     from surrealist_gym.aerialist import load_test
 

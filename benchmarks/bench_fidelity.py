@@ -28,7 +28,7 @@ CAMBA_FLIGHTS = ROOT / "benchmarks" / "data" / "camba-px4-flights.csv"
 
 def sequential(lset, n: int) -> float:
     """Tests per second of a plain loop: simulate one run and measure the competition distance, test by test."""
-    from surrealist_gym.fidelity import sim_config_for
+    from surrealist_gym.fidelity.measure import sim_config_for
     from surrealist_gym.sim import simulate
 
     tests = lset.tests[:n]
@@ -42,7 +42,7 @@ def sequential(lset, n: int) -> float:
 
 def harness(name: str, path, labels, workers: int, limit, every: int, baseline: float | None) -> float:
     from surrealist_gym.cli.fidelity import summary_text
-    from surrealist_gym.fidelity import measure_fidelity
+    from surrealist_gym.fidelity.measure import measure_fidelity
 
     report = measure_fidelity(path, labels=labels, workers=workers, limit=limit, every=every)
     print(f"== {name} ({workers} workers)")
@@ -64,7 +64,7 @@ def main() -> int:
     parser.add_argument("--skip-rilast", action="store_true", help="CAMBA only")
     args = parser.parse_args()
 
-    from surrealist_gym.fidelity import load_labelled_set
+    from surrealist_gym.fidelity.measure import load_labelled_set
 
     rilast = load_labelled_set(RILAST)
     baseline = sequential(rilast, args.baseline)

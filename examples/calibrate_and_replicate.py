@@ -10,9 +10,9 @@ import argparse
 
 import surrealist_gym as sg
 from search import AdaptiveGreedy
-from surrealist_gym.calibration import calibrate, format_calibration
 from surrealist_gym.envs.replicate import ReplicateEnv
 from surrealist_gym.executors import InlineExecutor, LocalPoolExecutor
+from surrealist_gym.fidelity.calibration import calibrate, format_calibration
 from surrealist_gym.sim.profiles import test_uav_settings
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

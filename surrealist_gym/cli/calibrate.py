@@ -30,7 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    from ..calibration import calibrate, format_calibration, plot_calibration
+    from ..fidelity.calibration import calibrate, format_calibration, plot_calibration
     from ..executors import LocalPoolExecutor
     from ..logs import read_flight
     from ..sim.profiles import load_profile, save_profile

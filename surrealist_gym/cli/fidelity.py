@@ -54,7 +54,7 @@ def _check(args) -> None:
 
 def summary_text(report) -> str:
     """The summary ``surrealist fidelity`` prints; every distance says which one it is."""
-    from ..fidelity import DISTANCE_NAME, format_figure as _f
+    from ..fidelity.measure import DISTANCE_NAME, format_figure as _f
 
     results = {}
     for row in report.rows:
@@ -108,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from ..fidelity import load_labelled_set, measure_fidelity, sim_config_for, write_report
+    from ..fidelity.measure import load_labelled_set, measure_fidelity, sim_config_for, write_report
 
     _check(args)
     sim_config_for(args.uav)

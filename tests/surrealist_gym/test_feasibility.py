@@ -10,7 +10,7 @@ import pytest
 
 from surrealist_gym.aerialist import load_test
 from surrealist_gym.feasibility import FeasibilityConfig, infeasible
-from surrealist_gym.labels import load_labelled_set
+from surrealist_gym.fidelity.labels import load_labelled_set
 from surrealist_gym.mission import Command, Mission, MissionItem
 from surrealist_gym.testcase import Obstacle, Shape, TestCase
 

@@ -26,12 +26,12 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
-from .frozendict import FrozenDict
-from .sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
-from .sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, profile_for_flight, vehicle_of
-from .testcase import TestCase
-from .trajectory import Phases, Trajectory, phases, profile as time_profile
+from ..errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
+from ..frozendict import FrozenDict
+from ..sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
+from ..sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, profile_for_flight, vehicle_of
+from ..testcase import TestCase
+from ..trajectory import Phases, Trajectory, phases, profile as time_profile
 
 __all__ = ["Calibration", "FITS", "Fit", "calibrate"]
 
@@ -121,7 +121,7 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
         grid: values of each setting's range flown before interpolating.
         passes: rounds over the settings (the pace moves the altitude a little, and back).
     """
-    from .executors import InlineExecutor
+    from ..executors import InlineExecutor
 
     if not flights:
         raise LogFormatError("calibrate: no log given")

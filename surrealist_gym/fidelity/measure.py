@@ -1,7 +1,7 @@
 """Fidelity: how far the simulated UAV agrees with the system that produced a labelled set of Aerialist tests.
 
-Each test of a labelled set (:mod:`surrealist_gym.labels`) is flown in the simulator and compared with its label
-on the 2-D competition distance (:func:`~surrealist_gym.geometry.competition_distance`), the outcome and the
+Each test of a labelled set (:mod:`surrealist_gym.fidelity.labels`) is flown in the simulator and compared with its
+label on the 2-D competition distance (:func:`~surrealist_gym.geometry.competition_distance`), the outcome and the
 airborne time (first to last moment above 0.3 m).
 
 Outcome mapping: their ``flown`` (or ``success``) is our ``success``; their ``no_result`` (Aerialist's 500 s
@@ -31,12 +31,12 @@ import numpy as np
 
 from search.statistics import vargha_delaney_a12
 
-from .errors import SurrealistError
-from .outcomes import BLOCKED as _BLOCKED
-from .outcomes import UNSAFE_DISTANCE_M, RunStatus
-from .frozendict import FrozenDict
+from ..errors import SurrealistError
+from ..outcomes import BLOCKED as _BLOCKED
+from ..outcomes import UNSAFE_DISTANCE_M, RunStatus
+from ..frozendict import FrozenDict
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
-from .testcase import TestCase
+from ..testcase import TestCase
 
 __all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "RunOutcome",
            "TestRow", "airborne_time", "build_report", "fly_labelled_set", "fly_test", "format_figure",
@@ -75,7 +75,7 @@ def sim_config_for(uav=None, config=None):
     """The one place where a UAV profile becomes a SimConfig: ``uav`` (a preset name, a YAML path or a
     :class:`~surrealist_gym.sim.profiles.UavProfile`; default the PX4 SITL Iris that produced the competition's
     labels) applied to ``config``."""
-    from .sim.profiles import SITL_IRIS, load_profile
+    from ..sim.profiles import SITL_IRIS, load_profile
 
     return load_profile(uav if uav is not None else SITL_IRIS).sim_config(config)
 
@@ -83,8 +83,8 @@ def sim_config_for(uav=None, config=None):
 def fly_test(test: TestCase, runs: int, seed: int, config=None, buffer: float = 0.0) -> tuple[RunOutcome, ...]:
     """Fly ``runs`` runs of a test and reduce each to a :class:`RunOutcome` (the function the workers call); the
     distance is the run's competition distance with its polyline buffered by ``buffer`` [m]."""
-    from .executors import fly
-    from .sim import SimConfig
+    from ..executors import fly
+    from ..sim import SimConfig
 
     out = []
     config = replace(config or SimConfig(), competition_buffer_m=buffer)
@@ -114,7 +114,7 @@ def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=Non
     """
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    from .executors import _die_with_parent
+    from ..executors import _die_with_parent
 
     workers = workers or os.cpu_count() or 1
     out: list = [None] * len(lset)

@@ -26,9 +26,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Sequence
 
-from .aerialist import load_test
-from .errors import InvalidLabels, InvalidTestCase, SurrealistError, regular_file
-from .testcase import Obstacle, TestCase
+from ..aerialist import load_test
+from ..errors import InvalidLabels, InvalidTestCase, SurrealistError, regular_file
+from ..testcase import Obstacle, TestCase
 
 # their result (lower case) -> normalised result
 RESULTS = {"flown": "flown", "success": "flown", "no_result": "timeout", "timeout": "timeout",

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from surrealist_gym.cli import main
-from surrealist_gym.fidelity import (InvalidLabels, RunOutcome, airborne_time, build_report, load_labelled_set,
-                                     measure_fidelity, region_stats)
+from surrealist_gym.fidelity.measure import (InvalidLabels, RunOutcome, airborne_time, build_report, load_labelled_set,
+                                             measure_fidelity, region_stats)
 from tests.conftest import SHARED_DATA
 
 COMPETITION = SHARED_DATA / "competition"
