@@ -7,7 +7,7 @@ config). The cap variants of the README (``cruise_speed_max``, since removed) ru
 """
 import sys, json, time, dataclasses, re
 import numpy as np
-from surrealist_gym.fidelity import load_labelled_set, fly_labelled_set, build_report
+from surrealist_gym.fidelity.measure import load_labelled_set, fly_labelled_set, build_report
 from surrealist_gym.sim.profiles import load_profile
 from pathlib import Path
 DATA = str(Path(__file__).resolve().parents[3].parent / "shared" / "data")
