@@ -73,7 +73,7 @@ def make_tool(folder: Path, layouts) -> Path:
 
 def plain(flights, seed: int) -> list[tuple[float, float]]:
     """Wall time [s] of a plain simulate of each flight's test and run, and its simulated duration [s]."""
-    from surrealist_gym.competition import load_competition_test
+    from surrealist_gym.competition.rules import load_competition_test
     from surrealist_gym.sim import simulate_runs
     from surrealist_gym.sim.profiles import load_profile
 
@@ -93,7 +93,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=1, help="fly each measured test this many times")
     args = parser.parse_args()
-    from surrealist_gym.compete import prepare, run
+    from surrealist_gym.competition.compete import prepare, run
     from surrealist_gym.logs import read_flight
 
     layouts = [LAYOUTS[0]] + [layout for layout in LAYOUTS[1:] for _ in range(args.repeat)]

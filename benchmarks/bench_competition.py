@@ -144,7 +144,7 @@ def score(mission: str, rep: int, folders: dict[str, Path], out: Path, args) -> 
 def standings(board: Path, folders: dict[str, Path], summaries: dict[str, dict]) -> list[dict]:
     """Every tool's row of one case study and repetition: the leaderboard's, and score 0 / no diversity for a tool
     that wrote no test; R re-ranked over all five (scoring.ranks, as the leaderboard ranks)."""
-    from surrealist_gym.scoring import ranks
+    from surrealist_gym.competition.scoring import ranks
 
     with open(board, newline="", encoding="utf-8") as f:
         by_folder = {row["folder"]: row for row in csv.DictReader(f)}

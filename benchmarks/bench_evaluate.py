@@ -50,7 +50,7 @@ def write_rilast(folder: Path, count: int = 9, every: int = 150) -> Path:
 
 def inline(tests, runs: int, seed: int) -> tuple[float, list[list[float]]]:
     """Wall time [s] of the same runs flown one by one in this process, and each run's CPU time [s]."""
-    from surrealist_gym.reevaluation import _records
+    from surrealist_gym.competition.reevaluation import _records
     from surrealist_gym.sim.profiles import default_profile
 
     start, costs = time.perf_counter(), []
@@ -68,7 +68,7 @@ def scheduled(costs: list[list[float]], workers: int) -> tuple[float, float]:
     """Wall times [s] on idle cores, from each run's CPU time: evaluate's jobs (``_jobs``), each given to the first
     free worker in submission order; and a test at a time with its runs split over the workers (LocalPoolExecutor)."""
     from surrealist_gym.executors import _chunks
-    from surrealist_gym.reevaluation import _jobs
+    from surrealist_gym.competition.reevaluation import _jobs
 
     free = [0.0] * workers
     for i, chunk in _jobs(len(costs), len(costs[0]), workers):
@@ -111,7 +111,7 @@ def main() -> int:
         print(f"needs the shared data folder {COMPETITION}", file=sys.stderr)
         return 1
     from surrealist_gym.cli.evaluate import summary_text
-    from surrealist_gym.reevaluation import _records, evaluate, load_tests, write_report
+    from surrealist_gym.competition.reevaluation import _records, evaluate, load_tests, write_report
 
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:

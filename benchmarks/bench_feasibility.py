@@ -1,4 +1,5 @@
-"""The feasibility check (surrealist_gym.feasibility) on walled-off layouts and PX4's labelled flights, and its time.
+"""The feasibility check (surrealist_gym.competition.feasibility) on walled-off layouts and PX4's labelled flights, and
+its time.
 
 Run from the project root::
 
@@ -45,7 +46,7 @@ def _bisect(ok, lo: float, hi: float, steps: int = 20) -> float:
 def _calibration(rilast, camba, cfg) -> None:
     from shapely.geometry import LineString, Point, Polygon
 
-    from surrealist_gym.feasibility import infeasible
+    from surrealist_gym.competition.feasibility import infeasible
 
     start, goal = (0.0, 0.0), next(it for it in rilast.tests[0].mission.items if it.command.name == "LAND")
     track = LineString([start, (goal.x, goal.y)])
@@ -132,7 +133,7 @@ def main() -> None:
         sys.exit(f"needs the shared data folder {COMPETITION}")
     warnings.filterwarnings("ignore", message=".*MAV_CMD 530 is not supported.*")  # mission2/3's camera item
 
-    from surrealist_gym.feasibility import FeasibilityConfig, infeasible
+    from surrealist_gym.competition.feasibility import FeasibilityConfig, infeasible
     from surrealist_gym.fidelity.labels import load_labelled_set
     from surrealist_gym.sim.profiles import load_profile
     from surrealist_gym.aerialist import load_test

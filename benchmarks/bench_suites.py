@@ -2,13 +2,13 @@
 greedy and CMA-ES under the same budget.
 
 Each search flies ``--budget`` single-run evaluations of ``Surrealist-CaseStudy-v0`` (PX4 SITL profile, the
-competition's rules and distance, the feasibility check) behind :class:`~surrealist_gym.envs.suite.RecordSuite`;
-then every member of its suite is re-flown ``--confirm`` times with fresh noise (base seed + 1). A member is
-*confirmed* when it fails in at least 60% of the re-runs. A suite larger than ``--confirm-max`` is confirmed on a
-random sample of that many members, and its confirmed count estimated as its size times the sample's confirmed share
-(the count in the sample is a lower bound). Per case study and agent the table gives the median (min-max) of distinct
-failures found and confirmed, with the two-sided Mann-Whitney p-value and Vargha-Delaney A12 of the suite search
-against each other agent on the (estimated) confirmed count.
+competition's rules and distance, the feasibility check) behind
+:class:`~surrealist_gym.competition.suite_env.RecordSuite`; then every member of its suite is re-flown ``--confirm``
+times with fresh noise (base seed + 1). A member is *confirmed* when it fails in at least 60% of the re-runs. A suite
+larger than ``--confirm-max`` is confirmed on a random sample of that many members, and its confirmed count estimated as
+its size times the sample's confirmed share (the count in the sample is a lower bound). Per case study and agent the
+table gives the median (min-max) of distinct failures found and confirmed, with the two-sided Mann-Whitney p-value and
+Vargha-Delaney A12 of the suite search against each other agent on the (estimated) confirmed count.
 
 Each repetition is cached in ``--out`` (its evaluations in SQLite, its figures in JSON): a rerun reads finished
 ones back and resumes an interrupted one.
@@ -42,11 +42,11 @@ def one_search(mission: str, agent: str, rep: int, budget: int, confirm: int, ou
     if stem.with_suffix(".json").is_file():
         return json.loads(stem.with_suffix(".json").read_text())
     from search.registry import make_agent
-    from surrealist_gym.envs.case_study import CaseStudyEnv
-    from surrealist_gym.envs.suite import RecordSuite
-    from surrealist_gym.reevaluation import evaluate
-    from surrealist_gym.suite import diversity
-    from surrealist_gym.suite_export import export_suite
+    from surrealist_gym.competition.case_study_env import CaseStudyEnv
+    from surrealist_gym.competition.suite_env import RecordSuite
+    from surrealist_gym.competition.reevaluation import evaluate
+    from surrealist_gym.competition.suite import diversity
+    from surrealist_gym.competition.suite_export import export_suite
 
     start = time.perf_counter()
     env = RecordSuite(CaseStudyEnv(CASE_STUDIES / f"{mission}.yaml", budget=budget, runs=1, random_seed=rep,
@@ -65,7 +65,7 @@ def one_search(mission: str, agent: str, rep: int, budget: int, confirm: int, ou
         picked = np.random.default_rng(rep).choice(len(paths), confirm_max, replace=False)
         checked = [paths[i] for i in sorted(picked)]
     if checked and confirm:
-        from surrealist_gym.reevaluation import load_tests
+        from surrealist_gym.competition.reevaluation import load_tests
 
         ev = evaluate(load_tests(checked), runs=confirm, seed=rep + 1, workers=1)
         ps = [s.p for s in ev.tests]

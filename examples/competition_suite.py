@@ -13,10 +13,10 @@ import gymnasium as gym
 
 import surrealist_gym  # noqa: F401  (registers Surrealist-CaseStudy-v0)
 from search.novelty import SuiteSearch
-from surrealist_gym.envs.suite import RecordSuite
-from surrealist_gym.reevaluation import evaluate, load_tests
-from surrealist_gym.suite import diversity
-from surrealist_gym.suite_export import export_suite
+from surrealist_gym.competition.reevaluation import evaluate, load_tests
+from surrealist_gym.competition.suite import diversity
+from surrealist_gym.competition.suite_env import RecordSuite
+from surrealist_gym.competition.suite_export import export_suite
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("case_study", help="a case study's YAML (or mission1-3 when $SURREALIST_CASE_STUDIES is set)")

@@ -1,12 +1,12 @@
 """Suite search: the default generator of suites of distinct failures (``surrealist generate --case-study``).
 
 Random search finds failures; the suite needs many distinct ones that fail again when re-flown. So the agent mixes
-uniform samples (exploration: ``explore`` of the asks, and every ask until something failed) with mutations of
-earlier failures (exploitation). A parent is drawn with a weight that falls with the children it already had, so the
-search spreads over many failures instead of polishing one. A child moves each mutator with probability ``rate`` by
-a Gaussian step of ``sigma`` (in action units: 1 is half a mutator's range). A child alike to its parent that comes
-closer replaces it in the suite (:class:`~surrealist_gym.envs.suite.RecordSuite`); one that differs enough becomes a
-new member. The agent reads the competition distance and the status of each run from ``info`` and nothing else.
+uniform samples (exploration: ``explore`` of the asks, and every ask until something failed) with mutations of earlier
+failures (exploitation). A parent is drawn with a weight that falls with the children it already had, so the search
+spreads over many failures instead of polishing one. A child moves each mutator with probability ``rate`` by a Gaussian
+step of ``sigma`` (in action units: 1 is half a mutator's range). A child alike to its parent that comes closer replaces
+it in the suite (:class:`~surrealist_gym.competition.suite_env.RecordSuite`); one that differs enough becomes a new
+member. The agent reads the competition distance and the status of each run from ``info`` and nothing else.
 
 Only failures are parents (``near_m``): near misses made no better parents than uniform samples
 (``benchmarks/lab/2026-11-24-suites/``).

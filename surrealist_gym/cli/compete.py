@@ -42,8 +42,8 @@ def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from tqdm import tqdm
 
-    from ..compete import prepare
-    from ..compete import run as run_tool
+    from ..competition.compete import prepare
+    from ..competition.compete import run as run_tool
     from ..errors import SurrealistError
     from .options import check_at_least, check_writable
 

@@ -5,9 +5,9 @@ prints one row per test (failure probability with its 95% Clopper-Pearson interv
 closest approach) and the suite's distinct failures and diversity, and writes ``report.md``, ``evaluation.csv``,
 ``runs.csv`` and the figures to ``--out``. Tests must keep the competition's rules unless ``--any-layout``.
 
-``--competition 2024|2025`` scores each folder (a tool's output, one case study) as that edition did: it draws
-the edition's tests (:mod:`surrealist_gym.scoring`), flies them the edition's runs, and ranks the folders per case
-study (``leaderboard.csv``, ``test-scores.csv``, ``leaderboard.png`` and a section of the report).
+``--competition 2024|2025`` scores each folder (a tool's output, one case study) as that edition did: it draws the
+edition's tests (:mod:`surrealist_gym.competition.scoring`), flies them the edition's runs, and ranks the folders per
+case study (``leaderboard.csv``, ``test-scores.csv``, ``leaderboard.png`` and a section of the report).
 
 ``--out`` holds one evaluation: its options (``run.json``, with the tests drawn) and every run, stored as it
 completes (``evaluations.sqlite``). ``--resume DIR`` finishes an interrupted evaluation: it flies only the missing
@@ -28,8 +28,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..competition.scoring import Draw
 from ..errors import SurrealistError
-from ..scoring import Draw
 from .options import RUN_FILE
 
 STORE_FILE = "evaluations.sqlite"
@@ -57,7 +57,7 @@ class EvaluateOptions:
     def from_args(cls, args: argparse.Namespace) -> "EvaluateOptions":
         """The options of a new evaluation; with ``--competition``, each folder's tests are loaded and drawn here
         (one-line errors before anything is flown)."""
-        from ..scoring import draw_folder, edition
+        from ..competition.scoring import draw_folder, edition
 
         ed = None if args.competition is None else edition(args.competition)
         runs = args.runs if args.runs is not None else ed.runs if ed else DEFAULT_RUNS
@@ -124,7 +124,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def summary_text(ev) -> str:
     """The table ``surrealist evaluate`` prints: one row per test, then the suite's figures."""
-    from ..reevaluation_report import suite_lines
+    from ..competition.reevaluation_report import suite_lines
 
     width = max([len("test"), *(len(t.name) for t in ev.tests)])
     head = (f"{'test':{width}}  {'fail':>5}  {'err':>3}  {'p':>5}  {'95% CI':>12}  {'pts/run':>7}  {'median':>6}  "
@@ -147,8 +147,8 @@ def _m(value, digits: int = 2) -> str:
 def run(args: argparse.Namespace) -> int:
     """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
     summary and write the report."""
-    from ..reevaluation import flight_configs, load_tests, rule_broken
-    from ..scoring import edition
+    from ..competition.reevaluation import flight_configs, load_tests, rule_broken
+    from ..competition.scoring import edition
     from ..sim.profiles import default_profile, load_profile
     from ._search import _unlock
     from .options import check_at_least, check_buffer
@@ -261,8 +261,8 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict) ->
     breaks)."""
     from tqdm import tqdm
 
-    from ..reevaluation import evaluate
-    from ..reevaluation_report import scoring_lines, write_report
+    from ..competition.reevaluation import evaluate
+    from ..competition.reevaluation_report import scoring_lines, write_report
 
     store = out / STORE_FILE
     resume = f"surrealist evaluate --resume {out}"
@@ -302,7 +302,7 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict) ->
 
 def _board(options: EvaluateOptions, ev, tests: dict, invalid: dict):
     """The folders' draws scored as the edition did and ranked per case study."""
-    from ..scoring import edition, score_suite, standings
+    from ..competition.scoring import edition, score_suite, standings
 
     ed = edition(options.competition)
     runs = {t.file: t.runs for t in ev.tests}

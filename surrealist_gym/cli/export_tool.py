@@ -17,7 +17,7 @@ import argparse
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist export-tool``."""
-    from ..export_tool import AGENTS, ToolSettings
+    from ..competition.export_tool import AGENTS, ToolSettings
 
     default = ToolSettings()
     parser.add_argument("dir", metavar="DIR", help="the tool's folder to write (new or empty)")
@@ -43,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
-    from ..export_tool import SETTINGS_FILE, ToolSettings, write_tool
+    from ..competition.export_tool import SETTINGS_FILE, ToolSettings, write_tool
     from .options import check_writable
 
     settings = ToolSettings(sim_budget_factor=args.sim_budget_factor, obstacles=args.obstacles, confirm=args.confirm,

@@ -60,7 +60,7 @@ def _case_study(args) -> int:
     """A new case-study search: the case study's defaults where the command line left them, then the search."""
     from pathlib import Path
 
-    from ..competition import case_study_path
+    from ..competition.rules import case_study_path
 
     path = case_study_path(args.case_study)  # a case study that does not exist fails here, before any folder
     if Path(args.case_study).suffix in (".yaml", ".yml"):
@@ -69,15 +69,15 @@ def _case_study(args) -> int:
         if f"--{name}" not in getattr(args, "_flags", frozenset()):
             setattr(args, name, value)
     if args.uav is None:
-        from ..envs.case_study import DEFAULT_UAV
+        from ..competition.case_study_env import DEFAULT_UAV
         args.uav = DEFAULT_UAV
     with search_folder(args, GenerateOptions) as (out, options):
         return _case_study_search(out, options)
 
 
 def _case_study_search(out, options) -> int:
-    from ..envs.case_study import CaseStudyEnv
-    from ..envs.suite import RecordSuite
+    from ..competition.case_study_env import CaseStudyEnv
+    from ..competition.suite_env import RecordSuite
 
     env = RecordSuite(CaseStudyEnv(case_study=options.case_study, obstacles=options.obstacles, runs=options.runs,
                                    budget=options.budget, aggregate=options.aggregate,
@@ -98,11 +98,11 @@ def _write_suite(out, suite, options) -> None:
 
     from tqdm import tqdm
 
-    from ..reevaluation import evaluate, regroup, stored_runs
-    from ..reevaluation_report import write_report
-    from ..scoring import EDITIONS, Draw, case_study_of, score_suite, test_score
-    from ..suite import diversity
-    from ..suite_export import export_suite, member_name, plot_suite
+    from ..competition.reevaluation import evaluate, regroup, stored_runs
+    from ..competition.reevaluation_report import write_report
+    from ..competition.scoring import EDITIONS, Draw, case_study_of, score_suite, test_score
+    from ..competition.suite import diversity
+    from ..competition.suite_export import export_suite, member_name, plot_suite
 
     folder = out / "suite"
     members, ev = suite.members, None

@@ -28,9 +28,9 @@ import yaml
 
 from surrealist_gym.aerialist import load_test, save_test
 from surrealist_gym.cli import main
-from surrealist_gym.compete import tool_environment
-from surrealist_gym.compete.locate import source_of
-from surrealist_gym.competition import load_competition_test
+from surrealist_gym.competition.compete import tool_environment
+from surrealist_gym.competition.compete.locate import source_of
+from surrealist_gym.competition.rules import load_competition_test
 from surrealist_gym.errors import InvalidTestCase
 from surrealist_gym.logs import read_flight
 from surrealist_gym.results import export_test

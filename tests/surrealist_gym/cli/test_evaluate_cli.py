@@ -9,7 +9,7 @@ import pytest
 
 from surrealist_gym.aerialist import load_test, save_test
 from surrealist_gym.cli import main
-from surrealist_gym.reevaluation import RunRecord, load_tests, summarise_test
+from surrealist_gym.competition.reevaluation import RunRecord, load_tests, summarise_test
 from surrealist_gym.testcase import Obstacle
 from tests.conftest import SHARED_DATA
 

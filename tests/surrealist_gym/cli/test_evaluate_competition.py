@@ -11,8 +11,8 @@ import pytest
 import shapely
 import yaml
 
-from surrealist_gym import scoring
 from surrealist_gym.cli import main
+from surrealist_gym.competition import scoring
 from tests.conftest import SHARED_DATA
 
 COMPETITION = SHARED_DATA / "competition"

@@ -9,11 +9,11 @@ import yaml
 
 from surrealist_gym.aerialist import load_test
 from surrealist_gym.cli import main
-from surrealist_gym.competition import load_case_study
+from surrealist_gym.competition.rules import load_case_study
+from surrealist_gym.competition.suite import Member, Suite
+from surrealist_gym.competition.suite_export import export_suite
 from surrealist_gym.sim.profiles import load_profile
 from surrealist_gym.sim.runner import simulate
-from surrealist_gym.suite import Member, Suite
-from surrealist_gym.suite_export import export_suite
 from surrealist_gym.testcase import Obstacle
 from tests.conftest import CASE_STUDIES
 
@@ -102,7 +102,7 @@ def _by_hand(runs, boxes: int) -> float:
 @pytest.fixture(scope="module")
 def flown_suite():
     """CAMBA's three mission3 tests (short flights) as a suite, each with one real flight as the search's run."""
-    from surrealist_gym.competition import load_competition_test
+    from surrealist_gym.competition.rules import load_competition_test
     from tests.conftest import SHARED_DATA
 
     camba = SHARED_DATA / "competition" / "camba-collection"
@@ -161,7 +161,7 @@ def test_export_is_ranked_by_the_confirmations_expected_score(tmp_path, flown_su
 
     closest = min(suite.members, key=lambda m: (m.status != "collision", m.distance))
     assert f"closest failure: {closest.distance:.2f} m ({closest.status}) in {folder}/failure-" in printed
-    from surrealist_gym.scoring import area_diversity
+    from surrealist_gym.competition.scoring import area_diversity
 
     assert (f"expected 2025 scores of the first 3 (from 2 re-runs each): failure {sum(scores):.2f} "
             in printed)  # CAMBA's three layouts differ: no duplicate

@@ -1,5 +1,5 @@
-"""The figures of a re-evaluation report (:mod:`surrealist_gym.reevaluation`): distances per test, a top view per
-test, a map of the suite and, when folders are scored as the competition did, the leaderboard.
+"""The figures of a re-evaluation report (:mod:`surrealist_gym.competition.reevaluation`): distances per test, a top
+view per test, a map of the suite and, when folders are scored as the competition did, the leaderboard.
 
 Top views follow the local frame (x north, y east): east (y) on the horizontal axis, north (x) up. matplotlib is
 imported inside each function (the ``Figure`` API, no pyplot state).
@@ -12,7 +12,7 @@ import os
 
 import numpy as np
 
-from .outcomes import UNSAFE_DISTANCE_M
+from ..outcomes import UNSAFE_DISTANCE_M
 
 __all__ = ["plot_distances", "plot_leaderboard", "plot_suite_map", "plot_top_views"]
 
@@ -141,8 +141,8 @@ def _colours(n: int) -> list:
 
 
 def plot_leaderboard(board, path) -> None:
-    """The folders scored as an edition did (:func:`~surrealist_gym.scoring.standings`), one row per case study:
-    a bar per folder of its score (2024: the suite score; 2025: the failure score, and its diversity beside),
+    """The folders scored as an edition did (:func:`~surrealist_gym.competition.scoring.standings`), one row per case
+    study: a bar per folder of its score (2024: the suite score; 2025: the failure score, and its diversity beside),
     labelled with its rank."""
     studies = list(dict.fromkeys(row.suite.case_study for row in board))
     year = board[0].suite.edition

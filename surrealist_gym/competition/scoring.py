@@ -1,7 +1,8 @@
 """The UAV Testing Competition's scoring of a test suite, as its 2024 (SBFT) and 2025 (ICST, SBFT) editions did.
 
 Sources: the editions' reports (skhatiri/UAV-Testing-Competition, ``reports/``). The rules on obstacles and the points
-of a run are :mod:`surrealist_gym.competition`'s; this module draws the tests an edition evaluates and scores them.
+of a run are :mod:`surrealist_gym.competition.rules`'s; this module draws the tests an edition evaluates and scores
+them.
 
 - **Drawn tests** (:func:`draw`): 2024 drew 20 tests of a suite at random (here seeded) and ran each 5 times; 2025
   took the first 20 in the order the tool wrote them (:func:`writing_order`) and ran each 3 times.
@@ -34,7 +35,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .errors import SurrealistError
+from ..errors import SurrealistError
 
 __all__ = ["EDITIONS", "SIMILAR_FLIGHT_M", "Draw", "Edition", "ScoredTest", "Standing", "SuiteScore",
            "area_diversity", "area_similarity", "case_study_of", "draw", "draw_folder", "duplicates", "edition",
@@ -188,8 +189,9 @@ def area_diversity(layouts: Sequence) -> float:
 def similar_flights(flights: Sequence, threshold_m: float = SIMILAR_FLIGHT_M) -> tuple[int | None, ...]:
     """2024: for each test's runs (a sequence of (N, 3) trajectories; empty: not flown), the first earlier test whose
     averaged flight is within ``threshold_m`` (mean x-y distance along DTW's path between the DBA averages,
-    :func:`~surrealist_gym.fitness.average_runs`, :func:`~surrealist_gym.suite.trajectory_distance`), or None."""
-    from .fitness import average_runs
+    :func:`~surrealist_gym.fitness.average_runs`, :func:`~surrealist_gym.competition.suite.trajectory_distance`), or
+    None."""
+    from ..fitness import average_runs
     from .suite import trajectory_distance
 
     averages = [average_runs([r for r in runs if len(r)]) if any(len(r) for r in runs) else None for runs in flights]

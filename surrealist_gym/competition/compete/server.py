@@ -31,7 +31,7 @@ from multiprocessing.connection import Client, Listener
 from pathlib import Path
 from typing import Callable
 
-from ..errors import SurrealistError, one_line
+from ...errors import SurrealistError, one_line
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,7 +76,7 @@ class SimulationServer:
 
     def __init__(self, folder, budget: int, config, seed: int = 0, workers: int = 1,
                  on_flight: Callable[[Flight], None] | None = None, runaway_after: int | None = None) -> None:
-        from ..executors import InlineExecutor, LocalPoolExecutor
+        from ...executors import InlineExecutor, LocalPoolExecutor
 
         self.folder = Path(folder)
         self.budget, self.config, self.seed = budget, config, seed
@@ -190,7 +190,7 @@ class SimulationServer:
             return self._fly(message)
 
     def _fly(self, message: dict) -> dict:
-        from ..competition import load_competition_test
+        from ..rules import load_competition_test
         from .translate import write_test
 
         number = len(self._flights) + 1

@@ -1,7 +1,7 @@
-"""The report of a re-evaluation (:mod:`surrealist_gym.reevaluation`): ``evaluation.csv``, ``runs.csv``, the figures
-(:mod:`surrealist_gym.report_plots`) and ``report.md``, with the competition's scoring (``leaderboard.csv``,
-``test-scores.csv``, ``leaderboard.png``) when given a board. Every name here is importable from
-:mod:`surrealist_gym.reevaluation` too.
+"""The report of a re-evaluation (:mod:`surrealist_gym.competition.reevaluation`): ``evaluation.csv``, ``runs.csv``, the
+figures (:mod:`surrealist_gym.competition.report_plots`) and ``report.md``, with the competition's scoring
+(``leaderboard.csv``, ``test-scores.csv``, ``leaderboard.png``) when given a board. Every name here is importable from
+:mod:`surrealist_gym.competition.reevaluation` too.
 """
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
-from .errors import SurrealistError
-from .outcomes import UNSAFE_DISTANCE_M
+from ..errors import SurrealistError
+from ..outcomes import UNSAFE_DISTANCE_M
 
 if TYPE_CHECKING:
     from .reevaluation import Evaluation, TestStats
@@ -72,9 +72,9 @@ SCORING_FILES = {"leaderboard": "leaderboard.csv", "test_scores": "test-scores.c
 
 def write_report(ev: Evaluation, out, board: Sequence | None = None) -> dict[str, Path]:
     """Write ``evaluation.csv`` (one row per test), ``runs.csv`` (one row per run), the figures
-    (:mod:`surrealist_gym.report_plots`) and ``report.md`` to the folder ``out``; returns their paths. With ``board``
-    (:func:`~surrealist_gym.scoring.standings` of the folders scored as an edition did) also ``leaderboard.csv``,
-    ``test-scores.csv`` and ``leaderboard.png``, and the report has a section on them.
+    (:mod:`surrealist_gym.competition.report_plots`) and ``report.md`` to the folder ``out``; returns their paths. With
+    ``board`` (:func:`~surrealist_gym.competition.scoring.standings` of the folders scored as an edition did) also
+    ``leaderboard.csv``, ``test-scores.csv`` and ``leaderboard.png``, and the report has a section on them.
 
     Whole or not at all: the files are written to a temporary folder inside ``out`` and then moved into place
     (``report.md`` last); if that fails (a full disk), the temporary folder and any report file moved are removed and

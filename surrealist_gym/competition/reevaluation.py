@@ -2,19 +2,20 @@
 
 Any folder of Aerialist YAMLs (a generator's output, the competition's) is flown ``runs`` times per test; run i of a
 test draws its noise from (test key, seed, i). A run **fails** when it collides or its competition distance
-(:attr:`~surrealist_gym.sim.runner.RunResult.competition_distance`) is below 1.5 m. Per test
-(:class:`TestStats`): the failure probability with its 95% Clopper-Pearson interval, the competition's points
-(:func:`~surrealist_gym.competition.points`; a collision scores 5) as a mean per run and for the median run, and the
-closest approach. A run that ends in ``error`` (its simulation raised, or the vehicle's state became invalid) is
+(:attr:`~surrealist_gym.sim.runner.RunResult.competition_distance`) is below 1.5 m. Per test (:class:`TestStats`): the
+failure probability with its 95% Clopper-Pearson interval, the competition's points
+(:func:`~surrealist_gym.competition.rules.points`; a collision scores 5) as a mean per run and for the median run, and
+the closest approach. A run that ends in ``error`` (its simulation raised, or the vehicle's state became invalid) is
 neither a pass nor a failure: it is counted apart, and the figures are over the runs flown. Per suite
-(:class:`Evaluation`): the failing tests' closest runs offered in turn to a :class:`~surrealist_gym.suite.Suite`
-(distinct failures) and their :func:`~surrealist_gym.suite.diversity`.
+(:class:`Evaluation`): the failing tests' closest runs offered in turn to a
+:class:`~surrealist_gym.competition.suite.Suite` (distinct failures) and their
+:func:`~surrealist_gym.competition.suite.diversity`.
 
-The tests are flown on a process pool several at a time, so every core stays busy: whole tests (their runs in one
-world) first, the last round split run by run so that no worker idles at the end. Given a ``store``, each chunk of
-runs is written to it (an :class:`~surrealist_gym.store.EvaluationStore`) as it completes, and the runs it holds
-already are read back instead of flown: an interrupted evaluation resumes and loses nothing. :func:`write_report`
-writes the report whole or not at all (:mod:`surrealist_gym.reevaluation_report`, its names re-exported here).
+The tests are flown on a process pool several at a time, so every core stays busy: whole tests (their runs in one world)
+first, the last round split run by run so that no worker idles at the end. Given a ``store``, each chunk of runs is
+written to it (an :class:`~surrealist_gym.store.EvaluationStore`) as it completes, and the runs it holds already are
+read back instead of flown: an interrupted evaluation resumes and loses nothing. :func:`write_report` writes the report
+whole or not at all (:mod:`surrealist_gym.competition.reevaluation_report`, its names re-exported here).
 
 Example::
 
@@ -36,13 +37,13 @@ from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
-from .errors import InvalidTestCase, SurrealistError, one_line
-from .frozendict import FrozenDict
-from .outcomes import UNSAFE_DISTANCE_M
+from ..errors import InvalidTestCase, SurrealistError, one_line
+from ..frozendict import FrozenDict
+from ..outcomes import UNSAFE_DISTANCE_M
+from ..testcase import Obstacle, TestCase
 from .reevaluation_report import (REPORT_FILES, SCORING_FILES, _f, _leaderboard_row, _p_text,  # noqa: F401
                                   _r, _scoring_section, _test_score_row, _write_csv, report_text,
                                   scoring_lines, suite_lines, write_report)  # the report, re-exported
-from .testcase import Obstacle, TestCase
 
 if TYPE_CHECKING:
     from .suite import Suite
@@ -77,9 +78,9 @@ def find_tests(paths: Sequence) -> list[Path]:
 
 def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, TestCase]]:
     """Load the tests named by ``paths`` (see :func:`find_tests`) and check them; unless ``any_layout``, against
-    the competition's rules (:func:`~surrealist_gym.competition.violations`). Raises a one-line
+    the competition's rules (:func:`~surrealist_gym.competition.rules.violations`). Raises a one-line
     :class:`~surrealist_gym.errors.InvalidTestCase` naming the file and field of the first bad test."""
-    from .competition import load_competition_test
+    from .rules import load_competition_test
 
     out = []
     for path in find_tests(paths):
@@ -96,7 +97,7 @@ def flight_configs(tests: Sequence[tuple[Path, TestCase]], profiles: Sequence) -
     """The SimConfig each test flies with (its profile's); a test whose ``uav.*`` settings its UAV cannot take
     (an unknown planner field, a value out of range) is a one-line InvalidTestCase naming its file, before any
     flight."""
-    from .sim.profiles import test_uav_settings, with_uav_settings
+    from ..sim.profiles import test_uav_settings, with_uav_settings
 
     configs = []
     for (path, test), profile in zip(tests, profiles):
@@ -111,7 +112,7 @@ def flight_configs(tests: Sequence[tuple[Path, TestCase]], profiles: Sequence) -
 
 def rule_broken(test: TestCase) -> str:
     """The first of the competition's rules the test breaks (and how many more), or "" when it keeps them all."""
-    from .competition import violations
+    from .rules import violations
 
     broken = violations(test)
     return broken[0] + (f" (and {len(broken) - 1} more)" if len(broken) > 1 else "") if broken else ""
@@ -154,14 +155,14 @@ class RunRecord:
     @property
     def points(self) -> int:
         """The competition's points of the run (a collision scores 5, as a distance of 0 does)."""
-        from .competition import points
+        from .rules import points
 
         return 5 if self.status == "collision" else points(self.distance)
 
 
 def _records(test, indices, seed, config) -> list[RunRecord]:
     """Fly runs of one test together and keep what the report needs (the function the workers call)."""
-    from .sim.runner import simulate_runs
+    from ..sim.runner import simulate_runs
 
     return [RunRecord(int(r.index), str(getattr(r.status, "value", r.status)), float(r.competition_distance),
                       float(r.duration), np.asarray(r.trajectory.xyz, dtype=np.float64), r.message)
@@ -197,7 +198,7 @@ def fly_tests(tests: Sequence[TestCase], configs: Sequence, runs: int, seed: int
     (to store it)."""
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    from .executors import _die_with_parent
+    from ..executors import _die_with_parent
 
     workers = workers or max(1, min(os.cpu_count() or 1, 8))
     got: list[dict] = [dict(h) for h in have] if have is not None else [{} for _ in tests]
@@ -333,11 +334,11 @@ class Evaluation:
     """A suite re-evaluated: its tests' statistics, the distinct failures and their diversity.
 
     Attributes:
-        runs, seed: runs per test and base seed; uav: the profile given (None: each test's default).
-        tests: per-test statistics, in input order. suite: the distinct failures (a
-        :class:`~surrealist_gym.suite.Suite` of the failing tests' closest runs). diversity: their
-        :func:`~surrealist_gym.suite.diversity` over all failing tests. workers, wall_s: processes and flying time [s]
-        (of this call). stored: runs read back from the store, flown before this call.
+        runs, seed: runs per test and base seed; uav: the profile given (None: each test's default). tests: per-test
+        statistics, in input order. suite: the distinct failures (a :class:`~surrealist_gym.competition.suite.Suite` of
+        the failing tests' closest runs). diversity: their :func:`~surrealist_gym.competition.suite.diversity` over all
+        failing tests. workers, wall_s: processes and flying time [s] (of this call). stored: runs read back from the
+        store, flown before this call.
     """
 
     runs: int
@@ -368,7 +369,7 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     (:func:`evaluation_identity`, with ``identity``: anything else the runs depend on), so a store of another
     evaluation is refused in one line. ``buffer``: the competition distance's polyline buffer [m] (``--buffer``,
     ``SimConfig.competition_buffer_m``)."""
-    from .sim.profiles import default_profile, load_profile
+    from ..sim.profiles import default_profile, load_profile
     from .suite import Suite
 
     if runs < 1:
@@ -381,7 +382,7 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     db = None
     try:
         if store is not None:
-            from .store import EvaluationStore
+            from ..store import EvaluationStore
 
             db = EvaluationStore(store)
             db.claim({**evaluation_identity(tests, runs, seed, configs), **(identity or {})})
@@ -425,7 +426,7 @@ def evaluation_identity(tests: Sequence[tuple[Path, TestCase]], runs: int, seed:
     """What the runs of an evaluation depend on: its tests (file and a digest of ``TestCase.key()``, in order), the
     runs per test, the base seed, the UAV profiles and the simulator settings (digest); and, recorded but not
     compared, the package version."""
-    from . import __version__
+    from .. import __version__
 
     def digest(value) -> str:
         return hashlib.sha1(value.encode()).hexdigest()[:16]
@@ -438,7 +439,7 @@ def evaluation_identity(tests: Sequence[tuple[Path, TestCase]], runs: int, seed:
 def stored_runs(store, tests: Sequence[TestCase]) -> list[tuple[RunRecord, ...]]:
     """The runs a search flew of each test, read from its store (``evaluations.sqlite``), as the re-evaluation keeps
     runs (without their trajectories); empty for a test the store does not hold."""
-    from .store import EvaluationStore
+    from ..store import EvaluationStore
 
     with EvaluationStore(store) as db:
         rows = [db.get(test.key()) for test in tests]
@@ -449,7 +450,7 @@ def stored_runs(store, tests: Sequence[TestCase]) -> list[tuple[RunRecord, ...]]
 
 def _store(db, i: int, path, test: TestCase, records: list[RunRecord]) -> None:
     """Write a chunk of runs of test ``i`` (with their trajectories, for the report) and commit it."""
-    from .store import StoredEvaluation
+    from ..store import StoredEvaluation
 
     try:
         db.add(StoredEvaluation(test.key(), {"file": os.fspath(path)}, tuple(r.index for r in records),

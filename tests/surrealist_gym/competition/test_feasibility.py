@@ -9,12 +9,12 @@ from pathlib import Path
 import pytest
 
 from surrealist_gym.aerialist import load_test
-from surrealist_gym.feasibility import FeasibilityConfig, infeasible
+from surrealist_gym.competition.feasibility import FeasibilityConfig, infeasible
 from surrealist_gym.fidelity.labels import load_labelled_set
 from surrealist_gym.mission import Command, Mission, MissionItem
 from surrealist_gym.testcase import Obstacle, Shape, TestCase
 
-WALLED_OFF = Path(__file__).resolve().parents[1] / "data" / "walled_off"
+WALLED_OFF = Path(__file__).resolve().parents[2] / "data" / "walled_off"
 NAMES = re.compile(r"obstacles\[\d+\]")
 
 

@@ -8,7 +8,7 @@ Aerialist's own results built from the ULogs. See docs/compete.md.
 
 Example::
 
-    >>> from surrealist_gym.compete import prepare, run                                        # doctest: +SKIP
+    >>> from surrealist_gym.competition.compete import prepare, run                                     # doctest: +SKIP
     >>> result = run(prepare("../shared/third_party/peers/ambiegen/snippets", "mission2", 10))  # doctest: +SKIP
     >>> result.output_folder, [t.points for t in result.tests]                                # doctest: +SKIP
 """

@@ -1,7 +1,8 @@
-"""A wrapper that keeps a suite of distinct failures from every test a search flies (:mod:`surrealist_gym.suite`).
+"""A wrapper that keeps a suite of distinct failures from every test a search flies
+(:mod:`surrealist_gym.competition.suite`).
 
 Any agent searches through it unchanged: it forwards the search API and charges nothing, it only offers each newly
-evaluated test (not memo answers) to its :class:`~surrealist_gym.suite.Suite` and notes the answer in
+evaluated test (not memo answers) to its :class:`~surrealist_gym.competition.suite.Suite` and notes the answer in
 ``info["suite"]`` (``added``, ``replaced N``, ``alike N``, ``passed``).
 
 Example::
@@ -12,8 +13,8 @@ Example::
 """
 from __future__ import annotations
 
-from ..suite import Member, Suite
-from .wrapper import SurrealistWrapper
+from ..envs.wrapper import SurrealistWrapper
+from .suite import Member, Suite
 
 
 class RecordSuite(SurrealistWrapper):

@@ -17,9 +17,9 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from .errors import InvalidTestCase
-from .outcomes import UNSAFE_DISTANCE_M
-from .testcase import Obstacle, Shape, TestCase
+from ..errors import InvalidTestCase
+from ..outcomes import UNSAFE_DISTANCE_M
+from ..testcase import Obstacle, Shape, TestCase
 
 #: Points of a run by its competition distance [m]: (below this distance, points), checked in order.
 POINTS = ((0.25, 5), (1.0, 2), (UNSAFE_DISTANCE_M, 1))
@@ -139,7 +139,7 @@ def load_competition_test(path) -> TestCase:
     mode) is skipped, as known."""
     import warnings
 
-    from .aerialist import load_test
+    from ..aerialist import load_test
 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r".*MAV_CMD 530 is not supported")
@@ -170,7 +170,7 @@ def seed_layout(count: int = 3, rules: Rules = RULES) -> tuple[Obstacle, ...]:
 def layout_mutators(seed: TestCase, rules: Rules = RULES):
     """One mutator per box and field that moves it by up to the whole width of the rule's bounds either way, within
     those bounds (``lowest``/``highest``): ``env.action_bounds()`` is exactly the rules, action 0 the seed."""
-    from .mutators import Mutator, MutatorKind
+    from ..mutators import Mutator, MutatorKind
 
     kinds = {"x": MutatorKind.MOVE_X, "y": MutatorKind.MOVE_Y, "r": MutatorKind.ROTATE,
              "l": MutatorKind.RESIZE_L, "w": MutatorKind.RESIZE_W, "h": MutatorKind.RESIZE_H}

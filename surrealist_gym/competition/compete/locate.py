@@ -19,7 +19,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import DependencyNotInstalled, SurrealistError
+from ...errors import DependencyNotInstalled, SurrealistError
 
 AERIALIST_ENV = "SURREALIST_AERIALIST"
 #: Aerialist's test API -> its module in aerialist.px4.

@@ -13,15 +13,15 @@ import numpy as np
 import pytest
 
 from surrealist_gym.cli import main
-from surrealist_gym.compete import prepare, run, tool_environment
-from surrealist_gym.compete.locate import AERIALIST_ENV, find_aerialist, tool_apis
-from surrealist_gym.competition import load_competition_test
+from surrealist_gym.competition.compete import prepare, run, tool_environment
+from surrealist_gym.competition.compete.locate import AERIALIST_ENV, find_aerialist, tool_apis
+from surrealist_gym.competition.rules import load_competition_test
 from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
 from surrealist_gym.geometry import competition_distances
 from surrealist_gym.logs import read_flight
 from surrealist_gym.trajectory import Trajectory
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 THIRD_PARTY = ROOT.parent / "shared" / "third_party"
 SNIPPETS = THIRD_PARTY / "uav-testing-competition" / "snippets"
 AMBIEGEN = THIRD_PARTY / "peers" / "ambiegen" / "snippets"

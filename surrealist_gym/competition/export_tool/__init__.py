@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 
-from ..errors import SurrealistError
+from ...errors import SurrealistError
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 TOOL_FILES = ("cli.py", "testcase.py", "Dockerfile", "requirements.txt", "README.md")
@@ -53,7 +53,7 @@ class ToolSettings:
     agent: str = "suite"  # generate --agent: the search (suite, the default; cmaes, random, greedy to compare)
 
     def check(self) -> "ToolSettings":
-        from ..cli.options import check_buffer
+        from ...cli.options import check_buffer
 
         lowest = {"sim_budget_factor": 1, "obstacles": 1, "confirm": 0, "seed": 0, "workers": 1}
         for name, low in lowest.items():
@@ -70,7 +70,7 @@ class ToolSettings:
 
 def write_tool(folder, settings: ToolSettings = ToolSettings()) -> Path:
     """Write the tool into ``folder`` (new or empty; one-line SurrealistError otherwise); returns the folder."""
-    from .. import __version__
+    from ... import __version__
 
     settings.check()
     folder = Path(folder)
@@ -97,7 +97,7 @@ def write_tool(folder, settings: ToolSettings = ToolSettings()) -> Path:
 
 def _source_root() -> Path:
     """The folder holding surrealist-gym's pyproject.toml and packages (a source checkout, installed with -e)."""
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     if not all((root / item).exists() for item in SOURCE_ITEMS):
         raise SurrealistError(f"surrealist-gym's source is not beside its package in {root} (export-tool puts it in "
                               f"the tool for its Dockerfile): run it from a source checkout installed with pip -e")
@@ -106,7 +106,7 @@ def _source_root() -> Path:
 
 def _case_study_files(name: str) -> list[Path]:
     """The case study's YAML and the mission, parameter and command files it names."""
-    from ..competition import case_study_path, load_competition_test
+    from ..rules import case_study_path, load_competition_test
 
     path = case_study_path(name)
     test = load_competition_test(path)

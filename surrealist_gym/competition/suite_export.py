@@ -14,7 +14,7 @@ import math
 from pathlib import Path
 from typing import Sequence
 
-from .results import export_test
+from ..results import export_test
 from .suite import Member, Suite, layout_distance, trajectory_distance
 
 

@@ -1,13 +1,13 @@
 """Surrealist-CaseStudy-v0: generate tests for a UAV Testing Competition case study, under the competition's rules.
 
-The seed is the case study's mission with ``obstacles`` boxes (:func:`~surrealist_gym.competition.seed_layout`);
-the action is one value in [-1, 1] per box and field (x, y, l, w, h, r), mapped linearly onto the competition's
-bounds (:func:`~surrealist_gym.competition.layout_mutators`), so any agent of ``search/`` can search it. A test that
-breaks the rules (an overlap), that puts a box within the 1.5 m safety distance of the take-off or landing point
-(every run would fail before flying: :func:`~surrealist_gym.competition.endpoint_failure`) or that the feasibility
-check finds walled off is not flown: it costs no budget and ``info["invalid"]`` gives the reason. The reward is the
-paper's eq. 2 on the competition's distance; the UAV is the PX4 SITL profile (``px4-v1.12-sitl-iris``) unless
-``uav`` names another. ``wind=True`` adds the wind mutators.
+The seed is the case study's mission with ``obstacles`` boxes (:func:`~surrealist_gym.competition.rules.seed_layout`);
+the action is one value in [-1, 1] per box and field (x, y, l, w, h, r), mapped linearly onto the competition's bounds
+(:func:`~surrealist_gym.competition.rules.layout_mutators`), so any agent of ``search/`` can search it. A test that
+breaks the rules (an overlap), that puts a box within the 1.5 m safety distance of the take-off or landing point (every
+run would fail before flying: :func:`~surrealist_gym.competition.rules.endpoint_failure`) or that the feasibility check
+finds walled off is not flown: it costs no budget and ``info["invalid"]`` gives the reason. The reward is the paper's
+eq. 2 on the competition's distance; the UAV is the PX4 SITL profile (``px4-v1.12-sitl-iris``) unless ``uav`` names
+another. ``wind=True`` adds the wind mutators.
 
 Example::
 
@@ -15,11 +15,11 @@ Example::
 """
 from __future__ import annotations
 
-from ..competition import RULES, check_rules, endpoint_failure, layout_mutators, load_case_study, seed_layout
+from ..envs.base import SurrealistEnv
 from ..errors import InvalidTestCase
 from ..evaluation import GenerationObjective
 from ..outcomes import Measure
-from .base import SurrealistEnv
+from .rules import RULES, check_rules, endpoint_failure, layout_mutators, load_case_study, seed_layout
 
 DEFAULT_UAV = "px4-v1.12-sitl-iris"
 
@@ -60,7 +60,7 @@ class CaseStudyEnv(SurrealistEnv):
         if degenerate is not None:
             raise InvalidTestCase(f"degenerate: {degenerate}")
         if self.feasibility:
-            from ..feasibility import infeasible
+            from .feasibility import infeasible
 
             reason = infeasible(test)
             if reason is not None:

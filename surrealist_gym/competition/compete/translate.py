@@ -17,7 +17,7 @@ import os
 from pathlib import Path
 from typing import Mapping
 
-from ..errors import InvalidTestCase
+from ...errors import InvalidTestCase
 
 #: The file fields of each section (current and legacy names).
 _FILE_FIELDS = {"robot": ("params_file", "mission_file"), "drone": ("params_file", "mission_file"),

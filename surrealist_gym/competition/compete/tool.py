@@ -1,8 +1,8 @@
 """Run a competition tool's own ``cli.py``, unedited, with every Aerialist agent flying surrealist-gym's simulator.
 
-:func:`prepare` checks everything before anything starts (the tool folder and its ``cli.py``, the case study, the
-output folder, the UAV, an Aerialist that holds the API the tool imports and imports here); :func:`run` copies the
-tool folder into the output folder, starts a :class:`~surrealist_gym.compete.server.SimulationServer`, and runs
+:func:`prepare` checks everything before anything starts (the tool folder and its ``cli.py``, the case study, the output
+folder, the UAV, an Aerialist that holds the API the tool imports and imports here); :func:`run` copies the tool folder
+into the output folder, starts a :class:`~surrealist_gym.competition.compete.server.SimulationServer`, and runs
 ``python cli.py generate CASE_STUDY BUDGET`` in the copy, as the competition does, with the shim folder first on its
 ``PYTHONPATH`` (``shim/``: Aerialist's agents ask the server to fly). The output folder then holds::
 
@@ -34,7 +34,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Callable
 
-from ..errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, one_line
+from ...errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, one_line
 from ..scoring import writing_order
 from .locate import AerialistSource, find_aerialist, tool_apis
 from .server import Flight, SimulationServer
@@ -139,7 +139,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         seed: base seed of the runs' noise.
         uav: the UAV profile flown (default the competition's PX4 v1.12 SITL Iris).
     """
-    from ..sim.profiles import load_profile
+    from ...sim.profiles import load_profile
 
     for name, value in (("budget", budget), ("--runs-per-test", runs_per_test), ("--workers", workers)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -165,7 +165,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
 def _case_study(tool: Path, name) -> tuple[str, Path]:
     """What the tool's cli.py is given for the case study, and its file; checked as our loader and Aerialist (paths
     relative to the tool's folder) would read it."""
-    from ..competition import case_study_path, load_competition_test
+    from ..rules import case_study_path, load_competition_test
 
     given = Path(os.fspath(name))
     if given.suffix in (".yaml", ".yml"):
@@ -243,7 +243,7 @@ def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs
 # --- the run ---------------------------------------------------------------------------------------------------------
 def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) -> CompeteResult:
     """Run the tool (see the module docstring); ``on_flight`` is called with each Flight as the server records it."""
-    from ..sim.profiles import load_profile
+    from ...sim.profiles import load_profile
 
     start = time.perf_counter()
     plan.out.mkdir(parents=True)
@@ -345,7 +345,7 @@ def _written_tests(folder: Path, flights) -> tuple[WrittenTest, ...]:
         else:
             try:
                 distance = ulog_distance(ulg, flight.test_file)
-                from ..competition import points as competition_points
+                from ..rules import points as competition_points
 
                 points = competition_points(distance)
             except SurrealistError as err:
@@ -359,10 +359,10 @@ def ulog_distance(ulg, test_file) -> float:
     """The competition distance [m] of a ULog's flight to the obstacles of a test (our YAML): the least over the
     boxes of the distance from the footprint to the polyline of Aerialist's 0.5 s trajectory of the log
     (:meth:`~surrealist_gym.trajectory.Trajectory.aerialist`; unbuffered)."""
-    from ..competition import load_competition_test
-    from ..geometry import competition_distance
-    from ..logs import read_flight
-    from ..trajectory import Trajectory
+    from ..rules import load_competition_test
+    from ...geometry import competition_distance
+    from ...logs import read_flight
+    from ...trajectory import Trajectory
 
     test = load_competition_test(test_file)
     p = read_flight(ulg).positions

@@ -26,22 +26,22 @@ from typing import Sequence
 
 import numpy as np
 
-from .outcomes import UNSAFE_DISTANCE_M
-from .testcase import Obstacle, Shape, TestCase
+from ..outcomes import UNSAFE_DISTANCE_M
+from ..testcase import Obstacle, Shape, TestCase
 
 MIN_FLIGHT_M = 1.0  # [m] mean point distance below which two flights are alike
 MIN_LAYOUT_M = 5.0  # [m] Hausdorff distance below which two failing obstacles are alike
 
 
 def _xy(trajectory) -> np.ndarray:
-    from .trajectory import as_points
+    from ..trajectory import as_points
 
     return np.ascontiguousarray(as_points(trajectory)[:, :2], dtype=np.float64)
 
 
 def trajectory_distance(a, b) -> float:
     """Mean x-y distance [m] between the points DTW matches: DTW along its optimal path over the path's length."""
-    from .metrics import dtw_path
+    from ..metrics import dtw_path
 
     path, total = dtw_path(_xy(a), _xy(b))
     return total / len(path)
@@ -76,7 +76,7 @@ class Member:
     failing_obstacle: Obstacle | None = field(init=False, compare=False, repr=False)  # the box it came closest to
 
     def __post_init__(self):
-        from .geometry import competition_distances
+        from ..geometry import competition_distances
 
         traj = np.array(self.trajectory, dtype=np.float64)
         traj.setflags(write=False)
@@ -88,7 +88,7 @@ class Member:
 
     @property
     def points(self) -> int:
-        from .competition import points
+        from .rules import points
 
         return 5 if self.status == "collision" else points(self.distance)
 

@@ -1,6 +1,6 @@
-"""The competition's scoring (surrealist_gym.scoring) on hand-made values: area similarity and diversity of boxes,
-duplicates, the seeded 2024 draw and 2025's writing order, test, rest and suite scores, 2024's similar flights, and
-the ranks of the ICST 2025 report's Table I."""
+"""The competition's scoring (surrealist_gym.competition.scoring) on hand-made values: area similarity and diversity of
+boxes, duplicates, the seeded 2024 draw and 2025's writing order, test, rest and suite scores, 2024's similar flights,
+and the ranks of the ICST 2025 report's Table I."""
 import math
 import os
 from dataclasses import dataclass
@@ -8,10 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from surrealist_gym.competition.scoring import (EDITIONS, Draw, SuiteScore, area_diversity, area_similarity, draw,
+                                                duplicates, edition, ranks, rest_score, score_suite, similar_flights,
+                                                standings, test_score, writing_order)
 from surrealist_gym.errors import SurrealistError
-from surrealist_gym.scoring import (EDITIONS, Draw, SuiteScore, area_diversity, area_similarity, draw, duplicates,
-                                    edition, ranks, rest_score, score_suite, similar_flights, standings, test_score,
-                                    writing_order)
 from surrealist_gym.testcase import Obstacle, TestCase
 
 A = Obstacle(4, 4, 20, 0, 20)              # a 4 x 4 m box at (0, 20)

@@ -15,10 +15,10 @@ from pathlib import Path
 import pytest
 
 from surrealist_gym.cli import main
-from surrealist_gym.compete.locate import AERIALIST_ENV
-from surrealist_gym.export_tool import SETTINGS_FILE, TOOL_FILES
+from surrealist_gym.competition.compete.locate import AERIALIST_ENV
+from surrealist_gym.competition.export_tool import SETTINGS_FILE, TOOL_FILES
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 THIRD_PARTY = ROOT.parent / "shared" / "third_party"
 AERIALIST_PATH = os.pathsep.join(str(THIRD_PARTY / name) for name in ("aerialist-master", "aerialist-0.2.1"))
 

@@ -24,8 +24,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-from .mission import Command
-from .testcase import Obstacle, Shape, TestCase
+from ..mission import Command
+from ..testcase import Obstacle, Shape, TestCase
 
 _EPS = 1e-6  # [m] "touches": shapely's distance between a piece and a grown footprint it borders is ~0
 
