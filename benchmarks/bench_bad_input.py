@@ -221,7 +221,7 @@ def _write(name: str, text: str | bytes) -> Callable[[Path], None]:
 
 def _violation(rng: np.random.Generator, key: str):
     """A value outside ``key``'s physical range: below it, above it, not finite, or not a number."""
-    from surrealist_gym.ranges import RANGES
+    from surrealist_gym.sim.ranges import RANGES
 
     r = RANGES[key]
     choices = ["nan", "inf", "string"]
@@ -271,7 +271,7 @@ def _folder(name: str) -> Callable[[Path], None]:
 
 def corpus(rng: np.random.Generator) -> list[Case]:
     """The seeded refusal corpus: every case an input that must be refused."""
-    from surrealist_gym.ranges import RANGES
+    from surrealist_gym.sim.ranges import RANGES
 
     cases = []
     add = lambda kind, name, argv, setup=lambda folder: None: cases.append(Case(kind, name, tuple(argv), setup))

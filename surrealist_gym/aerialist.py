@@ -18,7 +18,7 @@ from pathlib import Path
 
 from .errors import InvalidTestCase, MissionError, regular_file
 from .mission import read_mission
-from .ranges import param_problem
+from .sim.ranges import param_problem
 from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, _finite, _parse_shape
 
 # --- YAML --------------------------------------------------------------------------------------------------------

@@ -16,9 +16,8 @@ from enum import Enum
 from typing import Mapping
 
 from .errors import InvalidTestCase
-from .frozendict import FrozenDict
 from .mission import Mission
-from .ranges import param_problem
+from .sim.ranges import FrozenDict, param_problem
 
 
 class Shape(str, Enum):

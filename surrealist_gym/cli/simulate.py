@@ -48,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _params(items: list[str]) -> dict:
     """``--param NAME=VALUE`` overrides, each a finite number in its physical range (ranges.RANGES)."""
     from ..errors import SimulationError
-    from ..ranges import param_problem
+    from ..sim.ranges import param_problem
 
     out = {}
     for item in items:

@@ -38,8 +38,8 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 
 from ..errors import InvalidTestCase, SurrealistError, one_line
-from ..frozendict import FrozenDict
 from ..outcomes import UNSAFE_DISTANCE_M
+from ..sim.ranges import FrozenDict
 from ..testcase import Obstacle, TestCase
 from .reevaluation_report import (REPORT_FILES, SCORING_FILES, _f, _leaderboard_row, _p_text,  # noqa: F401
                                   _r, _scoring_section, _test_score_row, _write_csv, report_text,

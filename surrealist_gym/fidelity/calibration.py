@@ -27,9 +27,9 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
-from ..frozendict import FrozenDict
 from ..sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
 from ..sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, profile_for_flight, vehicle_of
+from ..sim.ranges import FrozenDict
 from ..testcase import TestCase
 from ..trajectory import Phases, Trajectory, phases, profile as time_profile
 

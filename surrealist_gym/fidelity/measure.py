@@ -34,9 +34,9 @@ from search.statistics import vargha_delaney_a12
 from ..errors import SurrealistError
 from ..outcomes import BLOCKED as _BLOCKED
 from ..outcomes import UNSAFE_DISTANCE_M, RunStatus
-from ..frozendict import FrozenDict
-from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
+from ..sim.ranges import FrozenDict
 from ..testcase import TestCase
+from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
 
 __all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "RunOutcome",
            "TestRow", "airborne_time", "build_report", "fly_labelled_set", "fly_test", "format_figure",

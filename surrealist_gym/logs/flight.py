@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from ..frozendict import FrozenDict
 from typing import Mapping
 
 import numpy as np
 
 from ..errors import LogFormatError
 from ..mission import Mission
+from ..sim.ranges import FrozenDict
 from ..trajectory import Trajectory, frozen_array as _frozen
 
 

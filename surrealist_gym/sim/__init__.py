@@ -6,13 +6,34 @@ Public face::
     results = sg.simulate(test, runs=5, seed=0)      # one RunResult per run
     results[0].status, results[0].min_distance, results[0].duration, results[0].trajectory
 
-No gymnasium import here (the envs build on this package).
+No gymnasium import here (the envs build on this package). The names below are loaded on first use (PEP 562), so
+importing a light module of the package (``sim.ranges``, which the test-case values use) loads neither PyBullet nor
+the run loop, and the values can import it without a cycle.
 """
 from __future__ import annotations
 
-from .config import PX4_DEFAULTS, NoiseConfig, SimConfig, VehicleModel
-from .runner import Clearance, LocalPosition, RunResult, RunStatus, simulate, simulate_runs
-from .vehicle import IRIS, PRESETS, PX4_VISION, VehicleParams, preset
+import importlib
+
+_EXPORTS = {
+    "PX4_DEFAULTS": "config", "NoiseConfig": "config", "SimConfig": "config", "VehicleModel": "config",
+    "Clearance": "runner", "LocalPosition": "runner", "RunResult": "runner", "RunStatus": "runner",
+    "simulate": "runner", "simulate_runs": "runner",
+    "IRIS": "vehicle", "PRESETS": "vehicle", "PX4_VISION": "vehicle", "VehicleParams": "vehicle", "preset": "vehicle",
+}
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
+
 
 __all__ = ["Clearance", "IRIS", "LocalPosition", "NoiseConfig", "PRESETS", "PX4_DEFAULTS", "PX4_VISION",
            "RunResult", "RunStatus", "SimConfig", "VehicleModel", "VehicleParams", "preset", "simulate",

@@ -12,9 +12,9 @@ import math
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
-from ..frozendict import FrozenDict
-from ..ranges import UAV_SETTING_PREFIX  # a test's params uav.<setting> set the simulated UAV (sim/profiles.py)
 from typing import Any, Mapping
+
+from .ranges import UAV_SETTING_PREFIX, FrozenDict  # a test's params uav.<setting> set the simulated UAV (profiles.py)
 
 # PX4 v1.12 defaults of the parameters the simulated UAV reads (sources: the *_params.c / *_params.yaml of
 # mc_pos_control, mc_att_control, mc_rate_control, navigator, land_detector, commander in PX4-Autopilot v1.12).

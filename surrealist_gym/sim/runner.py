@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from ..frozendict import FrozenDict
 from typing import Mapping
 
 import numpy as np
@@ -25,6 +24,7 @@ from .config import SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
+from .ranges import FrozenDict
 from .vehicle import preset
 from .world import World
 

@@ -1,5 +1,6 @@
 """Physical ranges of the values that set up the simulated UAV: one table for UAV profiles (``params``, ``planner``,
-``sensor``, ``noise``, timings) and for a test's PX4 ``params`` and ``uav.*`` settings.
+``sensor``, ``noise``, timings) and for a test's PX4 ``params`` and ``uav.*`` settings; and :class:`FrozenDict`, the
+read-only mapping that holds such values (a test's, a log's or a profile's parameters) inside frozen dataclasses.
 
 Keys are spelt as a profile spells them: a PX4 parameter by its name (``MPC_XY_CRUISE``), a profile field by its
 name (``takeoff_delay_s``), a planner, camera or noise field with its section (``planner.cruise_speed``,
@@ -25,7 +26,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .frozendict import FrozenDict
+
+class FrozenDict(dict):
+    """A read-only dict: hashable, picklable (unlike ``types.MappingProxyType``), and equal to a plain dict."""
+
+    def _readonly(self, *args, **kwargs):
+        raise TypeError(f"{type(self).__name__} is read-only")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = __ior__ = _readonly
+
+    def __hash__(self) -> int:
+        return hash(tuple(sorted(self.items())))
+
+    def __reduce__(self):
+        return (type(self), (dict(self),))
+
 
 UAV_SETTING_PREFIX = "uav."  # a test's params named uav.<setting> set the simulated UAV, not PX4
 UAV_TIMINGS = ("takeoff_delay_s", "takeoff_hold_s")  # the UAV settings that are profile fields, not the planner's
@@ -160,4 +175,4 @@ def param_problem(name: str, value) -> str | None:
     return problem(key, value) or (None if math.isfinite(value) else f"expected a finite number, got {value!r}")
 
 
-__all__ = ["RANGES", "Range", "UAV_SETTING_PREFIX", "UAV_TIMINGS", "param_problem", "problem"]
+__all__ = ["FrozenDict", "RANGES", "Range", "UAV_SETTING_PREFIX", "UAV_TIMINGS", "param_problem", "problem"]
