@@ -1,4 +1,5 @@
-"""PNG plots of flights and trajectories: a top view (east to the right, north up) and an altitude profile.
+"""PNG plots of flights and trajectories: a top view (east to the right, north up) and an altitude profile: the
+figures ``surrealist inspect`` and ``surrealist simulate`` write (unless ``--no-plot``).
 
 matplotlib is imported inside the functions (Agg backend, no display needed), so importing this module is cheap.
 Frames: trajectories and obstacles are local (x north, y east, z up, metres); the top view draws east on the
@@ -10,9 +11,9 @@ import math
 import os
 from typing import Mapping, Sequence
 
-from .errors import DependencyNotInstalled
-from .testcase import Obstacle, Shape
-from .trajectory import Trajectory
+from ..errors import DependencyNotInstalled
+from ..testcase import Obstacle, Shape
+from ..trajectory import Trajectory
 
 _REFERENCE_STYLE = {"color": "black", "linewidth": 2.5, "zorder": 5}
 _OBSTACLE_STYLE = {"facecolor": "tab:red", "edgecolor": "darkred", "alpha": 0.35, "linewidth": 1.0}
