@@ -5,8 +5,8 @@ TEST``). A clean answer is exit 0 (the damage left a readable file) or exit 2 wi
 file; never a traceback, never over 10 s or 1 GB.
 
 Refusals: a seeded corpus of inputs that are wrong on purpose, over every command (simulate, replicate, generate,
-generate --case-study, calibrate, fidelity, evaluate, surrogate train/eval, compare, train-ppo, inspect): bad option
-values, UAV profiles outside their physical ranges or malformed, tests with out-of-range or non-numeric settings,
+generate --case-study, calibrate, fidelity, evaluate, surrogate train/eval, compare, train, inspect): bad option
+values, options that do not apply to the problem or were renamed (``--seed`` where ``--random-seed`` is meant), UAV profiles outside their physical ranges or malformed, tests with out-of-range or non-numeric settings,
 outputs that cannot be written (a file, a path under a file, a read-only tmpfs where this machine mounts one), FIFOs,
 folders and devices where a file is expected, empty files, bad case-study names, argparse errors. Each case runs in
 its own folder with cheap settings (``--budget 1 --runs 1``), so a command that wrongly accepts its input ends soon.
@@ -15,7 +15,7 @@ exactly its inputs afterwards, unchanged (no output folder, no plot, no store tu
 
 Prints the share of clean answers per kind, the slowest and the largest, and every unclean one.
 
-    python benchmarks/bench_bad_input.py [--per-file 12] [--seed 2026] [--only damage|refusals] [--jobs 2]
+    python benchmarks/bench_bad_input.py [--per-file 12] [--random-seed 2026] [--only damage|refusals] [--jobs 2]
 """
 from __future__ import annotations
 
@@ -86,7 +86,8 @@ def answer(command: list[str]) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--per-file", type=int, default=12, help="damaged copies of each file (default 12)")
-    parser.add_argument("--seed", type=int, default=2026, help="seed of the damage and the corpus (default 2026)")
+    parser.add_argument("--random-seed", type=int, default=2026,
+                        help="seed of the damage and the corpus (default 2026)")
     parser.add_argument("--only", choices=["damage", "refusals"], default=None, help="run one corpus only")
     parser.add_argument("--jobs", type=int, default=2, help="commands run at the same time (refusals; default 2)")
     args = parser.parse_args()
@@ -98,7 +99,7 @@ def main() -> int:
 
 
 def damage_corpus(args) -> None:
-    rng = np.random.default_rng(args.seed)
+    rng = np.random.default_rng(args.random_seed)
     cli = [sys.executable, "-m", "surrealist_gym.cli"]
     results: dict[str, list[dict]] = {"log": [], "test": [], "plan": []}
     with tempfile.TemporaryDirectory() as tmp:
@@ -157,13 +158,13 @@ CHEAP = {  # each command with settings that keep a wrongly accepted input short
     "surrogate-eval": ["surrogate", "eval", "{model}", str(STORE)],
     "compare": ["compare", "--env", "Surrealist-Generate-v0", "--agents", "random", "--budget", "1",
                 "--repetitions", "1", "--runs", "1", "--inline", "--out", "out"],
-    "train-ppo": ["train-ppo", "--steps", "1", "--episode-budget", "2", "--problem", "generate", "--out",
-                  "policy.zip"],
+    "train": ["train", "--steps", "1", "--episode-budget", "2", "--problem", "generate", "--out", "policy.zip"],
     "inspect": ["inspect", str(CASE0), "--out", "case0.png"],
 }
 # (command, flag, bad values): whole numbers, numbers and names that the options do not take
 OPTIONS = [
-    ("simulate", "--runs", ["0", "-1", "x"]), ("simulate", "--seed", ["-1", "1.5"]),
+    ("simulate", "--runs", ["0", "-1", "x"]), ("simulate", "--random-seed", ["-1", "1.5"]),
+    ("simulate", "--seed", ["0"]), ("fidelity", "--seed", ["0"]),
     ("simulate", "--param", ["MPC_XY_CRUISE", "MPC_XY_CRUISE=abc", "MPC_XY_CRUISE=1e9", "NAV_ACC_RAD=-1",
                              "MPC_THR_HOVER=0", "=3"]),
     ("simulate", "--reference", ["missing.ulg"]), ("simulate", "--vehicle", ["boat"]),
@@ -174,6 +175,7 @@ OPTIONS = [
     ("replicate", "--resume", ["no-such-folder"]),
     ("generate", "--budget", ["0"]), ("generate", "--runs", ["-2"]), ("generate", "--aggregate", ["max"]),
     ("generate", "--agent", ["nope"]), ("generate", "--surrogate", ["no-model"]), ("generate", "--screen", ["x"]),
+    ("generate", "--obstacles", ["2"]), ("generate", "--confirm", ["3"]),
     ("case-study", "--obstacles", ["0", "4"]), ("case-study", "--confirm", ["-1"]),
     ("calibrate", "--runs", ["0"]), ("calibrate", "--workers", ["0"]), ("calibrate", "--seed", ["missing.yaml"]),
     ("calibrate", "--uav", ["no-such-preset"]),
@@ -187,9 +189,9 @@ OPTIONS = [
     ("compare", "--repetitions", ["0"]), ("compare", "--budget", ["0"]), ("compare", "--parallel", ["0"]),
     ("compare", "--env", ["CartPole-v1"]), ("compare", "--agents", ["", ",", "bogus", "ppo:missing.zip"]),
     ("compare", "--seed", ["missing.yaml"]), ("compare", "--log", ["missing.ulg"]),
-    ("train-ppo", "--steps", ["0"]), ("train-ppo", "--episode-budget", ["1"]), ("train-ppo", "--runs", ["0"]),
-    ("train-ppo", "--spread", ["0", "5", "nan", "-1"]), ("train-ppo", "--threads", ["0"]),
-    ("train-ppo", "--algorithm", ["dqn"]), ("train-ppo", "--seed", ["missing.yaml"]),
+    ("train", "--steps", ["0"]), ("train", "--episode-budget", ["1"]), ("train", "--runs", ["0"]),
+    ("train", "--spread", ["0", "5", "nan", "-1"]), ("train", "--threads", ["0"]),
+    ("train", "--algorithm", ["dqn"]), ("train", "--seed", ["missing.yaml"]),
 ]
 ARGPARSE = [["simulate"], ["calibrate", str(CASE0)], ["fidelity"], ["surrogate"], ["surrogate", "eval"],
             ["surrogate", "train", str(STORE)], ["evaluate"], ["nope"], ["inspect", "--bogus"],
@@ -320,7 +322,7 @@ def corpus(rng: np.random.Generator) -> list[Case]:
                ("generate", CHEAP["generate"][:1] + ["t.yaml"] + CHEAP["generate"][2:]),
                ("evaluate", ["evaluate", "t.yaml", "--any-layout", "--runs", "1", "--workers", "1", "--out", "out"]),
                ("replicate --seed", _with(CHEAP["replicate"], "--seed", "t.yaml")),
-               ("train-ppo --seed", _with(CHEAP["train-ppo"], "--seed", "t.yaml")),
+               ("train --seed", _with(CHEAP["train"], "--seed", "t.yaml")),
                ("compare --seed", _with(CHEAP["compare"], "--seed", "t.yaml")),
                ("surrogate train --seed", _with(CHEAP["surrogate-train"], "--seed", "t.yaml"))]
     for i, (what, text) in enumerate(bad_tests.items()):
@@ -341,8 +343,8 @@ def corpus(rng: np.random.Generator) -> list[Case]:
                                ("inspect", "--out", "case0.txt"), ("inspect", "--out", "afile/case0.png"),
                                ("inspect", "--out", "{ro}/case0.png"), ("inspect", "--out", "afile"),
                                ("surrogate-eval", "--plot", "eval.txt"), ("surrogate-eval", "--plot", "afile/e.png"),
-                               ("surrogate-eval", "--plot", "{ro}/e.png"), ("train-ppo", "--out", "afile/p.zip"),
-                               ("train-ppo", "--out", "{ro}/p.zip"), ("calibrate", "--out", "afile")]:
+                               ("surrogate-eval", "--plot", "{ro}/e.png"), ("train", "--out", "afile/p.zip"),
+                               ("train", "--out", "{ro}/p.zip"), ("calibrate", "--out", "afile")]:
         add("output", f"{command} {flag} {bad}", _with(CHEAP[command], flag, bad), _write("afile", "x"))
     # FIFOs, folders and devices where a file is expected
     for maker, label in ((_fifo, "FIFO"), (_folder, "folder")):
@@ -460,7 +462,7 @@ def _read_only(folder: Path) -> bool:
 
 
 def refusal_corpus(args) -> None:
-    rng = np.random.default_rng(args.seed + 1)
+    rng = np.random.default_rng(args.random_seed + 1)
     cases = corpus(rng)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -487,7 +489,7 @@ def refusal_corpus(args) -> None:
                 subprocess.run(["umount", str(ro)], check=False)
         wall = time.perf_counter() - start
     kinds = list(dict.fromkeys(r["kind"] for r in rows))
-    print(f"\nrefusals: {len(rows)} bad inputs over every command, seed {args.seed + 1}, {args.jobs} at a time, "
+    print(f"\nrefusals: {len(rows)} bad inputs over every command, seed {args.random_seed + 1}, {args.jobs} at a time, "
           f"{wall:.0f} s wall")
     print("| input | cases | clean answers | exit 2 | wrote something | slowest [s] |")
     print("|---|---|---|---|---|---|")

@@ -8,7 +8,7 @@ The tools:
 - ``reference``: the competition's 2025 reference generator (``uav-testing-competition/snippets``, random boxes);
 - ``ambiegen``: AmbieGen, a 2024 participant (``peers/ambiegen/snippets``).
 
-Each cell (tool, case study, repetition) runs ``surrealist compete TOOL CASE_STUDY BUDGET --seed REP``: the tool's
+Each cell (tool, case study, repetition) runs ``surrealist compete TOOL CASE_STUDY BUDGET --random-seed REP``: the tool's
 own ``cli.py``, unedited, every simulation it asks for flown on our simulator (PX4 v1.12 SITL Iris), at most BUDGET.
 Our three tools search in our simulator first (``--sim-budget-factor`` x BUDGET single-run evaluations, seed REP),
 then spend the budget; those searches are extra flights of the very simulator that judges them, which a real
@@ -92,7 +92,7 @@ def tool_folder(cell: Cell, out: Path, args) -> Path:
         if folder.exists():
             set_aside(folder)
         folder.parent.mkdir(parents=True, exist_ok=True)
-        code = surrealist("export-tool", str(folder), "--agent", OURS[cell.tool], "--seed", str(cell.rep),
+        code = surrealist("export-tool", str(folder), "--agent", OURS[cell.tool], "--random-seed", str(cell.rep),
                           "--sim-budget-factor", str(args.sim_budget_factor), "--confirm", str(args.confirm),
                           log=out / "tools" / f"{cell.tool}-seed{cell.rep}.log")
         if code != 0:
@@ -109,7 +109,7 @@ def run_cell(cell: Cell, out: Path, args) -> dict:
             set_aside(folder)
         folder.parent.mkdir(parents=True, exist_ok=True)
         tool = tool_folder(cell, out, args)
-        surrealist("compete", str(tool), cell.mission, str(args.budget), "--out", str(folder), "--seed",
+        surrealist("compete", str(tool), cell.mission, str(args.budget), "--out", str(folder), "--random-seed",
                    str(cell.rep), log=folder.with_name(folder.name + ".log"))
         if not summary.is_file():
             raise RuntimeError(f"{cell.name}: compete wrote no summary ({folder.with_name(folder.name + '.log')})")

@@ -50,7 +50,7 @@ def write_rilast(folder: Path, count: int = 9, every: int = 150) -> Path:
 
 def inline(tests, runs: int, seed: int) -> tuple[float, list[list[float]]]:
     """Wall time [s] of the same runs flown one by one in this process, and each run's CPU time [s]."""
-    from surrealist_gym.competition.reevaluation import _records
+    from surrealist_gym.executors import fly_records
     from surrealist_gym.sim.profiles import default_profile
 
     start, costs = time.perf_counter(), []
@@ -59,7 +59,7 @@ def inline(tests, runs: int, seed: int) -> tuple[float, list[list[float]]]:
         costs.append([])
         for i in range(runs):
             cpu = time.process_time()
-            _records(test, [i], seed, config)
+            fly_records(test, [i], seed, config)
             costs[-1].append(time.process_time() - cpu)
     return time.perf_counter() - start, costs
 
@@ -67,8 +67,7 @@ def inline(tests, runs: int, seed: int) -> tuple[float, list[list[float]]]:
 def scheduled(costs: list[list[float]], workers: int) -> tuple[float, float]:
     """Wall times [s] on idle cores, from each run's CPU time: evaluate's jobs (``_jobs``), each given to the first
     free worker in submission order; and a test at a time with its runs split over the workers (LocalPoolExecutor)."""
-    from surrealist_gym.executors import _chunks
-    from surrealist_gym.competition.reevaluation import _jobs
+    from surrealist_gym.executors import _chunks, _jobs
 
     free = [0.0] * workers
     for i, chunk in _jobs(len(costs), len(costs[0]), workers):
@@ -102,7 +101,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--random-seed", type=int, default=0)
     parser.add_argument("--limit", type=int, default=None, help="the first N tests only")
     parser.add_argument("--executor", action="store_true", help="also time LocalPoolExecutor, test by test")
     parser.add_argument("--skip-baseline", action="store_true", help="time the evaluation alone")
@@ -111,14 +110,15 @@ def main() -> int:
         print(f"needs the shared data folder {COMPETITION}", file=sys.stderr)
         return 1
     from surrealist_gym.cli.evaluate import summary_text
-    from surrealist_gym.competition.reevaluation import _records, evaluate, load_tests, write_report
+    from surrealist_gym.competition.reevaluation import evaluate, load_tests, write_report
+    from surrealist_gym.executors import fly_records
 
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
         rilast = write_rilast(Path(tmp) / "rilast")
         start, children = time.perf_counter(), _children_cpu()
         tests = load_tests([CAMBA, rilast])[:args.limit]
-        ev = evaluate(tests, runs=args.runs, seed=args.seed, workers=args.workers)
+        ev = evaluate(tests, runs=args.runs, seed=args.random_seed, workers=args.workers)
         write_report(ev, Path(tmp) / "out")
         wall, cpu = time.perf_counter() - start, _children_cpu() - children
         print(summary_text(ev))
@@ -129,8 +129,8 @@ def main() -> int:
               f"target <= 120 s: {'met' if wall <= 120 else 'NOT met'}; workers' CPU {cpu:.1f} s "
               f"(/ {args.workers} = {cpu / args.workers:.1f} s)")
         if not args.skip_baseline:
-            _records(tests[0][1], [0], args.seed, None)  # warm-up: numba compilation, PyBullet client
-            base, costs = inline(tests, args.runs, args.seed)
+            fly_records(tests[0][1], [0], args.random_seed, None)  # warm-up: numba compilation, PyBullet client
+            base, costs = inline(tests, args.runs, args.random_seed)
             cpu_sum = sum(map(sum, costs))
             print(f"baseline, the same runs one by one inline: {base:.1f} s (CPU {cpu_sum:.1f} s) -> speed-up "
                   f"{base / wall:.2f}x (flying alone {base / ev.wall_s:.2f}x)")
@@ -141,7 +141,7 @@ def main() -> int:
                   f"one by one), a test at a time split over the workers {per_test:.1f} s")
         print(f"load average after: {os.getloadavg()[0]:.1f}")
         if args.executor:
-            pool = executor(tests, args.runs, args.seed, args.workers)
+            pool = executor(tests, args.runs, args.random_seed, args.workers)
             print(f"LocalPoolExecutor, test by test: {pool:.1f} s -> evaluate is {pool / wall:.2f}x faster")
     return 0
 

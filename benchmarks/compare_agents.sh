@@ -7,7 +7,7 @@
 # If benchmarks/reproduce_paper.py has run (results/paper), its greedy stores are copied in first: the compare
 # then replays them (same env seeds, same simulator: identical numbers, and the wall time counts the stored
 # simulation time) instead of flying the greedy again. Every search resumes where it stopped when run again.
-# PPO policies come from `surrealist train-ppo` (results/policies/ppo-replicate.zip, ppo-generate.zip).
+# PPO policies come from `surrealist train` (results/policies/ppo-replicate.zip, ppo-generate.zip).
 set -euo pipefail
 OUT=${1:-results/compare-full}
 PAPER=results/paper

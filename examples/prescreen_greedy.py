@@ -28,22 +28,22 @@ parser.add_argument("--budget", type=int, default=20)
 parser.add_argument("--runs", type=int, default=10)
 parser.add_argument("--first-runs", type=int, default=3, help="racing: runs flown before the rest (0: off)")
 parser.add_argument("--kind", default="ensemble", choices=("ensemble", "knn"))
-parser.add_argument("--seed", type=int, default=0)
+parser.add_argument("--random-seed", type=int, default=0, help="seed of the noise, the model and the agents")
 args = parser.parse_args()
 
 featurizer = Featurizer.for_problem("generate", lowfi=True)
 start = time.perf_counter()
-model = train_model(load_dataset(args.store, featurizer), featurizer, args.kind, seed=args.seed)
+model = train_model(load_dataset(args.store, featurizer), featurizer, args.kind, seed=args.random_seed)
 print(f"model: {args.kind} on {len(model.train_y)} stored evaluations, trained in {time.perf_counter() - start:.1f} s")
 
-agents = {"greedy": AdaptiveGreedy("paper", seed=args.seed),
+agents = {"greedy": AdaptiveGreedy("paper", seed=args.random_seed),
           "greedy+prescreen": Prescreened(AdaptiveGreedy("paper"), model,
-                                          PrescreenConfig.of(first_runs=args.first_runs), seed=args.seed)}
+                                          PrescreenConfig.of(first_runs=args.first_runs), seed=args.random_seed)}
 for name, agent in agents.items():
     env = gym.make("Surrealist-Generate-v0", budget=args.budget, runs=args.runs, executor="inline")
     steps = []  # the info of every simulated step: info["simulations"] counts the runs flown so far
     start = time.perf_counter()
-    result = agent.run(env, seed=args.seed, callback=steps.append)
+    result = agent.run(env, seed=args.random_seed, callback=steps.append)
     line = (f"{name:>16}: fitness {result.history[0]:.2f} -> {result.best_fitness:.2f}, "
             f"{steps[-1]['simulations'] if steps else args.runs} simulations, {time.perf_counter() - start:.1f} s")
     if isinstance(agent, Prescreened):

@@ -3,7 +3,7 @@
 Names:
     ``greedy`` (the adaptive greedy with the authors' preset), ``greedy-paper`` (paper Table 1), ``random``,
     ``cmaes``, ``suite`` (suites of distinct failures), ``ppo:POLICY.zip`` / ``sac:POLICY.zip`` (a policy
-    trained by ``surrealist train-ppo``), any name added with :func:`register_agent`, and ``module:Class`` or ``path/to/file.py:Class`` for an Agent subclass
+    trained by ``surrealist train``), any name added with :func:`register_agent`, and ``module:Class`` or ``path/to/file.py:Class`` for an Agent subclass
     of your own (built as ``Class(seed=seed, **options)``).
 
 Example:
@@ -92,7 +92,7 @@ def make_agent(name: str, seed: int | None = None, **options) -> Agent:
         return _REGISTRY[name](seed=seed, **options)
     if name in POLICY_PREFIXES:
         raise UnknownAgent(f"agent {name!r} needs a trained policy: {name}:POLICY.zip "
-                           f"(train one with `surrealist train-ppo`)")
+                           f"(train one with `surrealist train`)")
     close = difflib.get_close_matches(name, list(_REGISTRY) + list(POLICY_PREFIXES), n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ""
     raise UnknownAgent(f"unknown agent {name!r}{hint} (known: {', '.join(agent_names())}, or module:Class)")

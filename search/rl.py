@@ -227,11 +227,11 @@ def load_policy(path, algorithm: Algorithm | str = "ppo"):
             state = torch.load(io.BytesIO(archive.read("policy.pth")), weights_only=True, map_location="cpu")
     except pickle.UnpicklingError:  # torch refuses what is not plain tensors; it is never loaded unsafely
         raise SurrealistError(f"{path}: cannot be loaded safely: its policy.pth holds pickled objects besides "
-                              f"tensors (a policy of `surrealist train-ppo` holds weights only)") from None
+                              f"tensors (a policy of `surrealist train` holds weights only)") from None
     except (OSError, KeyError, zipfile.BadZipFile, RuntimeError, ValueError, EOFError) as err:
-        raise SurrealistError(f"{path}: not a policy file of `surrealist train-ppo` ({type(err).__name__})") from None
+        raise SurrealistError(f"{path}: not a policy file of `surrealist train` ({type(err).__name__})") from None
     if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
-        raise SurrealistError(f"{path}: not a policy file of `surrealist train-ppo` (policy.pth holds no weights)")
+        raise SurrealistError(f"{path}: not a policy file of `surrealist train` (policy.pth holds no weights)")
     first, action = (("mlp_extractor.policy_net.0.weight", "action_net.weight") if algorithm is Algorithm.PPO
                      else ("actor.latent_pi.0.weight", "actor.mu.weight"))
     if first not in state or action not in state:
@@ -267,7 +267,7 @@ class PPOAgent(Agent):
         self.name = self.algorithm.value
         if isinstance(policy, (str, os.PathLike)):
             if not Path(policy).is_file():
-                raise SurrealistError(f"{policy}: no such policy file (train one with `surrealist train-ppo`)")
+                raise SurrealistError(f"{policy}: no such policy file (train one with `surrealist train`)")
             self.policy_path = str(policy)
             policy = load_policy(self.policy_path, self.algorithm)
         self.model = policy

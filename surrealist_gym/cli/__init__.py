@@ -21,13 +21,17 @@ COMMANDS = {
     "replicate": ("surrealist_gym.cli.replicate", "find obstacles that make the simulated flight match a real log"),
     "generate": ("surrealist_gym.cli.generate", "find nearby tests that make the UAV unsafe or crash"),
     "compare": ("surrealist_gym.cli.compare", "run several search agents on the same problems and compare them"),
-    "train-ppo": ("surrealist_gym.cli.train_ppo", "train an RL policy (PPO/SAC) across generated problems"),
+    "train": ("surrealist_gym.cli.train", "train an RL policy (--algorithm ppo or sac) across generated problems"),
     "surrogate": ("surrealist_gym.cli.surrogate", "train or evaluate a surrogate model on evaluation stores"),
     "fidelity": ("surrealist_gym.cli.fidelity", "fly a labelled set of tests and report how far our UAV agrees"),
     "evaluate": ("surrealist_gym.cli.evaluate", "re-fly a suite of tests N times: failure odds, points, diversity"),
     "compete": ("surrealist_gym.cli.compete", "run a UAV Testing Competition tool, unedited, on our simulator"),
     "export-tool": ("surrealist_gym.cli.export_tool", "write a competition tool that picks its tests on our simulator"),
 }
+
+
+# other names a sub-command answers to (the names it had before)
+ALIASES = {"train": ["train-ppo"]}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -43,10 +47,27 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, (module, help_text) in COMMANDS.items():
-        cmd = sub.add_parser(name, help=help_text, description=help_text)
+        cmd = sub.add_parser(name, help=help_text, description=help_text, aliases=ALIASES.get(name, []))
         cmd.set_defaults(_module=module)
         importlib.import_module(module).add_arguments(cmd)
     return parser
+
+
+def _given(parser: argparse.ArgumentParser, command: str, argv: list[str]) -> frozenset[str]:
+    """The options typed on the command line, even at their defaults, each by its full name (``--obst`` is
+    ``--obstacles``, as argparse reads an unambiguous prefix)."""
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    known = sub.choices[command]._option_string_actions
+    given = set()
+    for arg in argv:
+        if not arg.startswith("--") or arg == "--":
+            continue
+        flag = arg.split("=", 1)[0]
+        if flag not in known:
+            matches = [o for o in known if o.startswith(flag)]
+            flag = matches[0] if len(matches) == 1 else flag
+        given.add(flag)
+    return frozenset(given)
 
 
 def _version() -> str:
@@ -57,11 +78,12 @@ def _version() -> str:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
-        args = _parser().parse_args(argv)
+        parser = _parser()
+        args = parser.parse_args(argv)
     except SurrealistError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    args._flags = frozenset(a.split("=", 1)[0] for a in argv if a.startswith("--"))  # the options given explicitly
+    args._flags = _given(parser, args.command, argv)
     warnings.simplefilter("ignore", DeprecationWarning)
     warnings.formatwarning = lambda msg, category, *a, **k: f"warning: {msg}\n"
     try:

@@ -9,11 +9,10 @@ import sys
 import time
 from collections import Counter
 from contextlib import closing, contextmanager
-from datetime import datetime
 from pathlib import Path
 
 from ..errors import InfrastructureError, SurrealistError, one_line, regular_file
-from .options import RUN_FILE, SearchOptions, check_writable
+from .options import RUN_FILE, SearchOptions, check_writable, default_out
 
 
 @contextmanager
@@ -144,7 +143,7 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         if getattr(options, key, None) and not (key == "seed" and options.seed in SEEDS):
             changes[key] = str(Path(getattr(options, key)).resolve())
     options = measured_prescreen(dataclasses.replace(options, **changes))
-    out = check_writable(args.out or f"results/{options.command}-{datetime.now():%Y%m%d-%H%M%S}", "--out")
+    out = check_writable(args.out or default_out(options.command), "--out")
     if (out / RUN_FILE).exists():
         raise SurrealistError(f"--out {out}: holds a search already; continue it with --resume {out}, or choose "
                               f"another folder")

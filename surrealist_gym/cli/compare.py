@@ -2,40 +2,57 @@
 from __future__ import annotations
 
 import sys
-from datetime import datetime
 from pathlib import Path
+
+from .options import PROBLEM_DEFAULTS, PROBLEM_ENVS
+
+CASE_STUDY_ENV = PROBLEM_ENVS["case study"]
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--env", default="Surrealist-Replicate-v0",
-                        help="env id (default Surrealist-Replicate-v0)")
+    from .options import out_help
+
+    parser.add_argument("--env", default=None,
+                        help=f"env id: {', '.join(PROBLEM_ENVS.values())} (default {PROBLEM_ENVS['replicate']}; "
+                             f"with --case-study {CASE_STUDY_ENV})")
+    parser.add_argument("--case-study", default=None, metavar="NAME|YAML",
+                        help=f"the UAV Testing Competition case study the searches generate tests for (mission1, "
+                             f"mission2, mission3 or its YAML), on {CASE_STUDY_ENV} (default mission1)")
     parser.add_argument("--agents", default="greedy,random,cmaes",
                         help="comma-separated agents: greedy, greedy-paper, random, cmaes, ppo:POLICY.zip, "
                              "sac:POLICY.zip, module:Class or file.py:Class (default greedy,random,cmaes)")
     parser.add_argument("--repetitions", type=int, default=10, help="searches per agent (default 10)")
     parser.add_argument("--budget", type=int, default=100, help="evaluations per search (default 100)")
-    parser.add_argument("--runs", type=int, default=None, help="simulations per evaluation (default: the env's)")
-    parser.add_argument("--seed", default=None, metavar="TEST.yaml", help="seed test case (default: the env's)")
-    parser.add_argument("--log", default=None, help="reference flight log (replication; default: the env's)")
-    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    parser.add_argument("--runs", type=int, default=None,
+                        help="simulations per evaluation (default: the env's: " + ", ".join(
+                            f"{PROBLEM_ENVS[p]} {d['runs']}" for p, d in PROBLEM_DEFAULTS.items()) + ")")
+    parser.add_argument("--seed", default=None, metavar="TEST.yaml",
+                        help="seed test case (default: the env's; not with a case study, which brings its mission)")
+    parser.add_argument("--log", default=None,
+                        help=f"reference flight log (only {PROBLEM_ENVS['replicate']}; default: the seed test's, "
+                             f"else case0)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: all cores; not with --inline or --dask-scheduler)")
     parser.add_argument("--parallel", type=int, default=1,
-                        help="searches run at the same time on the workers (default 1)")
+                        help="searches run at the same time on the workers (default 1; not with --inline)")
     parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
                         help="run the simulations on a Dask cluster (tcp://host:port)")
-    parser.add_argument("--inline", action="store_true", help="simulate in this process (no worker processes)")
+    parser.add_argument("--inline", action="store_true",
+                        help="simulate in this process (no worker processes; not with --dask-scheduler)")
     parser.add_argument("--common-noise", action="store_true",
                         help="common random numbers: run i of every test flies with the same noise")
-    parser.add_argument("--out", default=None,
-                        help="results folder (default results/compare-<time>); run again with the same --out "
-                             "to resume")
+    parser.add_argument("--out", metavar="DIR", default=None,
+                        help=out_help("compare", "results folder") + "; run again with the same --out to resume")
 
 
 def run(args) -> int:
     from tqdm import tqdm
 
-    from .options import check_at_least, check_writable
+    from .options import check_at_least, check_writable, default_out, refuse_inapplicable
 
     check_at_least(args, repetitions=1, budget=1, runs=1, workers=1, parallel=1)
+    if args.env is None:
+        args.env = CASE_STUDY_ENV if args.case_study is not None else PROBLEM_ENVS["replicate"]
 
     from search.compare import compare
     from search.registry import make_agent
@@ -47,14 +64,33 @@ def run(args) -> int:
     surrealist_envs = sorted(k for k in registry if k.startswith("Surrealist-"))
     if args.env not in surrealist_envs:  # checked before any folder or worker exists
         raise SurrealistError(f"--env {args.env!r}: not a Surrealist env (one of {', '.join(surrealist_envs)})")
+    case_study = args.env == CASE_STUDY_ENV
+    refuse_inapplicable(args, [
+        ("--case-study", case_study, f"applies only to {CASE_STUDY_ENV}, not to {args.env}"),
+        ("--seed", not case_study, "not with a case study: it brings its own mission (the searches lay out its boxes)"),
+        ("--log", args.env == PROBLEM_ENVS["replicate"],
+         f"applies only to {PROBLEM_ENVS['replicate']} (a reference flight to replicate), not to {args.env}"),
+        ("--dask-scheduler", not args.inline, "not with --inline: give one of them"),
+        (("--workers", "--parallel"), not args.inline, "not with --inline: every simulation runs in this process"),
+        ("--workers", args.dask_scheduler is None, "not with --dask-scheduler: the cluster's workers fly the runs")])
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     if not agents:
         raise SurrealistError(f"--agents {args.agents!r}: expected comma-separated agent names such as "
                               f"greedy,random,cmaes")
     for name in agents:  # an unknown agent or a bad policy file, before any folder exists
         make_agent(name, seed=0)
-    out = check_writable(args.out or f"results/compare-{datetime.now():%Y%m%d-%H%M%S}", "--out", "folder")
+    out = check_writable(args.out or default_out("compare"), "--out", "folder")
     env_kwargs = {}
+    if args.case_study is not None:  # as generate --case-study names it: a YAML by its absolute path
+        from ..competition.rules import case_study_path
+
+        path = case_study_path(args.case_study)  # a case study that does not exist fails here
+        env_kwargs["case_study"] = (str(path.resolve()) if Path(args.case_study).suffix in (".yaml", ".yml")
+                                    else args.case_study)
+    if case_study:  # the UAV generate --case-study flies, with or without --common-noise
+        from ..competition.case_study_env import DEFAULT_UAV
+
+        env_kwargs["uav"] = DEFAULT_UAV
     if args.seed:
         env_kwargs["seed_test"] = str(Path(args.seed).resolve())
     if args.log:

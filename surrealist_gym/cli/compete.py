@@ -24,8 +24,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("case_study", metavar="CASE_STUDY",
                         help="mission1, mission2, mission3 (the tool's case_studies/ first) or an Aerialist YAML")
     parser.add_argument("budget", metavar="BUDGET", type=int, help="simulations the tool may fly (given to its cli.py)")
-    parser.add_argument("--out", metavar="DIR", default=None,
-                        help="output folder, must not exist (default results/compete-<time>)")
+    from .options import add_out_argument, add_random_seed_argument
+
+    add_out_argument(parser, "compete", "output folder, must not exist")
     parser.add_argument("--runs-per-test", type=int, default=1,
                         help="runs an agent flies per test (default 1; a test's own agent.count wins)")
     parser.add_argument("--workers", type=int, default=1,
@@ -33,7 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--aerialist", metavar="DIR", default=None,
                         help="Aerialist's folder (default: the folders in $SURREALIST_AERIALIST holding the API the "
                              "tool imports, then the installed aerialist)")
-    parser.add_argument("--seed", type=int, default=0, help="base seed of the runs' noise (default 0)")
+    add_random_seed_argument(parser, "base seed of the runs' noise (default 0)")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default="px4-v1.12-sitl-iris",
                         help="UAV profile flown (default px4-v1.12-sitl-iris, the competition's PX4 SITL)")
 
@@ -45,11 +46,12 @@ def run(args: argparse.Namespace) -> int:
     from ..competition.compete import prepare
     from ..competition.compete import run as run_tool
     from ..errors import SurrealistError
-    from .options import check_at_least, check_writable
+    from .options import check_at_least, check_writable, default_out
 
-    check_at_least(args, budget=1, runs_per_test=1, workers=1, seed=0)
-    plan = prepare(args.tool, args.case_study, args.budget, args.out, runs_per_test=args.runs_per_test,
-                   workers=args.workers, aerialist=args.aerialist, seed=args.seed, uav=args.uav)
+    check_at_least(args, budget=1, runs_per_test=1, workers=1, random_seed=0)
+    plan = prepare(args.tool, args.case_study, args.budget, args.out or default_out("compete"),
+                   runs_per_test=args.runs_per_test, workers=args.workers, aerialist=args.aerialist,
+                   seed=args.random_seed, uav=args.uav)
     check_writable(plan.out, "--out")
     print(f"tool: {plan.tool} ({', '.join(plan.apis) or 'no Aerialist test API found'}), case study "
           f"{plan.case_study_file}, budget {plan.budget}; {plan.aerialist.describe()}; UAV {plan.uav}", flush=True)

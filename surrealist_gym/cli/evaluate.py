@@ -24,13 +24,12 @@ import argparse
 import dataclasses
 import json
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..competition.scoring import Draw
+from ..competition.scoring import EDITIONS, Draw
 from ..errors import SurrealistError
-from .options import RUN_FILE
+from .options import RUN_FILE, default_out, out_help
 
 STORE_FILE = "evaluations.sqlite"
 DEFAULT_RUNS = 5  # runs per test without --competition
@@ -101,7 +100,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("tests", metavar="TESTS", nargs="*", help="Aerialist test YAMLs, or folders of them")
     parser.add_argument("--runs", type=int, default=None,
-                        help="runs per test (default 5; with --competition the edition's: 2024 5, 2025 3)")
+                        help=f"runs per test (default {DEFAULT_RUNS}; with --competition the edition's: "
+                             + ", ".join(f"{e.name} {e.runs}" for e in EDITIONS.values()) + ")")
     parser.add_argument("--competition", metavar="EDITION", default=None,
                         help="score each folder (a tool's output, one case study) as the 2024 or 2025 edition did: "
                              "its tests drawn, test scores, 2024's rest score and similarity penalty, 2025's "
@@ -115,8 +115,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_buffer_argument(parser)
     parser.add_argument("--any-layout", action="store_true",
                         help="accept tests outside the competition's rules on obstacles (count, bounds, boxes only)")
-    parser.add_argument("--out", metavar="DIR", default=None,
-                        help="output folder, new or empty (default results/evaluate-<timestamp>)")
+    parser.add_argument("--out", metavar="DIR", default=None, help=out_help("evaluate", "output folder, new or empty"))
     parser.add_argument("--resume", metavar="DIR", default=None,
                         help="finish an interrupted evaluation in DIR: fly its missing runs and write its report "
                              "(same options; only --workers changes)")
@@ -162,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
             raise SurrealistError("TESTS: give the tests to evaluate (YAMLs or folders of them), or --resume DIR")
         if args.competition is not None:
             edition(args.competition)
-        out = _empty_folder(Path(args.out or f"results/evaluate-{time.strftime('%Y%m%d-%H%M%S')}"))
+        out = _empty_folder(Path(args.out or default_out("evaluate")))
         options = EvaluateOptions.from_args(args)
     uav = None if options.uav is None else load_profile(options.uav if args.resume else args.uav)  # named as given
     scored = bool(options.competition)  # a drawn test that breaks the rules is not flown and scores 0

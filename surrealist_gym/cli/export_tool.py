@@ -18,6 +18,7 @@ import argparse
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist export-tool``."""
     from ..competition.export_tool import AGENTS, ToolSettings
+    from .options import add_random_seed_argument
 
     default = ToolSettings()
     parser.add_argument("dir", metavar="DIR", help="the tool's folder to write (new or empty)")
@@ -31,8 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--buffer", type=float, default=default.buffer, metavar="M",
                         help="the search's competition distance: half width added to the flight's polyline [m] "
                              "(default %(default)s, Aerialist master's, as the competition measures)")
-    parser.add_argument("--seed", type=int, default=default.seed,
-                        help="seed of the tool's search and of the simulator's noise (default %(default)s)")
+    add_random_seed_argument(parser, f"seed of the tool's search and of the simulator's noise (default "
+                                     f"{default.seed})", default=default.seed)
     parser.add_argument("--workers", type=int, default=default.workers,
                         help="simulator processes the tool uses (default %(default)s: the competition gives a tool "
                              "1.5 vCPU)")
@@ -47,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     from .options import check_writable
 
     settings = ToolSettings(sim_budget_factor=args.sim_budget_factor, obstacles=args.obstacles, confirm=args.confirm,
-                            buffer=args.buffer, seed=args.seed, workers=args.workers, agent=args.agent).check()
+                            buffer=args.buffer, seed=args.random_seed, workers=args.workers, agent=args.agent).check()
     check_writable(args.dir, "DIR")
     folder = write_tool(args.dir, settings)
     print(f"tool written to {folder}/: cli.py, testcase.py, Dockerfile, requirements.txt, README.md, {SETTINGS_FILE}, "

@@ -20,7 +20,7 @@ from ..errors import SurrealistError
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist fidelity``."""
-    from .options import add_buffer_argument
+    from .options import add_buffer_argument, add_out_argument, add_random_seed_argument
 
     parser.add_argument("labels_set", metavar="LABELS", help="tests CSV, or a folder of Aerialist YAMLs")
     parser.add_argument("--labels", metavar="FILE", help="labels of a YAML folder (default <folder>/labels.csv)")
@@ -31,21 +31,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="UAV profile: a preset (px4-v1.12-sitl-iris, the default; px4-vision-case0) or a "
                              "profile YAML")
     parser.add_argument("--runs", type=int, default=1, help="runs per test (default 1)")
-    parser.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
+    add_random_seed_argument(parser, "base seed of the simulation noise (default 0)")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
     parser.add_argument("--limit", type=int, default=None, metavar="N", help="fly at most N tests")
     parser.add_argument("--every", type=int, default=1, metavar="K", help="fly every K-th test (default 1)")
     parser.add_argument("--close", type=float, default=3.0, metavar="M",
                         help="the close region: their distance below M metres (default 3)")
     add_buffer_argument(parser)
-    parser.add_argument("--out", metavar="DIR", default="fidelity_out", help="output folder (default fidelity_out)")
+    add_out_argument(parser, "fidelity")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
 
 def _check(args) -> None:
-    from .options import check_at_least, check_buffer, check_writable
+    from pathlib import Path
 
-    check_at_least(args, runs=1, every=1, workers=1, limit=1)
+    from .options import check_at_least, check_buffer, check_writable, default_out
+
+    check_at_least(args, runs=1, every=1, workers=1, limit=1, random_seed=0)
+    if args.mission is not None and Path(args.labels_set).is_dir():
+        raise SurrealistError("--mission: applies only to a tests CSV (a folder of YAMLs brings its missions)")
+    args.out = args.out or str(default_out("fidelity"))
     check_writable(args.out, "--out", "folder")
     if not args.close > 0 or not math.isfinite(args.close):
         raise SurrealistError(f"--close: expected a positive number of metres, got {args.close:g}")
@@ -121,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         bar.refresh()
 
     try:
-        report = measure_fidelity(lset, runs=args.runs, seed=args.seed, uav=args.uav, workers=args.workers,
+        report = measure_fidelity(lset, runs=args.runs, seed=args.random_seed, uav=args.uav, workers=args.workers,
                                   limit=args.limit, every=args.every, close=args.close, buffer=args.buffer,
                                   progress=progress)
     finally:

@@ -6,9 +6,7 @@ exported for Aerialist and re-flown to give each its failure probability.
 from __future__ import annotations
 
 from ._search import run_search, search_folder, sim_config_of
-from .options import GenerateOptions
-
-CASE_STUDY_DEFAULTS = {"budget": 200, "runs": 1, "agent": "suite"}  # what --case-study changes, unless typed
+from .options import CASE_STUDY_DEFAULTS, GenerateOptions, refuse_inapplicable
 
 
 def add_arguments(parser) -> None:
@@ -22,6 +20,8 @@ def run(args) -> int:
     from ..mutators import AUTHORS_ORDER, default_mutators
     from ..aerialist import load_test
 
+    if not args.resume:  # an option of the other problem, before any work
+        refuse_inapplicable(args, GenerateOptions.inapplicable(args))
     if args.case_study and not args.resume:
         return _case_study(args)
     if args.uav is None and not args.resume:  # the seed test's default UAV, recorded in run.json

@@ -10,6 +10,7 @@ import argparse
 import dataclasses
 import json
 from dataclasses import dataclass, field
+from datetime import datetime
 from pathlib import Path
 from typing import ClassVar
 
@@ -36,10 +37,81 @@ def _opt(default, help: str, **argparse_kwargs):
     return field(default=default, metadata={"help": help, **argparse_kwargs})
 
 
+#: The defaults that differ by problem, stated once: replicate's and generate's options take theirs from here,
+#: ``generate --case-study`` the third row (where the command line leaves them), ``compare --runs`` its help; the envs
+#: (Surrealist-Replicate-v0, -Generate-v0, -CaseStudy-v0) take the same (tests/surrealist_gym/cli/test_vocabulary.py).
+PROBLEM_DEFAULTS = {
+    "replicate": {"budget": 100, "runs": 5, "agent": "greedy"},
+    "generate": {"budget": 50, "runs": 10, "agent": "greedy"},
+    "case study": {"budget": 200, "runs": 1, "agent": "suite"},
+}
+#: what ``generate --case-study`` changes, unless typed
+CASE_STUDY_DEFAULTS = PROBLEM_DEFAULTS["case study"]
+#: the env of each problem (``compare --env``)
+PROBLEM_ENVS = {"replicate": "Surrealist-Replicate-v0", "generate": "Surrealist-Generate-v0",
+                "case study": "Surrealist-CaseStudy-v0"}
+
+#: Where every command that writes a folder writes it unless ``--out`` says otherwise (:func:`default_out`).
+OUT_PATTERN = "results/{command}-YYYYmmdd-HHMMSS"
+
+
+def default_out(command: str) -> Path:
+    """The folder ``command`` writes when ``--out`` is not given: ``results/<command>-<YYYYmmdd-HHMMSS>`` (local
+    time), the one pattern of every command."""
+    return Path("results") / f"{command}-{datetime.now():%Y%m%d-%H%M%S}"
+
+
+def out_help(command: str, what: str = "output folder") -> str:
+    """The help of ``--out`` for ``command``: what it is and its default (:data:`OUT_PATTERN`)."""
+    return f"{what} (default {OUT_PATTERN.format(command=command)})"
+
+
+def add_out_argument(parser: argparse.ArgumentParser, command: str, what: str = "output folder") -> None:
+    """``--out DIR``, default None: the command writes to :func:`default_out` then."""
+    parser.add_argument("--out", metavar="DIR", default=None, help=out_help(command, what))
+
+
+class _Refused(argparse.Action):
+    """An option kept only to be refused in one line (argparse's error: exit code 2) with what to type instead."""
+
+    def __init__(self, option_strings, dest, instead: str = "", **kwargs):
+        self.instead = instead
+        super().__init__(option_strings, dest, nargs="?", help=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        parser.error(f"{option_string}: {self.instead}")
+
+
+def add_random_seed_argument(parser: argparse.ArgumentParser, help: str, default: int = 0) -> None:
+    """``--random-seed N``, the seed of the simulation noise in every command; ``--seed`` (which names a seed test
+    elsewhere) is refused in one line."""
+    parser.add_argument("--random-seed", type=int, default=default, metavar="N", help=help)
+    parser.add_argument("--seed", dest="_refused_seed", action=_Refused, default=None,
+                        instead="use --random-seed (the noise seed); --seed names a seed test in other commands")
+
+
+def refuse_inapplicable(args: argparse.Namespace, rules) -> None:
+    """One line for an option typed on the command line that does not apply to the chosen problem, before any work.
+    ``rules``: ``(flags, applies, why)``; a flag of ``flags`` given (``args._flags``) when ``applies`` is false is
+    refused as ``--flag: why``."""
+    given = getattr(args, "_flags", frozenset())
+    for flags, applies, why in rules:
+        if applies:
+            continue
+        for flag in (flags,) if isinstance(flags, str) else flags:
+            if flag in given:
+                raise SurrealistError(f"{flag}: {why}")
+
+
 #: ``--buffer`` of generate, evaluate and fidelity: one meaning, one default (sim.SimConfig.competition_buffer_m).
 BUFFER_HELP = ("half width added to the flight's polyline in the competition distance [m]: 0.125 is Aerialist's since "
                "Oct 2024, whose figures read that much lower; default 0, Aerialist's before then (and the labelled "
                "PX4 flights')")
+
+
+_UAV_HELP = ("UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), px4-vision-case0, "
+             "or a profile YAML (surrealist calibrate)")
+_PRESET_HELP = "greedy hyper-parameters (--agent greedy): paper Table 1, or the authors' own run (default)"
 
 
 @dataclass(frozen=True)
@@ -48,21 +120,17 @@ class SearchOptions:
 
     command: ClassVar[str] = ""
 
-    budget: int = _opt(100, "evaluations allowed (default {default})", type=int)
-    runs: int = _opt(5, "simulations per evaluation (default {default})", type=int)
+    budget: int = _opt(PROBLEM_DEFAULTS["replicate"]["budget"], "evaluations allowed (default {default})", type=int)
+    runs: int = _opt(PROBLEM_DEFAULTS["replicate"]["runs"], "simulations per evaluation (default {default})", type=int)
     workers: int | None = _opt(None, "local worker processes (default: all cores)", type=int)
     dask_scheduler: str | None = _opt(None, "run the simulations on a Dask cluster (tcp://host:port)",
                                       metavar="ADDRESS")
-    preset: str = _opt("authors", "greedy hyper-parameters: paper Table 1, or the authors' own run (default)",
-                       choices=["paper", "authors"])
-    agent: str = _opt("greedy", "search agent: greedy (default), greedy-paper, random, cmaes, suite (the default "
-                                "with --case-study), ppo:POLICY.zip, module:Class")
-    random_seed: int = _opt(0, "base seed of the simulation noise", type=int)
-    uav: str | None = _opt(None, "UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
-                                 "px4-vision-case0, or a profile YAML (surrealist calibrate); default: replicate: "
-                                 "the log's vehicle (a PX4 Vision: px4-vision-case0, else px4-v1.12-sitl-iris, "
-                                 "on the ground as long as the log); generate: px4-vision-case0 for a seed test "
-                                 "with a reference log, as the paper's, else px4-v1.12-sitl-iris",
+    preset: str = _opt("authors", _PRESET_HELP, choices=["paper", "authors"])
+    agent: str = _opt(PROBLEM_DEFAULTS["replicate"]["agent"], "search agent: greedy, greedy-paper, random, cmaes, "
+                                                             "suite, ppo:POLICY.zip, module:Class (default {default})")
+    random_seed: int = _opt(0, "base seed of the simulation noise (default {default})", type=int, metavar="N")
+    uav: str | None = _opt(None, _UAV_HELP + "; default: the log's vehicle (a PX4 Vision: px4-vision-case0, else "
+                                             "px4-v1.12-sitl-iris, on the ground as long as the log)",
                            metavar="NAME_OR_YAML")
     common_noise: bool = _opt(False, "common random numbers: run i of every test flies with the same noise, so "
                                      "tests differ only by what they change (default: each test draws its own)",
@@ -97,6 +165,15 @@ class SearchOptions:
             raise SurrealistError(f"{where('first_runs')}: expected numbers of runs below the runs per evaluation "
                                   f"({self.runs}), got {','.join(map(str, self.first_runs))}")
         return self
+
+    @staticmethod
+    def inapplicable(args: argparse.Namespace, default_agent: str | None = None) -> list:
+        """The options of a new search that do not apply to it (:func:`refuse_inapplicable`): ``--preset`` steers
+        the greedy only (``default_agent``: the problem's agent when ``--agent`` is not typed)."""
+        given = getattr(args, "_flags", frozenset())
+        agent = args.agent if "--agent" in given or default_agent is None else default_agent
+        return [("--preset", agent == "greedy", f"applies only to --agent greedy (the adaptive greedy's "
+                                                f"hyper-parameters), not to {agent}")]
 
     @property
     def prescreened(self) -> bool:
@@ -147,7 +224,7 @@ class SearchOptions:
                 continue
             flag = meta.pop("flag", "--" + f.name.replace("_", "-"))
             parser.add_argument(flag, dest=f.name, default=f.default, help=help_text, **meta)
-        parser.add_argument("--out", default=None, help="results folder (default results/<command>-<time>)")
+        add_out_argument(parser, cls.command, "results folder")
         parser.add_argument("--resume", default=None, metavar="DIR",
                             help="resume an interrupted search from its results folder (same options)")
 
@@ -186,20 +263,30 @@ class GenerateOptions(SearchOptions):
 
     command: ClassVar[str] = "generate"
 
-    budget: int = _opt(50, "evaluations allowed (default {default})", type=int)
-    runs: int = _opt(10, "simulations per evaluation (default {default})", type=int)
+    budget: int = _opt(PROBLEM_DEFAULTS["generate"]["budget"], "evaluations allowed (default {default}; with "
+                       f"--case-study {CASE_STUDY_DEFAULTS['budget']})", type=int)
+    runs: int = _opt(PROBLEM_DEFAULTS["generate"]["runs"], "simulations per evaluation (default {default}; with "
+                     f"--case-study {CASE_STUDY_DEFAULTS['runs']})", type=int)
+    agent: str = _opt(PROBLEM_DEFAULTS["generate"]["agent"], "search agent: greedy, greedy-paper, random, cmaes, suite, "
+                                                            "ppo:POLICY.zip, module:Class (default {default}; with "
+                                                            f"--case-study {CASE_STUDY_DEFAULTS['agent']})")
+    uav: str | None = _opt(None, _UAV_HELP + "; default: px4-vision-case0 for a seed test with a reference log, as "
+                                             "the paper's, else px4-v1.12-sitl-iris (with --case-study too)",
+                           metavar="NAME_OR_YAML")
     test: str | None = _opt(None, "seed test case (Aerialist YAML); default: the paper's RQ2 seed", positional=True)
     aggregate: str = _opt("riskiest", "how the runs of a test are scored: the riskiest run (paper) or the mean",
                           choices=["riskiest", "mean"])
-    all_mutators: bool = _opt(False, "move, resize and rotate every obstacle (default: move the first obstacle "
-                                     "only)", action="store_true")
+    all_mutators: bool = _opt(False, "move, resize and rotate every obstacle of the seed test (default: move the "
+                                     "first obstacle only; not with --case-study, whose boxes all change)",
+                              action="store_true")
     case_study: str | None = _opt(None, "generate a suite of distinct failures for a UAV Testing Competition case "
                                         "study (mission1, mission2, mission3 or its YAML) under the competition's "
-                                        "rules; then the defaults are --budget 200 --runs 1 --agent suite",
+                                        "rules; then the defaults are " + " ".join(
+                                            f"--{k} {v}" for k, v in CASE_STUDY_DEFAULTS.items()),
                                   metavar="NAME|YAML")
     obstacles: int = _opt(3, "with --case-study: boxes per test (1-3; default {default})", type=int)
-    wind: bool = _opt(False, "search the wind's speed (0-10 m/s) and direction as well as the obstacles",
-                      action="store_true")
+    wind: bool = _opt(False, "search the wind's speed (0-10 m/s) and direction as well as the obstacles (not with "
+                             "pre-screening)", action="store_true")
     confirm: int = _opt(5, "with --case-study: re-fly each failure of the suite this many times with fresh noise and "
                            "report its failure probability (default {default}; 0: do not)", type=int)
     buffer: float = _opt(0.0, BUFFER_HELP, type=float, metavar="M")
@@ -217,7 +304,21 @@ class GenerateOptions(SearchOptions):
         check_buffer(self.buffer, where("buffer"))
         if self.case_study is not None and not 1 <= self.obstacles <= 3:
             raise SurrealistError(f"{where('obstacles')}: the competition allows 1 to 3 boxes, got {self.obstacles}")
+        if self.wind and self.prescreened:
+            raise SurrealistError(f"{where('wind')}: not with pre-screening (--surrogate, --first-runs, ...): the "
+                                  f"surrogate's features describe obstacles, not the wind")
         return self
+
+    @staticmethod
+    def inapplicable(args: argparse.Namespace) -> list:
+        """The options of a new ``generate`` that do not apply to its problem (:func:`refuse_inapplicable`)."""
+        case_study = bool(getattr(args, "case_study", None))
+        return [("--obstacles", case_study, "applies only with --case-study (the boxes of a competition test; a "
+                                            "seed test brings its obstacles)"),
+                ("--confirm", case_study, "applies only with --case-study (the re-runs of its suite's failures)"),
+                ("--all-mutators", not case_study,
+                 "not with --case-study: the competition's layout mutators change every box already"),
+                *SearchOptions.inapplicable(args, CASE_STUDY_DEFAULTS["agent"] if case_study else None)]
 
 
 def add_buffer_argument(parser: argparse.ArgumentParser) -> None:
@@ -278,5 +379,7 @@ def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tu
     return path
 
 
-__all__ = ["BUFFER_HELP", "GenerateOptions", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions",
-           "add_buffer_argument", "check_at_least", "check_buffer", "check_writable", "race_stages"]
+__all__ = ["BUFFER_HELP", "CASE_STUDY_DEFAULTS", "GenerateOptions", "OUT_PATTERN", "PROBLEM_DEFAULTS", "PROBLEM_ENVS",
+           "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "add_buffer_argument", "add_out_argument",
+           "add_random_seed_argument", "check_at_least", "check_buffer", "check_writable", "default_out", "out_help",
+           "race_stages", "refuse_inapplicable"]

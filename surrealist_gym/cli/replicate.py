@@ -5,7 +5,7 @@ import dataclasses
 import json
 
 from ._search import run_search, search_folder
-from .options import RUN_FILE, ReplicateOptions
+from .options import RUN_FILE, ReplicateOptions, refuse_inapplicable
 
 
 def add_arguments(parser) -> None:
@@ -18,6 +18,8 @@ def run(args) -> int:
 
     from ..errors import InvalidTestCase
 
+    if not args.resume:
+        refuse_inapplicable(args, ReplicateOptions.inapplicable(args))
     with search_folder(args, ReplicateOptions) as (out, options):
         try:
             env = ReplicateEnv(reference_log=options.log, seed_test=options.seed, runs=options.runs,

@@ -6,7 +6,7 @@ gives each run's DTW and Frechet distance to it.
 
 Example::
 
-    surrealist simulate rq1-seed1.yaml --runs 5 --seed 0 --out runs/
+    surrealist simulate rq1-seed1.yaml --runs 5 --random-seed 0 --out runs/
     surrealist simulate rq1-seed1.yaml --reference case0.ulg --no-avoidance
 """
 from __future__ import annotations
@@ -21,13 +21,18 @@ from pathlib import Path
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist simulate``."""
+    from .options import add_out_argument, add_random_seed_argument
+
     parser.add_argument("test", metavar="TEST.yaml", help="Aerialist test case")
     parser.add_argument("--runs", type=int, default=5, help="number of runs (default 5)")
-    parser.add_argument("--seed", type=int, default=0, help="base seed (default 0)")
-    parser.add_argument("--reference", metavar="LOG",
-                        help="real flight to compare against (default: the test's assertion log, if any)")
-    parser.add_argument("--no-reference", action="store_true", help="do not compare with the test's assertion log")
-    parser.add_argument("--out", metavar="DIR", default="sim_out", help="output folder (default ./sim_out)")
+    add_random_seed_argument(parser, "base seed of the simulation noise: run i draws its noise from the test, N and i "
+                                     "(default 0)")
+    reference = parser.add_mutually_exclusive_group()
+    reference.add_argument("--reference", metavar="LOG",
+                           help="real flight to compare against (default: the test's assertion log, if any)")
+    reference.add_argument("--no-reference", action="store_true",
+                           help="do not compare with the test's assertion log")
+    add_out_argument(parser, "simulate")
     parser.add_argument("--vehicle", choices=["px4_vision", "iris"], default=None,
                         help="fly this vehicle preset with the simulator's default planner instead of a UAV profile")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
@@ -71,10 +76,10 @@ def run(args: argparse.Namespace) -> int:
     from .. import load_test
     from ..sim import SimConfig, simulate
 
-    from .options import check_at_least, check_writable
+    from .options import check_at_least, check_writable, default_out
 
-    check_at_least(args, runs=1, seed=0)
-    out = check_writable(args.out, "--out", "folder")  # before anything is read or flown
+    check_at_least(args, runs=1, random_seed=0)
+    out = check_writable(args.out or default_out("simulate"), "--out", "folder")  # before anything is read or flown
     params = _params(args.param)
     test = load_test(args.test)
     ref_path = args.reference or (None if args.no_reference else test.reference_log)
@@ -101,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
     except InvalidTestCase as err:
         raise InvalidTestCase(f"{args.test}: {err}") from None
     start = time.perf_counter()
-    results = simulate(test, runs=args.runs, seed=args.seed, config=config)
+    results = simulate(test, runs=args.runs, seed=args.random_seed, config=config)
     wall = time.perf_counter() - start
     out.mkdir(parents=True, exist_ok=True)
     stem = Path(args.test).stem
@@ -125,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
         from .plots import plot_trajectories
         plot = out / f"{stem}.png"
         plot_trajectories(plot, [r.trajectory for r in results], obstacles=test.obstacles,
-                          title=f"{stem}: {len(results)} simulated runs (seed {args.seed})",
+                          title=f"{stem}: {len(results)} simulated runs (random seed {args.random_seed})",
                           reference=None if reference is None else reference.trajectory,
                           reference_label="real flight")
     simulated = sum(r.duration for r in results)

@@ -18,7 +18,8 @@ def add_arguments(parser) -> None:
                        help="what the stores searched: replicate (features against the mission and the reference "
                             "flight) or generate (default replicate)")
     train.add_argument("--seed", default=None, metavar="TEST.yaml",
-                       help="the problem's seed test, for its mission (default: the bundled rq1-seed1 / rq2 seed)")
+                       help="the problem's seed test, for its mission (default: replicate: rq1-seed1.yaml; generate: "
+                            "rq2-seed.yaml, both bundled)")
     train.add_argument("--log", default=None, help="reference flight log (replicate; default: the seed's, or case0)")
     train.add_argument("--lowfi", action="store_true",
                        help="add the outcomes of a low-fidelity flight of each test to its features (multi-fidelity; "
@@ -71,6 +72,13 @@ def _check_inputs(args) -> None:
             regular_file(model / name, "surrogate model file")
     else:
         check_at_least(args, members=1, epochs=1, k=1, holdout=0, random_seed=0)
+        for flag, value, applies, why in (
+                ("--log", args.log, args.problem == "replicate", "applies only to --problem replicate (its flight)"),
+                ("--k", args.k, args.kind == "knn", "applies only to --kind knn"),
+                ("--members", args.members, args.kind == "ensemble", "applies only to --kind ensemble"),
+                ("--epochs", args.epochs, args.kind == "ensemble", "applies only to --kind ensemble")):
+            if value is not None and not applies:
+                raise SurrealistError(f"{flag}: {why}")
         if args.holdout and not args.holdout < len(args.stores):
             raise SurrealistError(f"--holdout {args.holdout}: " + (
                 f"expected 1 to {len(args.stores) - 1} (stores given: {len(args.stores)})" if len(args.stores) > 1

@@ -132,7 +132,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         case_study: a case-study name (``mission1``: the tool's ``case_studies/``, then the project's look-up,
             ``competition.case_study_path``) or an Aerialist YAML.
         budget: the simulations the tool may fly, as its cli.py is told.
-        out: the output folder (must not exist; default ``results/compete-<time>``).
+        out: the output folder (must not exist; default ``results/compete-YYYYmmdd-HHMMSS``).
         runs_per_test: runs an agent flies per ``run()`` (a test's own ``agent.count`` wins).
         workers: processes flying the runs of one ``run()``.
         aerialist: an Aerialist folder (default: ``$SURREALIST_AERIALIST``, then the installed one).

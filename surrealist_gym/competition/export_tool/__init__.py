@@ -59,7 +59,8 @@ class ToolSettings:
         for name, low in lowest.items():
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
-                raise SurrealistError(f"--{name.replace('_', '-')}: expected a whole number >= {low}, got {value!r}")
+                flag = "--random-seed" if name == "seed" else f"--{name.replace('_', '-')}"  # export-tool's flags
+                raise SurrealistError(f"{flag}: expected a whole number >= {low}, got {value!r}")
         check_buffer(self.buffer)
         if self.agent not in AGENTS:
             raise SurrealistError(f"--agent: expected one of {', '.join(AGENTS)}, got {self.agent!r}")

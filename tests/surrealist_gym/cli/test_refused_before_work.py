@@ -194,7 +194,7 @@ def read_only(tmp_path) -> Path:
     (["calibrate", CASE0, "--out", "{tmp}/u.yaml", "--plot", "{ro}/u.png"], "--plot"),
     (["compare", "--budget", "1", "--repetitions", "1", "--agents", "random", "--out", "{ro}/cmp"], "--out"),
     (["surrogate", "train", STORE, "--problem", "generate", "--kind", "knn", "--out", "{ro}/model"], "--out"),
-    (["train-ppo", "--steps", "1", "--out", "{ro}/policy.zip"], "--out"),
+    (["train", "--steps", "1", "--out", "{ro}/policy.zip"], "--out"),
     (["inspect", CASE0, "--out", "{ro}/case0.png"], "--out"),
     (["fidelity", SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv", "--out", "{ro}/fid"], "--out"),
 ], ids=lambda v: v[0] if isinstance(v, list) else v)
@@ -232,7 +232,8 @@ def test_compare_with_no_agents_is_one_line(work, capsys):
 
 def test_compare_makes_its_env_once_before_any_folder(work, capsys):
     refused(capsys, ["compare", "--env", "Surrealist-Generate-v0", "--log", CASE0, "--agents", "random",
-                     "--out", work / "cmp"], "--env Surrealist-Generate-v0", "reference_log")
+                     "--out", work / "cmp"], "--log: applies only to Surrealist-Replicate-v0",
+            "not to Surrealist-Generate-v0")
     test = _test_yaml(work, "uav.planner.no_such_field: 1")
     refused(capsys, ["compare", "--env", "Surrealist-Generate-v0", "--seed", test, "--agents", "random",
                      "--out", work / "cmp"], test, "params.uav.planner.no_such_field")

@@ -261,8 +261,8 @@ def test_bad_search_values_are_one_line_errors(tmp_path, capsys, argv, message):
 @pytest.mark.parametrize("argv, message", [
     (["compare", "--repetitions", "0"], "--repetitions: expected a whole number >= 1, got 0"),
     (["compare", "--parallel", "0"], "--parallel: expected a whole number >= 1, got 0"),
-    (["train-ppo", "--steps", "-5"], "--steps: expected a whole number >= 1, got -5"),
-    (["simulate", "TEST", "--seed", "-1"], "--seed: expected a whole number >= 0, got -1"),
+    (["train", "--steps", "-5"], "--steps: expected a whole number >= 1, got -5"),
+    (["simulate", "TEST", "--random-seed", "-1"], "--random-seed: expected a whole number >= 0, got -1"),
     (["simulate", "TEST", "--runs", "0"], "--runs: expected a whole number >= 1, got 0"),
     (["simulate", "TEST", "--param", "MPC_XY_CRUISE=1e400"], "expected NAME=number (a finite number)")])
 def test_bad_numbers_of_other_commands_are_one_line_errors(tmp_path, capsys, argv, message):

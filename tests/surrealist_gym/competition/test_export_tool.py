@@ -80,7 +80,7 @@ def test_compete_runs_the_exported_tool_within_its_budget_and_it_writes_failures
     monkeypatch.delenv("AGENT", raising=False)
     monkeypatch.delenv("SURREALIST_PYTHON", raising=False)  # the tool's search runs with compete's interpreter
     tool, out = tmp_path / "tool", tmp_path / "run"
-    _export(tool, "--confirm", "0", "--seed", "0")
+    _export(tool, "--confirm", "0", "--random-seed", "0")
     capsys.readouterr()
     assert main(["compete", str(tool), "mission3", "5", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())

@@ -9,7 +9,7 @@ from tests.conftest import EXPERIMENTS
 
 
 def test_simulate_writes_table_ulogs_and_plot(tmp_path, capsys):
-    code = main(["simulate", str(EXPERIMENTS / "rq1-seed2.yaml"), "--runs", "2", "--seed", "3", "--out",
+    code = main(["simulate", str(EXPERIMENTS / "rq1-seed2.yaml"), "--runs", "2", "--random-seed", "3", "--out",
                  str(tmp_path), "--json"])
     assert code == 0
     out = json.loads(capsys.readouterr().out)
