@@ -10,7 +10,7 @@ Aerialist's ``AerialistTestResult`` reading it back into its ``Trajectory``. Bas
 a plain simulate of the very same test and run (the server's YAML of it, the same run index, so the same noise
 and flight): ``load_test``, ``simulate_runs`` and ``save_ulog``, as ``surrealist simulate --runs 1 --no-plot``
 does. The first test of each side is a warm-up (the simulator's first flight in a process compiles its kernels)
-and is not counted. Target (issue): a tool's simulation costs at most 1.5x the plain simulate.
+and is not counted. Target: a tool's simulation costs at most 1.5x the plain simulate.
 """
 from __future__ import annotations
 

@@ -8,8 +8,9 @@ The tools:
 - ``reference``: the competition's 2025 reference generator (``uav-testing-competition/snippets``, random boxes);
 - ``ambiegen``: AmbieGen, a 2024 participant (``peers/ambiegen/snippets``).
 
-Each cell (tool, case study, repetition) runs ``surrealist compete TOOL CASE_STUDY BUDGET --random-seed REP``: the tool's
-own ``cli.py``, unedited, every simulation it asks for flown on our simulator (PX4 v1.12 SITL Iris), at most BUDGET.
+Each cell (tool, case study, repetition) runs ``surrealist compete TOOL CASE_STUDY BUDGET --random-seed REP``: the
+tool's own ``cli.py``, unedited, every simulation it asks for flown on our simulator (PX4 v1.12 SITL Iris), at most
+BUDGET.
 Our three tools search in our simulator first (``--sim-budget-factor`` x BUDGET single-run evaluations, seed REP),
 then spend the budget; those searches are extra flights of the very simulator that judges them, which a real
 submission does not get (there PX4 SITL judges), so this bench measures the tools' searches, not our simulator's
@@ -19,8 +20,9 @@ Then, per case study and repetition, the five output folders are scored together
 (``evaluate --competition 2025 --random-seed REP``: the first 20 tests of each, 3 runs each, test scores, duplicates,
 area-IoU diversity, R_F, R_D, R = 0.75 R_F + 0.25 R_D). A tool whose cell wrote no test scores 0 with no diversity
 and shares the last ranks. The table gives, per case study and tool, the mean R and its values, the failure score and
-diversity, and, for our generator against each other tool, the p-value (statistics.compare: ANOVA or Mann-Whitney)
-and Vargha-Delaney A12 (probability that ours is better: a lower R, a higher failure score) over the repetitions.
+diversity, and, for our generator against each other tool, the p-value (search.statistics.compare: ANOVA or
+Mann-Whitney) and Vargha-Delaney A12 (probability that ours is better: a lower R, a higher failure score) over the
+repetitions.
 
 Every cell and every scoring is kept in ``--out`` as it completes; a rerun skips what is done and redoes what was
 interrupted (an interrupted cell's folder is kept beside, renamed ``*.interrupted-K``).
@@ -143,7 +145,7 @@ def score(mission: str, rep: int, folders: dict[str, Path], out: Path, args) -> 
 
 def standings(board: Path, folders: dict[str, Path], summaries: dict[str, dict]) -> list[dict]:
     """Every tool's row of one case study and repetition: the leaderboard's, and score 0 / no diversity for a tool
-    that wrote no test; R re-ranked over all five (scoring.ranks, as the leaderboard ranks)."""
+    that wrote no test; R re-ranked over all five (competition.scoring.ranks, as the leaderboard ranks)."""
     from surrealist_gym.competition.scoring import ranks
 
     with open(board, newline="", encoding="utf-8") as f:

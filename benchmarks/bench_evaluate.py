@@ -10,8 +10,8 @@ of ``rilast-mission1/tests.csv``) written as YAMLs to a temporary folder. The ev
 same run: the same runs (same tests, seeds and profiles) flown one by one in this process, the way a script calling
 ``simulate_runs(test, [i], seed, config)`` in a loop would; the speed-up is its wall time over the evaluation's.
 With ``--executor``, a second reference: each test's runs split over the workers by
-:class:`~surrealist_gym.executors.LocalPoolExecutor`, one test at a time. Issue 24's target: 30 tests x 5 runs in
-<= 2 minutes on 2 cores.
+:class:`~surrealist_gym.executors.LocalPoolExecutor`, one test at a time. Target: 30 tests x 5 runs in <= 2 minutes
+on 2 cores.
 
 Other processes on the machine slow both timings down; the load average before and after is printed, and CPU
 seconds beside the wall times: the workers' (children's) CPU time of the evaluation and this process's for the

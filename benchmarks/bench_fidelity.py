@@ -6,7 +6,7 @@
 
 Baseline, measured in the same run: a plain sequential loop (load, ``simulate(test, runs=1)``, competition
 distance) over the first ``--baseline`` rilast tests in this process. The harness's speed-up is its tests/s over
-the loop's. Issue 20's target: the 1,350 rilast tests in <= 10 minutes on 2 cores. CAMBA uses
+the loop's. Target: the 1,350 rilast tests in <= 10 minutes on 2 cores. CAMBA uses
 ``benchmarks/data/camba-px4-flights.csv`` (PX4 airborne times read off the plots) when it exists, else the
 folder's ``labels.csv`` (distances only).
 """

@@ -1,8 +1,8 @@
-"""Replicating any flight (issue 23): calibrate the UAV on the log, then replicate it, as a new user would.
+"""Replicating any flight: calibrate the UAV on the log, then replicate it, as a new user would.
 
 For each flight, in one run:
-- ``baseline``: the command before calibration existed (``--uav px4-vision-case0 --seed paper``: the case0 PX4
-  Vision, whatever flew the log);
+- ``baseline``: the paper's set-up (``--uav px4-vision-case0 --seed paper``: the case0 PX4 Vision, whatever flew
+  the log);
 - ``default``: ``surrealist replicate LOG`` (the log's own vehicle, on the ground as long as the log);
 - ``calibrated``: ``surrealist calibrate LOG --out uav.yaml`` then ``replicate LOG --uav uav.yaml``;
 - ``calibrated+search``: the same with ``--search-uav``.

@@ -1,14 +1,15 @@
-"""The 2024 similarity threshold (``scoring.SIMILAR_FLIGHT_M``): how far apart the averaged flights of one test and of
-two different tests are.
+"""The 2024 similarity threshold (``competition.scoring.SIMILAR_FLIGHT_M``): how far apart the averaged flights of one
+test and of two different tests are.
 
     python benchmarks/bench_similarity.py --out results/similarity     # CAMBA's 21 tests x 10 runs, 2 workers
     python benchmarks/bench_similarity.py --out results/similarity     # again: reads the runs back, flies none
 
-Each CAMBA test (``../shared/data/competition/camba-collection``) is flown 10 times (``reevaluation.evaluate``,
-stored in ``--out``, so a second call or an interrupted one flies only what is missing). The 2024 edition averaged
-each test's 5 runs and compared the averages of two tests by DTW; here the average is DBA
-(``fitness.average_runs``) and the distance the mean x-y distance along DTW's path (``suite.trajectory_distance``),
-and the summed DTW (``metrics.dtw``, 3-D, what Aerialist's ``Trajectory.distance`` computes) beside it:
+Each CAMBA test (``../shared/data/competition/camba-collection``) is flown 10 times
+(``competition.reevaluation.evaluate``, stored in ``--out``, so a second call or an interrupted one flies only what is
+missing). The 2024 edition averaged each test's 5 runs and compared the averages of two tests by DTW; here the average
+is DBA (``fitness.average_runs``) and the distance the mean x-y distance along DTW's path
+(``competition.suite.trajectory_distance``), and the summed DTW (``metrics.dtw``, 3-D, what Aerialist's
+``Trajectory.distance`` computes) beside it:
 
 - same test: the average of runs 0-4 against the average of runs 5-9 (two evaluations of one test);
 - different tests: the averages of runs 0-4 of two tests on the same mission.

@@ -1,5 +1,5 @@
 #!/bin/bash
-# The full-size agent comparison of docs/agents.md (issue 5): greedy vs random vs CMA-ES vs PPO on case0
+# The full-size agent comparison of docs/agents.md: greedy vs random vs CMA-ES vs PPO on case0
 # replication from seeds 1 and 2 (budget 100, 5 runs) and on RQ2 generation (budget 50, 10 runs), 10 repetitions.
 #
 #   bash benchmarks/compare_agents.sh [OUT]          (default OUT=results/compare-full; ~2 h on 2 cores)
