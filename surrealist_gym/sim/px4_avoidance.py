@@ -43,10 +43,10 @@ import numpy as np
 
 from ..geometry import line_projection
 from .px4_avoidance_tree import (  # noqa: F401 - re-exported: the kernels and constants live there
-    _R2D, ALPHA_RES, MAX_NODES, N_E, N_E2, N_Z, N_Z2, SUB_RES, _atan2_deg, _best_cells, _build_tree, _hist_index,
-    _histogram, _process_cloud, _smooth_columns, _smooth_row)
+    _R2D, ALPHA_RES, MAX_NODES, N_E, N_E2, N_Z, N_Z2, SUB_RES, KernelSettings, _atan2_deg, _best_cells, _build_tree,
+    _hist_index, _histogram, _process_cloud, _smooth_columns, _smooth_row)
 
-__all__ = ["Px4AvoidanceConfig", "Px4LocalPlanner", "Px4PlannerOutput"]
+__all__ = ["KernelSettings", "Px4AvoidanceConfig", "Px4LocalPlanner", "Px4PlannerOutput", "kernel_settings"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,6 +137,21 @@ class Px4PlannerOutput:
     points: int
 
 
+def kernel_settings(config: Px4AvoidanceConfig) -> KernelSettings:
+    """The config's settings as the compiled kernels read them: floats as floats (a YAML ``15`` too, so numba
+    compiles one specialisation), the smoothing margin as a radius in histogram cells."""
+    c = config
+    return KernelSettings(
+        min_range=float(c.min_sensor_range), max_range=float(c.max_sensor_range),
+        pitch_cost=float(c.pitch_cost_param), yaw_cost=float(c.yaw_cost_param),
+        velocity_cost=float(c.velocity_cost_param), obstacle_cost=float(c.obstacle_cost_param),
+        heuristic_weight=float(c.tree_heuristic_weight),
+        smoothing_radius=int(math.ceil(c.smoothing_margin_degrees / ALPHA_RES)),
+        children=int(c.children_per_node), expansions=int(c.n_expanded_nodes),
+        node_distance=float(c.tree_node_distance), max_point_age=float(c.max_point_age_s),
+        fov_h=float(c.fov_h_deg), fov_v=float(c.fov_v_deg))
+
+
 def sensor_limited_speed(acc: float, jerk: float, sensor_range: float) -> float:
     """The planner's speed limit from its sensor range: the positive root of u^2 + 2 a (a/j) u - 2 a R = 0."""
     b = 2.0 * acc * acc / max(jerk, 1e-6)
@@ -158,12 +173,7 @@ class Px4LocalPlanner:
         limit = sensor_limited_speed(acc_hor, jerk_max, c.max_sensor_range) if c.max_speed_sensor else math.inf
         self.cruise = min(float(cruise_speed), limit)
         self._line_band = float(cruise_speed)  # determineStrategy compares the line distance with MPC_XY_CRUISE
-        self._params = np.array([
-            c.min_sensor_range, c.max_sensor_range, c.pitch_cost_param, c.yaw_cost_param, c.velocity_cost_param,
-            c.obstacle_cost_param, c.tree_heuristic_weight,
-            float(int(math.ceil(c.smoothing_margin_degrees / ALPHA_RES))),
-            float(c.children_per_node), float(c.n_expanded_nodes), c.tree_node_distance, c.max_point_age_s,
-            c.fov_h_deg, c.fov_v_deg], dtype=np.float64)
+        self._settings = kernel_settings(c)
         self._heading_offset = math.radians(c.heading_offset_deg)
         self.reset()
 
@@ -203,17 +213,17 @@ class Px4LocalPlanner:
         new = np.ascontiguousarray(hits, dtype=np.float64).reshape(-1, 3)
         n_max = new.shape[0] + self._cloud.shape[0]
         out, out_age = np.empty((n_max, 3)), np.empty(n_max)
-        n = _process_cloud(new, self._cloud, self._age, px, py, pz, math.degrees(yaw), math.degrees(pitch),
-                           dt, self._params, out, out_age)
+        n = _process_cloud(new, self._cloud, self._age, (px, py, pz), (math.degrees(yaw), math.degrees(pitch)),
+                           dt, self._settings, out, out_age)
         self._cloud, self._age = out[:n], out_age[:n]
         # closest point on the mission line at goal altitude, or the goal when near the line (determineStrategy)
         cl = _closest_on_line(px, py, (float(prev_goal[0]), float(prev_goal[1])), (gx, gy), self._line_band)
-        cpt = (cl[0], cl[1], gz) if cl is not None else (gx, gy, gz)
+        cpt = (float(cl[0]), float(cl[1]), gz) if cl is not None else (gx, gy, gz)
         built = False
         if n > 0:
             path = np.empty((MAX_NODES, 3))
-            k = _build_tree(self._cloud, px, py, pz, float(velocity[0]), float(velocity[1]), float(velocity[2]),
-                            gx, gy, gz, cpt[0], cpt[1], cpt[2], self._params, path)
+            v = (float(velocity[0]), float(velocity[1]), float(velocity[2]))
+            k = _build_tree(self._cloud, (px, py, pz), v, (gx, gy, gz), cpt, self._settings, path)
             if k > 0:
                 self._path, self._path_t, built = path[:k][::-1].copy(), t, True
         # waypoint generator

@@ -3,10 +3,15 @@ memory, the polar histogram, its smoothing and cost matrix, and the look-ahead t
 
 The behaviour and its sources are described in :mod:`surrealist_gym.sim.px4_avoidance`, which re-exports these
 names; the planner class there calls them once per cycle.
+
+The kernels take the planner's constant settings as one :class:`KernelSettings` (a named tuple, which numba passes
+as a tuple of its fields), the per-cycle state (vehicle position, velocity, goal, the mission line's point) as
+3-tuples, and the cost search's work buffers as one :class:`_Work`.
 """
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -16,6 +21,54 @@ N_E, N_Z = 30, 60
 SUB_RES = 2.0  # subsampling cell of the point cloud [deg] (ALPHA_RES / 3)
 N_E2, N_Z2 = 90, 180
 MAX_NODES = 512
+
+
+class KernelSettings(NamedTuple):
+    """The planner's constant settings as the kernels read them (built once per planner from its config by
+    :func:`surrealist_gym.sim.px4_avoidance.kernel_settings`). Every float field holds a float and every int field an
+    int, so numba compiles one specialisation.
+
+    Attributes:
+        min_range / max_range: the sensor's range; also the memory radius and the tree's reach [m].
+        pitch_cost / yaw_cost: cost per squared degree of elevation / azimuth error.
+        velocity_cost: cost per m/s of ``|v| - u . v``.
+        obstacle_cost: distance at which a cell's obstacle cost is half its maximum [m].
+        heuristic_weight: the tree's heuristic cost per metre to the goal.
+        smoothing_radius: radius of the conic smoothing kernel [histogram cells].
+        children / expansions: children per node and expanded nodes of the tree.
+        node_distance: distance from a node to its children [m].
+        max_point_age: age at which a remembered point is forgotten [s].
+        fov_h / fov_v: the camera's field of view [deg].
+    """
+
+    min_range: float
+    max_range: float
+    pitch_cost: float
+    yaw_cost: float
+    velocity_cost: float
+    obstacle_cost: float
+    heuristic_weight: float
+    smoothing_radius: int
+    children: int
+    expansions: int
+    node_distance: float
+    max_point_age: float
+    fov_h: float
+    fov_v: float
+
+
+class _Work(NamedTuple):
+    """The work buffers of one tree search, shared by its expansions: histogram (``dist``, ``count``), obstacle
+    costs, the smoothing's padded matrix and running sums, and the cheapest cells (elevation, azimuth, cost)."""
+
+    dist: np.ndarray
+    count: np.ndarray
+    obst: np.ndarray
+    padded: np.ndarray
+    box: np.ndarray
+    cand_e: np.ndarray
+    cand_z: np.ndarray
+    cand_c: np.ndarray
 
 
 # --- compiled kernels --------------------------------------------------------------------------------------------
@@ -64,9 +117,14 @@ def _hist_index(dx, dy, dz, res):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _process_cloud(new, old, old_age, px, py, pz, yaw_deg, pitch_deg, elapsed, params, out, out_age):
-    # pragma: no cover - compiled
-    rmin, rmax, max_age, hfov, vfov = params[0], params[1], params[11], params[12], params[13]
+def _process_cloud(new, old, old_age, vehicle, view, elapsed, settings, out, out_age):  # pragma: no cover - compiled
+    """processPointcloud: the new points ``new`` (subsampled per 2 deg cell) and the remembered ``old`` (ages
+    ``old_age`` [s]) that are kept, seen from ``vehicle`` (x, y, z) with the camera's ``view`` (yaw, pitch) [deg],
+    ``elapsed`` [s] after the last cycle; writes them into ``out`` / ``out_age`` and returns their count."""
+    px, py, pz = vehicle
+    yaw_deg, pitch_deg = view
+    rmin, rmax, max_age = settings.min_range, settings.max_range, settings.max_point_age
+    hfov, vfov = settings.fov_h, settings.fov_v
     occupied = np.zeros((N_E2, N_Z2), dtype=np.bool_)
     k = 0
     for i in range(new.shape[0]):
@@ -194,14 +252,20 @@ def _smooth_row(padded, radius, e, box, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _best_cells(cloud, ox, oy, oz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, dist, count, obst, padded, box,
-                cand_e, cand_z, cand_c):
-    # pragma: no cover - compiled
-    """Histogram and cost matrix at (ox, oy, oz) with velocity v; fill the cheapest cells; return their count."""
-    rmin, rmax = params[0], params[1]
-    w_pitch, w_yaw, w_vel, obst_param = params[2], params[3], params[4], params[5]
-    radius = int(params[7])
-    n_best = int(params[8])
+def _best_cells(cloud, origin, velocity, goal, line, settings, work):  # pragma: no cover - compiled
+    """Histogram and cost matrix at ``origin`` (x, y, z) with ``velocity``, toward ``goal`` with the mission line's
+    point ``line``; fill ``work``'s cheapest cells (``cand_*``, ascending cost); return their count."""
+    ox, oy, oz = origin
+    vx, vy, vz = velocity
+    gx, gy, gz = goal
+    cx, cy, cz = line
+    dist, count, obst, padded, box = work.dist, work.count, work.obst, work.padded, work.box
+    cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
+    rmin, rmax = settings.min_range, settings.max_range
+    w_pitch, w_yaw, w_vel, obst_param = settings.pitch_cost, settings.yaw_cost, settings.velocity_cost, \
+        settings.obstacle_cost
+    radius = settings.smoothing_radius
+    n_best = settings.children
     _histogram(cloud, ox, oy, oz, dist, count)
     obst[:, :] = 0.0
     any_obstacle = False
@@ -286,26 +350,25 @@ def _best_cells(cloud, ox, oy, oz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, d
 
 
 @njit(cache=True)
-def _build_tree(cloud, px, py, pz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, path):
-    # pragma: no cover - compiled
-    """StarPlanner::buildLookAheadTree; writes the path deepest node first into ``path``, returns its length
+def _build_tree(cloud, vehicle, velocity, goal, line, settings, path):  # pragma: no cover - compiled
+    """StarPlanner::buildLookAheadTree from ``vehicle`` (x, y, z) with ``velocity`` toward ``goal``, ``line`` the
+    mission line's point (each a 3-tuple); writes the path deepest node first into ``path``, returns its length
     (0 when the vehicle's histogram is empty)."""
-    rmax, w_h, n_best, n_exp, step = params[1], params[6], int(params[8]), int(params[9]), params[10]
+    px, py, pz = vehicle
+    gx, gy, gz = goal
+    rmax, w_h, n_best = settings.max_range, settings.heuristic_weight, settings.children
+    n_exp, step = settings.expansions, settings.node_distance
     pos = np.empty((MAX_NODES, 3))
     parent = np.empty(MAX_NODES, dtype=np.int64)
     depth = np.empty(MAX_NODES, dtype=np.int64)
     total = np.empty(MAX_NODES)
     heur = np.empty(MAX_NODES)
     closed = np.zeros(MAX_NODES, dtype=np.bool_)
-    dist = np.empty((N_E, N_Z))
-    count = np.empty((N_E, N_Z))
-    obst = np.empty((N_E, N_Z))
-    radius = int(params[7])
-    padded = np.empty((N_E + 2 * radius, N_Z + 2 * radius))
-    box = np.empty(N_Z + 2 * radius)
-    cand_e = np.empty(n_best, dtype=np.int64)
-    cand_z = np.empty(n_best, dtype=np.int64)
-    cand_c = np.empty(n_best)
+    radius = settings.smoothing_radius
+    work = _Work(np.empty((N_E, N_Z)), np.empty((N_E, N_Z)), np.empty((N_E, N_Z)),
+                 np.empty((N_E + 2 * radius, N_Z + 2 * radius)), np.empty(N_Z + 2 * radius),
+                 np.empty(n_best, dtype=np.int64), np.empty(n_best, dtype=np.int64), np.empty(n_best))
+    dist, cand_e, cand_z, cand_c = work.dist, work.cand_e, work.cand_z, work.cand_c
     pos[0, 0], pos[0, 1], pos[0, 2] = px, py, pz
     parent[0], depth[0] = -1, 0
     h0 = w_h * math.sqrt((gx - px) ** 2 + (gy - py) ** 2 + (gz - pz) ** 2)
@@ -315,12 +378,11 @@ def _build_tree(cloud, px, py, pz, vx, vy, vz, gx, gy, gz, cx, cy, cz, params, p
     for it in range(n_exp):
         ox, oy, oz = pos[origin, 0], pos[origin, 1], pos[origin, 2]
         if origin == 0:
-            ux, uy, uz = vx, vy, vz
+            u = velocity
         else:
             p = parent[origin]
-            ux, uy, uz = ox - pos[p, 0], oy - pos[p, 1], oz - pos[p, 2]
-        k = _best_cells(cloud, ox, oy, oz, ux, uy, uz, gx, gy, gz, cx, cy, cz, params, dist, count, obst, padded,
-                        box, cand_e, cand_z, cand_c)
+            u = (ox - pos[p, 0], oy - pos[p, 1], oz - pos[p, 2])
+        k = _best_cells(cloud, (ox, oy, oz), u, goal, line, settings, work)
         if it == 0:
             empty = True
             for e in range(N_E):

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
-from surrealist_gym.sim.px4_avoidance import (N_E, N_Z, Px4AvoidanceConfig, Px4LocalPlanner, _atan2_deg,
-                                              _smooth_columns, _smooth_row)
+from surrealist_gym.sim.px4_avoidance import (N_E, N_Z, KernelSettings, Px4AvoidanceConfig, Px4LocalPlanner,
+                                              _atan2_deg, _smooth_columns, _smooth_row, kernel_settings)
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.sensor import DepthSensor, DepthSensorConfig
 from surrealist_gym.sim.profiles import SITL_IRIS
@@ -118,6 +118,41 @@ def test_a_wall_ahead_builds_a_tree_that_goes_around_it():
     again = Px4LocalPlanner(Px4AvoidanceConfig()).update(0.1, (0.0, 0.0, 10.0), (1.0, 0.0, 0.0), 0.0,
                                                          (40.0, 0.0, 10.0), (0.0, 0.0, 10.0), hits)
     assert np.array_equal(again.path, out.path)
+
+
+def test_kernel_settings_are_the_config_fields():
+    config = Px4AvoidanceConfig(max_sensor_range=12, min_sensor_range=0.5, pitch_cost_param=20, yaw_cost_param=4.0,
+                                velocity_cost_param=5000.0, obstacle_cost_param=7.5, tree_heuristic_weight=30.0,
+                                max_point_age_s=10.0, smoothing_margin_degrees=31.0, children_per_node=6,
+                                n_expanded_nodes=30, tree_node_distance=1.5, fov_h_deg=60.0, fov_v_deg=45.0)
+    settings = kernel_settings(config)
+    assert settings == KernelSettings(min_range=0.5, max_range=12.0, pitch_cost=20.0, yaw_cost=4.0,
+                                      velocity_cost=5000.0, obstacle_cost=7.5, heuristic_weight=30.0,
+                                      smoothing_radius=6, children=6, expansions=30, node_distance=1.5,
+                                      max_point_age=10.0, fov_h=60.0, fov_v=45.0)  # radius: ceil(31 / 6) cells
+    # a YAML's 12 and 20 reach the kernels as floats: one numba specialisation, the same flights
+    assert all(type(v) is (int if f in ("smoothing_radius", "children", "expansions") else float)
+               for f, v in settings._asdict().items())
+    assert kernel_settings(Px4AvoidanceConfig()).smoothing_radius == 7  # the cfg's 40 deg
+
+
+def test_a_planner_cycle_before_a_wall_gives_the_stored_path():
+    """The tree's path in front of the wall as the kernels gave it when they took a parameter array (pins the
+    kernels' behaviour, not only its shape): 2 m steps 3 deg down and 45 deg left, around the wall's west end."""
+    wall = Obstacle(l=4.0, w=10.0, h=20.0, x=12.0, y=1.0)
+    hits = DepthSensor([wall], CAMERA).scan((0.0, 0.0, 10.0), 0.0)
+    planner = Px4LocalPlanner(Px4AvoidanceConfig(max_sensor_range=15))  # an int, as a YAML gives it
+    outs = [planner.update(0.1 * k, (0.0, 0.0, 10.0), (1.0, 0.0, 0.0), 0.0, (40.0, 0.0, 10.0), (0.0, 0.0, 10.0), hits)
+            for k in (1, 2, 3)]
+    expected = [[0.0, 0.0, 10.0], [1.4122754318362525, -1.4122754318362523, 9.895328087514113],
+                [2.5000606841287256, -3.087317829995638, 9.790656175028225],
+                [3.756976542780057, -4.63947964984798, 9.895328087514113], [5.309138362632399, -5.89639550849931, 10.0]]
+    for out in outs:
+        assert out.state == "try_path" and out.points == 538 and out.speed == 0.0
+        assert out.path == pytest.approx(np.array(expected), abs=1e-9)
+    assert [o.yaw for o in outs] == pytest.approx([-0.07853981633974483, -0.1780925260562795, -0.2754131375177661],
+                                                  abs=1e-12)
+    assert outs[-1].position == pytest.approx((0.2673245553203368, 0.0, 10.0), abs=1e-12)
 
 
 def test_memory_keeps_points_outside_the_view_and_forgets_those_in_view():
