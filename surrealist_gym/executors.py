@@ -1,8 +1,18 @@
-"""Where simulations run: in this process, on a local process pool (default), or on a Dask cluster.
+"""Where simulations run: in this process, on a local process pool (default), or on a Dask cluster; and the one way
+to fly many tests on any of them (:func:`fly_many`).
 
-Every executor answers ``run(test, indices, seed, config) -> list of RunResult`` (one per run index, in order;
-run i of a test draws its noise from (test, seed, i)). A simulation that raises is retried once on its own; if it
-fails again it becomes a run with status ``error`` and the search goes on.
+Every executor answers ``submit(task, test, indices, seed, config) -> future`` (``task`` a module-level function
+such as :func:`fly`, run where the executor runs it; the future's ``done()`` and ``result()`` answer) and, built on
+it, ``run(test, indices, seed, config) -> list of RunResult`` (one per run index, in order; run i of a test draws its
+noise from (test, seed, i)), the evaluator's and the search agents' call. One retry policy (:func:`_fly_with_retry`)
+holds for both: a simulation that raises a :class:`SurrealistError` is retried run by run, and a run that fails again
+becomes a run with status ``error`` (the search goes on); any other failure is the infrastructure's (a dead worker,
+a lost scheduler): the chunk is flown again, and a second such failure raises :class:`InfrastructureError`.
+
+:func:`fly_many` flies every test's runs at once over an executor (the re-evaluation's and the fidelity measure's
+call, and calibration's): whole tests first, the last ones run by run, each chunk reduced to
+:class:`~surrealist_gym.outcomes.RunRecord` where it was flown, handed to ``done`` as it completes (to store it), and
+runs already held (``have``) not flown again.
 """
 from __future__ import annotations
 
@@ -12,12 +22,15 @@ import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
 from .errors import DependencyNotInstalled, InfrastructureError, SurrealistError, one_line
+from .outcomes import RunRecord
 from .trajectory import Trajectory
 
 
@@ -26,6 +39,12 @@ def fly(test, indices: Sequence[int], seed: int, config) -> list:
     from .sim import simulate_runs
 
     return simulate_runs(test, list(indices), seed, config)
+
+
+def fly_records(test, indices: Sequence[int], seed: int, config) -> list[RunRecord]:
+    """:func:`fly`, each run reduced to its :class:`RunRecord` where it was flown (:func:`fly_many`'s task: only the
+    records travel back, not the runs' true positions)."""
+    return [RunRecord.of(r) for r in fly(test, indices, seed, config)]
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,29 +74,29 @@ def _die_with_parent() -> None:
             pass
 
 
-def _fly_with_retry(submit, test, indices, seed, config, renew=lambda: None) -> list:
-    """Run a chunk via ``submit(test, indices, seed, config) -> future``.
+def _fly_with_retry(submit, test, indices, seed, config, first=None) -> list:
+    """Run a chunk via ``submit(test, indices, seed, config) -> future`` (``first``: its future, submitted already).
 
     A failure of the test itself (a :class:`SurrealistError` raised by the simulation, e.g. a mission that cannot be
-    flown) is retried run by run, once, and a run that fails again becomes an ``error`` run: a result. Any other
-    failure is the infrastructure's (a dead worker or pool, a lost scheduler): ``renew()`` replaces it and the chunk
-    is flown again; a second such failure raises :class:`InfrastructureError`, so nothing of it is stored."""
+    flown) is retried run by run, once, and a run that fails again becomes an ``error`` run (:class:`FailedRun`): a
+    result. Any other failure is the infrastructure's (a dead worker or pool, a lost scheduler): the chunk is flown
+    again (an executor replaces a broken pool when it is next given work); a second such failure raises
+    :class:`InfrastructureError`, so nothing of it is stored."""
     for attempt in (1, 2):
         try:
-            return submit(test, indices, seed, config).result()
+            return (first if attempt == 1 and first is not None else submit(test, indices, seed, config)).result()
         except SurrealistError:
             break
         except Exception as err:  # noqa: BLE001 - anything else is the machinery's failure
             if attempt == 2:
                 raise InfrastructureError(f"the simulations failed twice outside the simulator ({type(err).__name__}: "
                                           f"{one_line(err)})") from None
-            renew()
     results = []
     for index in indices:
         try:
             results.extend(submit(test, [index], seed, config).result())
         except SurrealistError as err:
-            results.append(FailedRun(seed, index, f"{type(err).__name__}: {err}"))
+            results.append(FailedRun(seed, index, f"{type(err).__name__}: {one_line(err)}"))
     return results
 
 
@@ -87,80 +106,88 @@ def _chunks(indices: Sequence[int], parts: int) -> list[list[int]]:
 
 
 class _Done:
-    """A finished 'future' for in-process runs."""
+    """A 'future' for in-process runs: flown when its result is asked for."""
 
     def __init__(self, fn, *args):
         self._fn, self._args = fn, args
+
+    def done(self) -> bool:
+        return True
+
+    def cancel(self) -> bool:
+        return True
 
     def result(self):
         return self._fn(*self._args)
 
 
-class InlineExecutor:
-    """Simulate in this process, the n runs of a test together in one world."""
+class _Executor:
+    """``run`` built on ``submit``: the runs of a test split evenly over ``self.workers``, each chunk under the
+    retry policy."""
 
     workers = 1
 
+    def submit(self, task, test, indices, seed, config):
+        raise NotImplementedError
+
     def run(self, test, indices, seed, config) -> list:
-        return _fly_with_retry(lambda *a: _Done(fly, *a), test, list(indices), seed, config)
+        chunks = _chunks(list(indices), self.workers)
+        futures = [self.submit(fly, test, chunk, seed, config) for chunk in chunks]
+        submit = self.submitter(fly)
+        return [r for chunk, future in zip(chunks, futures)
+                for r in _fly_with_retry(submit, test, chunk, seed, config, first=future)]
+
+    def submitter(self, task) -> Callable:
+        """``submit(test, indices, seed, config) -> future`` for ``task`` (what :func:`_fly_with_retry` calls)."""
+        return lambda test, indices, seed, config: self.submit(task, test, indices, seed, config)
+
+    def abandon(self) -> None:
+        """Stop what runs now (Ctrl-C, a store that cannot be written): its results are not wanted."""
 
     def close(self) -> None:
         pass
 
 
-class _ChunkedExecutor:
-    """Splits the runs of a test evenly over ``self.workers``; subclasses submit one chunk with ``_submit``."""
+class InlineExecutor(_Executor):
+    """Simulate in this process, the n runs of a test together in one world."""
 
-    workers = 1
-
-    def _submit(self, test, indices, seed, config):
-        raise NotImplementedError
-
-    def run(self, test, indices, seed, config) -> list:
-        futures = [(chunk, self._submit(test, chunk, seed, config)) for chunk in _chunks(list(indices), self.workers)]
-        results = []
-        for chunk, future in futures:
-            results.extend(_fly_with_retry(_Once(future, self._submit).submit, test, chunk, seed, config,
-                                           self._renew))
-        return results
-
-    def _renew(self) -> None:
-        """Replace what failed before flying a chunk again (a local pool whose worker died is broken for good)."""
+    def submit(self, task, test, indices, seed, config):
+        return _Done(task, test, list(indices), seed, config)
 
 
-class LocalPoolExecutor(_ChunkedExecutor):
-    """A pool of local processes; the runs of one test are split evenly over the workers."""
+class LocalPoolExecutor(_Executor):
+    """A pool of local processes; the runs of one test are split evenly over the workers. A pool broken by a dead
+    worker is replaced when next given work."""
 
     def __init__(self, workers: int | None = None):
         self.workers = workers or max(1, min(os.cpu_count() or 1, 8))
         self._pool: ProcessPoolExecutor | None = None
 
-    def _submit(self, test, indices, seed, config):
-        if self._pool is None:
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=_die_with_parent)
-        return self._pool.submit(fly, test, indices, seed, config)
+    def submit(self, task, test, indices, seed, config):
+        for attempt in (1, 2):
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=_die_with_parent)
+            try:
+                return self._pool.submit(task, test, list(indices), seed, config)
+            except BrokenProcessPool:
+                if attempt == 2:
+                    raise
+                self._pool.shutdown(wait=False, cancel_futures=True)
+                self._pool = None
+
+    def abandon(self) -> None:
+        """End the workers now, not after their jobs (Python 3.14: ``terminate_workers``)."""
+        if self._pool is not None:
+            processes = list((getattr(self._pool, "_processes", None) or {}).values())
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                process.terminate()
+            self._pool = None
 
     def close(self) -> None:
         if self._pool is not None:
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
-
-    def _renew(self) -> None:
-        self.close()
-
-
-class _Once:
-    """A chunk's submission: the first ``submit`` returns its already-submitted future, later ones (retries) submit
-    anew."""
-
-    def __init__(self, future, submit):
-        self._future, self._submit = future, submit
-
-    def submit(self, *args):
-        if self._future is not None:
-            future, self._future = self._future, None
-            return future
-        return self._submit(*args)
 
 
 LOST_SCHEDULER_S = 25.0  # a chunk is given up on after its client has been cut off from the scheduler this long
@@ -172,6 +199,21 @@ class _Watched:
 
     def __init__(self, future, client, patience: float):
         self._future, self._client, self._patience = future, client, patience
+        self._lost_since: float | None = None
+
+    def done(self) -> bool:
+        """Whether ``result()`` answers now: the future finished, or its client has lost the scheduler for longer
+        than the patience (then ``result()`` gives up)."""
+        if self._future.done():
+            return True
+        if self._client.status == "running":
+            self._lost_since = None
+            return False
+        self._lost_since = self._lost_since or time.monotonic()
+        return time.monotonic() - self._lost_since > self._patience
+
+    def cancel(self) -> bool:
+        return self._future.cancel()
 
     def result(self):
         lost_since = None
@@ -190,7 +232,7 @@ class _Watched:
                                           f"(client {self._client.status})") from None
 
 
-class DaskExecutor(_ChunkedExecutor):
+class DaskExecutor(_Executor):
     """Runs on a Dask cluster: a scheduler address (``tcp://host:port``) or a ``distributed.Client``."""
 
     def __init__(self, scheduler, patience: float = LOST_SCHEDULER_S):
@@ -206,8 +248,9 @@ class DaskExecutor(_ChunkedExecutor):
         self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
         self.patience = patience
 
-    def _submit(self, test, indices, seed, config):
-        return _Watched(self.client.submit(fly, test, indices, seed, config, pure=False), self.client, self.patience)
+    def submit(self, task, test, indices, seed, config):
+        return _Watched(self.client.submit(task, test, list(indices), seed, config, pure=False), self.client,
+                        self.patience)
 
     def close(self) -> None:
         if self._own:
@@ -222,4 +265,82 @@ def make_executor(spec=None, workers: int | None = None):
         return InlineExecutor()
     if isinstance(spec, str) or type(spec).__module__.startswith("distributed"):
         return DaskExecutor(spec)
-    return spec  # an executor object: run(test, indices, seed, config) and close()
+    return spec  # an executor object: submit, run(test, indices, seed, config) and close()
+
+
+@contextmanager
+def executor_for(spec=None, workers: int | None = None):
+    """:func:`make_executor` for the length of a ``with``, closed after it unless ``spec`` was an executor already;
+    without a spec, one worker flies in this process (:class:`InlineExecutor`)."""
+    executor = make_executor("inline" if spec is None and workers == 1 else spec, workers)
+    try:
+        yield executor
+    finally:
+        if executor is not spec:
+            executor.close()
+
+
+def _jobs(tests: int, runs: int, workers: int) -> list[tuple[int, list[int]]]:
+    """(test, run indices) to submit: whole tests first (flying runs in one world is cheaper), then the last
+    ``2 * workers`` tests run by run, so the last round of the workers is made of short jobs."""
+    tail = min(tests, 2 * workers) if workers > 1 else 0
+    return ([(i, list(range(runs))) for i in range(tests - tail)]
+            + [(i, [k]) for i in range(tests - tail, tests) for k in range(runs)])
+
+
+def _first_done(pending: dict, poll_s: float = 0.02):
+    """The first of the ``pending`` futures that is done (in submission order when several are)."""
+    while True:
+        for future in pending:
+            if future.done():
+                return future
+        time.sleep(poll_s)
+
+
+def fly_many(tests: Sequence, runs: int, seed: int, configs, executor, *,
+             progress: Callable[[int, int], None] | None = None, have: Sequence[dict] | None = None,
+             done: Callable[[int, list[RunRecord]], None] | None = None) -> list[tuple[RunRecord, ...]]:
+    """Fly runs 0..``runs``-1 of every test on ``executor`` (any of this module's) and return each test's
+    :class:`RunRecord` values, in run order.
+
+    Args:
+        tests: the test cases; configs: one SimConfig for every test, or a sequence with one per test.
+        runs, seed: runs per test and the base seed (run i of a test draws its noise from (test, seed, i)).
+        progress: called with (runs held, runs) as each chunk completes (and first with the runs of ``have``).
+        have: per test, the runs flown before ({index: RunRecord}): not flown again.
+        done: called with (test index, records) as each chunk completes, before anything else of it (to store it).
+
+    Every job is submitted at once: whole tests first, the last ``2 * executor.workers`` tests run by run (so the
+    last round is short). Each job keeps the module's retry policy: a simulation error becomes an ``error`` run, an
+    infrastructure failure flies it again, twice is an :class:`InfrastructureError`. On any exception (Ctrl-C, a
+    store that cannot be written) the jobs still pending are cancelled and the executor's workers stopped
+    (``abandon``)."""
+    configs = list(configs) if isinstance(configs, (list, tuple)) else [configs] * len(tests)
+    if len(configs) != len(tests):
+        raise ValueError(f"configs: expected one per test ({len(tests)}), got {len(configs)}")
+    got: list[dict] = [dict(h) for h in have] if have is not None else [{} for _ in tests]
+    total = len(tests) * runs
+    if progress and any(got):
+        progress(sum(map(len, got)), total)
+    submit = executor.submitter(fly_records)
+    pending: dict = {}
+    try:
+        for i, chunk in _jobs(len(tests), runs, max(1, int(getattr(executor, "workers", 1)))):
+            if todo := [k for k in chunk if k not in got[i]]:
+                pending[submit(tests[i], todo, seed, configs[i])] = (i, todo)
+        while pending:
+            future = _first_done(pending)
+            i, chunk = pending.pop(future)
+            records = [r if isinstance(r, RunRecord) else RunRecord.of(r)  # a FailedRun of the retry policy
+                       for r in _fly_with_retry(submit, tests[i], chunk, seed, configs[i], first=future)]
+            if done:
+                done(i, records)
+            got[i].update((r.index, r) for r in records)
+            if progress:
+                progress(sum(map(len, got)), total)
+    except BaseException:
+        for future in pending:
+            future.cancel()
+        executor.abandon()
+        raise
+    return [tuple(g[k] for k in range(runs)) for g in got]

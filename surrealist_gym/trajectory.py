@@ -296,3 +296,9 @@ def phases(trajectory: Trajectory, where: str = "flight") -> Phases:
     return Phases(float(t[air[0]]), float(t[air[-1]]), float(t[first_move]), float(np.median(v[moving])),
                   float(np.median(z[moving])), float(t[climb_end] - t[air[0]]),
                   float(max(t[air[-1]] - t[last_move], 0.0)))
+
+
+def airborne_time(t, xyz, threshold: float = AIRBORNE_M) -> float:
+    """Time [s] from the first to the last sample with z above ``threshold`` [m] (to the end if never landed)."""
+    up = np.flatnonzero(np.asarray(xyz)[:, 2] > threshold) if len(xyz) else np.zeros(0, dtype=int)
+    return float(t[up[-1]] - t[up[0]]) if up.size else 0.0

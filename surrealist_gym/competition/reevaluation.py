@@ -11,11 +11,13 @@ neither a pass nor a failure: it is counted apart, and the figures are over the 
 :class:`~surrealist_gym.competition.suite.Suite` (distinct failures) and their
 :func:`~surrealist_gym.competition.suite.diversity`.
 
-The tests are flown on a process pool several at a time, so every core stays busy: whole tests (their runs in one world)
-first, the last round split run by run so that no worker idles at the end. Given a ``store``, each chunk of runs is
-written to it (an :class:`~surrealist_gym.store.EvaluationStore`) as it completes, and the runs it holds already are
-read back instead of flown: an interrupted evaluation resumes and loses nothing. :func:`write_report` writes the report
-whole or not at all (:mod:`surrealist_gym.competition.reevaluation_report`, its names re-exported here).
+The tests are flown by :func:`~surrealist_gym.executors.fly_many` on local workers or a Dask cluster, several at a
+time, so every worker stays busy: whole tests (their runs in one world) first, the last round split run by run so that
+no worker idles at the end; each run is a :class:`~surrealist_gym.outcomes.RunRecord`. Given a ``store``, each chunk
+of runs is written to it (an :class:`~surrealist_gym.store.EvaluationStore`) as it completes, and the runs it holds
+already are read back instead of flown: an interrupted evaluation resumes and loses nothing. :func:`write_report`
+writes the report whole or not at all (:mod:`surrealist_gym.competition.reevaluation_report`, its names re-exported
+here).
 
 Example::
 
@@ -30,7 +32,6 @@ import math
 import os
 import sqlite3
 import time
-from collections import Counter
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Sequence
@@ -38,7 +39,7 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 
 from ..errors import InvalidTestCase, SurrealistError, one_line
-from ..outcomes import UNSAFE_DISTANCE_M
+from ..outcomes import RunRecord, statuses_text
 from ..sim.ranges import FrozenDict
 from ..testcase import Obstacle, TestCase
 from .reevaluation_report import (REPORT_FILES, SCORING_FILES, _f, _leaderboard_row, _p_text,  # noqa: F401
@@ -48,8 +49,8 @@ from .reevaluation_report import (REPORT_FILES, SCORING_FILES, _f, _leaderboard_
 if TYPE_CHECKING:
     from .suite import Suite
 
-__all__ = ["CONFIDENCE", "Evaluation", "RunRecord", "TestStats", "evaluate", "evaluation_identity", "find_tests",
-           "fly_tests", "load_tests", "regroup", "stored_runs", "summarise_test", "write_report"]
+__all__ = ["CONFIDENCE", "Evaluation", "TestStats", "evaluate", "evaluation_identity", "find_tests", "load_tests",
+           "regroup", "stored_runs", "summarise_test", "write_report"]
 
 CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
 _SUFFIXES = (".yaml", ".yml")
@@ -118,131 +119,6 @@ def rule_broken(test: TestCase) -> str:
     return broken[0] + (f" (and {len(broken) - 1} more)" if len(broken) > 1 else "") if broken else ""
 
 
-# --- flying --------------------------------------------------------------------------------------------------------
-@dataclass(frozen=True, slots=True, eq=False)
-class RunRecord:
-    """One run: index, status, competition distance [m] (inf without obstacles or a flight), duration since arming
-    [s], its trajectory (N, 3) [m] (x north, y east, z up; 0.5 s means) and the end's message. A run in ``error``
-    was not flown to an end: it neither passes nor fails."""
-
-    index: int
-    status: str
-    distance: float
-    duration: float
-    trajectory: np.ndarray
-    message: str = ""
-
-    @property
-    def flown(self) -> bool:
-        """Whether the run ended in anything but ``error`` (only such runs pass or fail)."""
-        return self.status != "error"
-
-    @property
-    def failed(self) -> bool:
-        """A flown run that collided or came within 1.5 m (competition distance)."""
-        return self.flown and (self.status == "collision" or self.distance < UNSAFE_DISTANCE_M)
-
-    def to_dict(self) -> dict:
-        """The run as a store keeps it (its trajectory apart)."""
-        return {"index": self.index, "status": self.status, "distance": self.distance, "duration": self.duration,
-                "message": self.message}
-
-    @classmethod
-    def from_dict(cls, run: dict, trajectory) -> "RunRecord":
-        return cls(run["index"], run["status"], run["distance"], run["duration"],
-                   np.asarray(trajectory, dtype=np.float64).reshape(-1, 3), run["message"])
-
-    @property
-    def points(self) -> int:
-        """The competition's points of the run (a collision scores 5, as a distance of 0 does)."""
-        from .rules import points
-
-        return 5 if self.status == "collision" else points(self.distance)
-
-
-def _records(test, indices, seed, config) -> list[RunRecord]:
-    """Fly runs of one test together and keep what the report needs (the function the workers call)."""
-    from ..sim.runner import simulate_runs
-
-    return [RunRecord(int(r.index), str(getattr(r.status, "value", r.status)), float(r.competition_distance),
-                      float(r.duration), np.asarray(r.trajectory.xyz, dtype=np.float64), r.message)
-            for r in simulate_runs(test, list(indices), seed, config)]
-
-
-def _guarded(test, indices, seed, config) -> list[RunRecord]:
-    """Fly again in this process, run by run; a run that raises again ends in ``error`` with the exception."""
-    out = []
-    for i in indices:
-        try:
-            out.extend(_records(test, [i], seed, config))
-        except Exception as err:  # noqa: BLE001 - one broken test must not end the evaluation
-            out.append(RunRecord(i, "error", math.inf, 0.0, np.zeros((0, 3)), f"{type(err).__name__}: {one_line(err)}"))
-    return out
-
-
-def _jobs(tests: int, runs: int, workers: int) -> list[tuple[int, list[int]]]:
-    """(test, run indices) to submit: whole tests first (flying runs in one world is cheaper), then the last
-    ``2 * workers`` tests run by run, so the pool's last round is made of short jobs."""
-    tail = min(tests, 2 * workers) if workers > 1 else 0
-    return ([(i, list(range(runs))) for i in range(tests - tail)]
-            + [(i, [k]) for i in range(tests - tail, tests) for k in range(runs)])
-
-
-def fly_tests(tests: Sequence[TestCase], configs: Sequence, runs: int, seed: int = 0, workers: int | None = None,
-              progress: Callable[[int, int], None] | None = None, have: Sequence[dict] | None = None,
-              done: Callable[[int, list[RunRecord]], None] | None = None) -> list[tuple[RunRecord, ...]]:
-    """Fly ``runs`` runs of every test (``configs[i]``: the SimConfig of test i) on ``workers`` processes (default:
-    all cores, at most 8; 1: in this process). Returns the runs of each test, in order; ``progress`` is called with
-    (runs done, runs). A job that raises is flown again here, run by run. ``have[i]``: runs of test i flown before
-    ({index: RunRecord}), not flown again; ``done(i, records)`` is called with each chunk of test i as it completes
-    (to store it)."""
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    from ..executors import _die_with_parent
-
-    workers = workers or max(1, min(os.cpu_count() or 1, 8))
-    got: list[dict] = [dict(h) for h in have] if have is not None else [{} for _ in tests]
-    jobs = [(i, todo) for i, chunk in _jobs(len(tests), runs, workers)
-            if (todo := [k for k in chunk if k not in got[i]])]
-    total = len(tests) * runs
-    if progress and any(got):
-        progress(sum(map(len, got)), total)
-
-    def collect(i: int, records: list[RunRecord]) -> None:
-        if done:
-            done(i, records)
-        got[i].update((r.index, r) for r in records)
-        if progress:
-            progress(sum(map(len, got)), total)
-
-    if workers == 1:
-        for i, chunk in jobs:
-            try:
-                records = _records(tests[i], chunk, seed, configs[i])
-            except Exception:  # noqa: BLE001 - retried run by run
-                records = _guarded(tests[i], chunk, seed, configs[i])
-            collect(i, records)
-    elif jobs:
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), initializer=_die_with_parent)
-        try:
-            futures = {pool.submit(_records, tests[i], chunk, seed, configs[i]): (i, chunk) for i, chunk in jobs}
-            for future in as_completed(futures):
-                i, chunk = futures[future]
-                try:
-                    records = future.result()
-                except Exception:  # noqa: BLE001 - retried in this process
-                    records = _guarded(tests[i], chunk, seed, configs[i])
-                collect(i, records)
-        except BaseException:  # Ctrl-C, a store that cannot be written: end the workers now, not after their jobs
-            workers_now = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for process in workers_now:  # (Python 3.14: pool.terminate_workers())
-                process.terminate()
-            raise
-        pool.shutdown(wait=True)
-    return [tuple(g[k] for k in range(runs)) for g in got]
-
-
 # --- statistics ----------------------------------------------------------------------------------------------------
 @dataclass(frozen=True, slots=True, eq=False)
 class TestStats:
@@ -290,7 +166,7 @@ class TestStats:
     @property
     def statuses(self) -> str:
         """How the runs ended, e.g. ``success:4 collision:1``."""
-        return " ".join(f"{s}:{n}" for s, n in Counter(r.status for r in self.runs).items())
+        return statuses_text(self.runs)
 
     @property
     def closest_failure(self) -> RunRecord | None:
@@ -337,8 +213,8 @@ class Evaluation:
         runs, seed: runs per test and base seed; uav: the profile given (None: each test's default). tests: per-test
         statistics, in input order. suite: the distinct failures (a :class:`~surrealist_gym.competition.suite.Suite` of
         the failing tests' closest runs). diversity: their :func:`~surrealist_gym.competition.suite.diversity` over all
-        failing tests. workers, wall_s: processes and flying time [s] (of this call). stored: runs read back from the
-        store, flown before this call.
+        failing tests. workers, wall_s: the executor's workers (local processes or Dask workers) and flying time [s]
+        (of this call). stored: runs read back from the store, flown before this call.
     """
 
     runs: int
@@ -359,7 +235,7 @@ class Evaluation:
 
 def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 0, uav=None,
              workers: int | None = None, progress: Callable[[int, int], None] | None = None, store=None,
-             identity: dict | None = None, buffer: float = 0.0) -> Evaluation:
+             identity: dict | None = None, buffer: float = 0.0, executor=None) -> Evaluation:
     """Fly ``runs`` runs of each (file, test) (from :func:`load_tests`) and compute the report's figures.
 
     ``uav``: a profile name, YAML or :class:`~surrealist_gym.sim.profiles.UavProfile` for every test (default: each
@@ -368,7 +244,10 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     not flown, and each chunk flown is written to it as it completes. It records the evaluation's identity
     (:func:`evaluation_identity`, with ``identity``: anything else the runs depend on), so a store of another
     evaluation is refused in one line. ``buffer``: the competition distance's polyline buffer [m] (``--buffer``,
-    ``SimConfig.competition_buffer_m``)."""
+    ``SimConfig.competition_buffer_m``). ``executor``: where the runs fly, a Dask scheduler's address, a
+    ``distributed.Client`` or an executor (:func:`~surrealist_gym.executors.make_executor`; default ``workers``
+    local processes, all cores and at most 8; 1: this process)."""
+    from ..executors import executor_for, fly_many
     from ..sim.profiles import default_profile, load_profile
     from .suite import Suite
 
@@ -377,29 +256,29 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     given = None if uav is None else load_profile(uav)
     profiles = [given or default_profile(test) for _, test in tests]
     configs = [replace(c, competition_buffer_m=buffer) for c in flight_configs(tests, profiles)]
-    workers = workers or max(1, min(os.cpu_count() or 1, 8))
     have: list[dict] = [{} for _ in tests]
     db = None
-    try:
-        if store is not None:
-            from ..store import EvaluationStore
+    with executor_for(executor, workers) as flying:
+        try:
+            if store is not None:
+                from ..store import EvaluationStore
 
-            db = EvaluationStore(store)
-            db.claim({**evaluation_identity(tests, runs, seed, configs), **(identity or {})})
-            for row in db:
-                have[row.info["test"]].update(
-                    (r["index"], RunRecord.from_dict(r, t)) for r, t in zip(row.runs, row.info["trajectories"]))
-        start = time.perf_counter()
-        flown = fly_tests([t for _, t in tests], configs, runs, seed, workers, progress, have,
-                          None if db is None else lambda i, records: _store(db, i, *tests[i], records))
-        wall = time.perf_counter() - start
-    finally:
-        if db is not None:
-            db.close()
+                db = EvaluationStore(store)
+                db.claim({**evaluation_identity(tests, runs, seed, configs), **(identity or {})})
+                for row in db:
+                    have[row.info["test"]].update(
+                        (r["index"], RunRecord.from_dict(r, t)) for r, t in zip(row.runs, row.info["trajectories"]))
+            start = time.perf_counter()
+            flown = fly_many([t for _, t in tests], runs, seed, configs, flying, progress=progress, have=have,
+                             done=None if db is None else lambda i, records: _store(db, i, *tests[i], records))
+            wall = time.perf_counter() - start
+        finally:
+            if db is not None:
+                db.close()
     stats = [summarise_test(path, test, records, profile.name)
              for (path, test), records, profile in zip(tests, flown, profiles)]
     return _with_suite(Evaluation(runs, seed, None if given is None else given.name, tuple(stats), Suite(),
-                                  FrozenDict(), workers, wall, sum(map(len, have))))
+                                  FrozenDict(), flying.workers, wall, sum(map(len, have))))
 
 
 def _with_suite(ev: Evaluation) -> Evaluation:
@@ -445,7 +324,7 @@ def stored_runs(store, tests: Sequence[TestCase]) -> list[tuple[RunRecord, ...]]
         rows = [db.get(test.key()) for test in tests]
     return [() if row is None else tuple(
         RunRecord(int(r["index"]), str(r["status"]), float(r.get("competition_distance", math.nan)),
-                  float(r["duration"]), np.zeros((0, 3))) for r in row.runs) for row in rows]
+                  float(r["duration"])) for r in row.runs) for row in rows]
 
 
 def _store(db, i: int, path, test: TestCase, records: list[RunRecord]) -> None:
@@ -455,7 +334,7 @@ def _store(db, i: int, path, test: TestCase, records: list[RunRecord]) -> None:
     try:
         db.add(StoredEvaluation(test.key(), {"file": os.fspath(path)}, tuple(r.index for r in records),
                                 tuple(r.to_dict() for r in records), None,
-                                {"test": i, "trajectories": [r.trajectory.tolist() for r in records]}))
+                                {"test": i, "trajectories": [r.trajectory.xyz.tolist() for r in records]}))
     except (sqlite3.Error, OSError) as err:
         raise SurrealistError(f"{db.path}: cannot store the runs ({one_line(err)}); the runs stored before are "
                               f"kept, and resuming flies the rest") from None

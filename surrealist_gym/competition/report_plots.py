@@ -88,7 +88,7 @@ def plot_top_views(ev, path, columns: int = 4) -> None:
         _boxes(ax, t.test.obstacles, facecolor="0.8", edgecolor=_BOX)
         for r in sorted(t.runs, key=lambda r: r.failed):  # failing flights on top
             if len(r.trajectory):
-                ax.plot(r.trajectory[:, 1], r.trajectory[:, 0], color=_FAIL if r.failed else _PASS if r.flown
+                ax.plot(r.trajectory.y, r.trajectory.x, color=_FAIL if r.failed else _PASS if r.flown
                         else "0.5", linestyle="-" if r.flown else "--", linewidth=0.8, alpha=0.8)
         _top_axes(ax)
         closest = "-" if math.isnan(t.min_distance) else f"{t.min_distance:.2f} m"
@@ -118,7 +118,7 @@ def plot_suite_map(ev, path) -> None:
             continue
         if i in kept:
             _boxes(ax, t.test.obstacles, facecolor="none", edgecolor=colour, linewidth=1)
-        ax.plot(run.trajectory[:, 1], run.trajectory[:, 0], color=colour, linewidth=2.2 if i in kept else 0.9,
+        ax.plot(run.trajectory.y, run.trajectory.x, color=colour, linewidth=2.2 if i in kept else 0.9,
                 alpha=0.9, label=f"{t.name} ({run.distance:.2f} m" + (", kept)" if i in kept else ")"))
     if not ev.failing:
         ax.text(0.5, 0.5, "no failing test", transform=ax.transAxes, ha="center", color="0.4")

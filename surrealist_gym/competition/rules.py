@@ -12,17 +12,13 @@ Example:
 """
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import InvalidTestCase
-from ..outcomes import UNSAFE_DISTANCE_M
+from ..outcomes import POINTS, UNSAFE_DISTANCE_M, points  # noqa: F401 - a run's points are the core's, named here
 from ..testcase import Obstacle, Shape, TestCase
-
-#: Points of a run by its competition distance [m]: (below this distance, points), checked in order.
-POINTS = ((0.25, 5), (1.0, 2), (UNSAFE_DISTANCE_M, 1))
 
 #: Where case-study names are looked up, in order (the competition repository keeps them in snippets/case_studies).
 CASE_STUDY_ENV = "SURREALIST_CASE_STUDIES"
@@ -47,13 +43,6 @@ class Rules:
 
 RULES = Rules()
 LAYOUT_FIELDS = ("x", "y", "l", "w", "h", "r")  # what a case-study test chooses of each box
-
-
-def points(distance: float) -> int:
-    """The competition's points of one run with this competition distance [m] (0 when not a soft failure)."""
-    if not math.isfinite(distance):
-        return 0
-    return next((p for limit, p in POINTS if distance < limit), 0)
 
 
 def canonical_box(o: Obstacle) -> Obstacle:

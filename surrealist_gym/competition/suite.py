@@ -88,9 +88,9 @@ class Member:
 
     @property
     def points(self) -> int:
-        from .rules import points
+        from ..outcomes import run_points
 
-        return 5 if self.status == "collision" else points(self.distance)
+        return run_points(self.status, self.distance)
 
 
 @dataclass(frozen=True, slots=True)

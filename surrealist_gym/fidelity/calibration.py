@@ -117,11 +117,12 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
         flights: :class:`~surrealist_gym.logs.FlightLog` values of one UAV.
         seed_test: the obstacles to fly the missions with (default none).
         runs: runs per simulated figure (common noise, seeds 0..runs-1).
-        executor: where the runs fly (an executor of :mod:`surrealist_gym.executors`; default this process).
+        executor: where the runs fly (an executor of :mod:`surrealist_gym.executors`; default this process): the
+            logs' missions fly together (:func:`~surrealist_gym.executors.fly_many`).
         grid: values of each setting's range flown before interpolating.
         passes: rounds over the settings (the pace moves the altitude a little, and back).
     """
-    from ..executors import InlineExecutor
+    from ..executors import InlineExecutor, fly_many
 
     if not flights:
         raise LogFormatError("calibrate: no log given")
@@ -144,9 +145,10 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
         key = tuple(sorted((k, round(v, 6)) for k, v in vals.items()))
         if key not in cache:
             got, trajs = [], []
-            for flight, test in zip(flights, tests):
-                t = replace(test, params={**test.params, **{UAV_SETTING_PREFIX + k: v for k, v in vals.items()}})
-                results = executor.run(t, range(runs), seed, config)
+            settings_of = {UAV_SETTING_PREFIX + k: v for k, v in vals.items()}
+            flown_runs = fly_many([replace(test, params={**test.params, **settings_of}) for test in tests], runs,
+                                  seed, config, executor)
+            for flight, results in zip(flights, flown_runs):
                 count[0] += len(results)
                 flown = [r for r in results if len(r.trajectory) >= 4]
                 where = f"{flight.path} on profile {base.name!r} with {dict(vals)}"

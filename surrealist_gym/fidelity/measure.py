@@ -33,17 +33,16 @@ from search.statistics import vargha_delaney_a12
 
 from ..errors import SurrealistError
 from ..outcomes import BLOCKED as _BLOCKED
-from ..outcomes import UNSAFE_DISTANCE_M, RunStatus
+from ..outcomes import UNSAFE_DISTANCE_M, RunRecord, RunStatus, status_counts, statuses_text
 from ..sim.ranges import FrozenDict
-from ..testcase import TestCase
+from ..trajectory import airborne_time  # noqa: F401 - the airborne time of the report, named here too
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
 
-__all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "RunOutcome",
-           "TestRow", "airborne_time", "build_report", "fly_labelled_set", "fly_test", "format_figure",
-           "load_labelled_set", "measure_fidelity", "plot_report", "region_stats", "sim_config_for", "write_report"]
+__all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "TestRow",
+           "airborne_time", "build_report", "fly_labelled_set", "format_figure", "load_labelled_set",
+           "measure_fidelity", "plot_report", "region_stats", "sim_config_for", "write_report"]
 
 DISTANCE_NAME = "2-D competition distance"
-AIRBORNE_Z_M = 0.3        # [m] above the ground: airborne
 TARGET_PRECISION = 0.6    # the best recall is sought at this precision or above
 # their (normalised) result -> our status that means the same
 SAME_STATUS = {"flown": "success", "timeout": "timeout", "collision": "collision"}
@@ -54,23 +53,6 @@ STATUS_ORDER = tuple(s.value for s in (RunStatus.SUCCESS, RunStatus.TIMEOUT, Run
 
 
 # --- flying ------------------------------------------------------------------------------------------------------
-@dataclass(frozen=True, slots=True)
-class RunOutcome:
-    """One simulated run: status, 2-D competition distance [m], airborne time [s], duration since arming [s]."""
-
-    status: str
-    distance: float
-    airborne_s: float
-    duration_s: float
-    message: str = ""
-
-
-def airborne_time(t, xyz, threshold: float = AIRBORNE_Z_M) -> float:
-    """Time [s] from the first to the last sample with z above ``threshold`` [m] (to the end if never landed)."""
-    up = np.flatnonzero(np.asarray(xyz)[:, 2] > threshold)
-    return float(t[up[-1]] - t[up[0]]) if up.size else 0.0
-
-
 def sim_config_for(uav=None, config=None):
     """The one place where a UAV profile becomes a SimConfig: ``uav`` (a preset name, a YAML path or a
     :class:`~surrealist_gym.sim.profiles.UavProfile`; default the PX4 SITL Iris that produced the competition's
@@ -80,67 +62,32 @@ def sim_config_for(uav=None, config=None):
     return load_profile(uav if uav is not None else SITL_IRIS).sim_config(config)
 
 
-def fly_test(test: TestCase, runs: int, seed: int, config=None, buffer: float = 0.0) -> tuple[RunOutcome, ...]:
-    """Fly ``runs`` runs of a test and reduce each to a :class:`RunOutcome` (the function the workers call); the
-    distance is the run's competition distance with its polyline buffered by ``buffer`` [m]."""
-    from ..executors import fly
+def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,
+                     buffer: float = 0.0, progress: Callable[[int, int], None] | None = None, executor=None
+                     ) -> list[tuple[RunRecord, ...]]:
+    """Fly every test of ``lset`` (:func:`~surrealist_gym.executors.fly_many`) with ``config`` (default
+    :class:`~surrealist_gym.sim.config.SimConfig`), the competition distance's polyline buffered by ``buffer`` [m].
+
+    ``executor``: a Dask scheduler's address, a ``distributed.Client`` or an executor (default ``workers`` local
+    processes, all cores; 1: this process). Returns one tuple of run records per test, in the set's
+    order; ``progress`` is called with (tests done, tests) as tests finish. A run whose simulation raises is retried
+    once; if it raises again, it ends in ``error`` with the exception as message.
+    """
+    from ..executors import executor_for, fly_many
     from ..sim import SimConfig
 
-    out = []
     config = replace(config or SimConfig(), competition_buffer_m=buffer)
-    for r in fly(test, range(runs), seed, config):
-        distance = r.competition_distance if len(r.trajectory) else math.nan
-        out.append(RunOutcome(str(getattr(r.status, "value", r.status)), distance,
-                              airborne_time(r.true_t, r.true_xyz), float(r.duration), r.message))
-    return tuple(out)
+    held, finished = [0] * len(lset), 0
 
+    def done(i: int, records: list) -> None:  # runs arrive chunk by chunk: a test is done when all its runs are
+        nonlocal finished
+        held[i] += len(records)
+        finished += held[i] == runs
+        if progress and held[i] == runs:
+            progress(finished, len(lset))
 
-def _fly_guarded(test, runs, seed, config, buffer):
-    """The retry of a test that raised, in this process: if it raises again, its runs end in ``error``."""
-    try:
-        return fly_test(test, runs, seed, config, buffer)
-    except Exception as err:  # noqa: BLE001 - one broken test must not end the measurement
-        message = f"{type(err).__name__}: {err}"
-        return tuple(RunOutcome("error", math.nan, 0.0, 0.0, message) for _ in range(runs))
-
-
-def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,
-                     buffer: float = 0.0, progress: Callable[[int, int], None] | None = None
-                     ) -> list[tuple[RunOutcome, ...]]:
-    """Fly every test of ``lset`` on ``workers`` processes (default: all cores; 1: in this process).
-
-    Returns one tuple of run outcomes per test, in the set's order. A test that raises is retried once; if it
-    raises again, its runs end in ``error`` with the exception as message.
-    """
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    from ..executors import _die_with_parent
-
-    workers = workers or os.cpu_count() or 1
-    out: list = [None] * len(lset)
-    if workers == 1:
-        for i, test in enumerate(lset.tests):
-            try:
-                out[i] = fly_test(test, runs, seed, config, buffer)
-            except Exception:  # noqa: BLE001 - retried once
-                out[i] = _fly_guarded(test, runs, seed, config, buffer)
-            if progress:
-                progress(i + 1, len(lset))
-        return out
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(lset)), initializer=_die_with_parent)
-    try:
-        futures = {pool.submit(fly_test, test, runs, seed, config, buffer): i for i, test in enumerate(lset.tests)}
-        for done, future in enumerate(as_completed(futures), start=1):
-            i = futures[future]
-            try:
-                out[i] = future.result()
-            except Exception:  # noqa: BLE001 - retried once in this process
-                out[i] = _fly_guarded(lset.tests[i], runs, seed, config, buffer)
-            if progress:
-                progress(done, len(lset))
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
-    return out
+    with executor_for(executor, workers or os.cpu_count() or 1) as flying:
+        return fly_many(list(lset.tests), runs, seed, config, flying, done=done)
 
 
 # --- the report --------------------------------------------------------------------------------------------------
@@ -151,7 +98,7 @@ class TestRow:
     __test__ = False  # not a pytest class
 
     label: Label
-    runs: tuple[RunOutcome, ...]
+    runs: tuple[RunRecord, ...]
 
     @property
     def distances(self) -> list[float]:
@@ -177,14 +124,14 @@ class TestRow:
     @property
     def status(self) -> str:
         """The most common status of the runs (ties: the first in success, timeout, stuck, collision, error)."""
-        counts = Counter(r.status for r in self.runs)
+        counts = status_counts(self.runs)
         rank = {s: i for i, s in enumerate(STATUS_ORDER)}
         return min(counts, key=lambda s: (-counts[s], rank.get(s, len(rank)), s))
 
     @property
     def airborne_s(self) -> float:
         """Median airborne time [s] over the runs that did not end in error."""
-        a = [r.airborne_s for r in self.runs if r.status != "error"]
+        a = [r.airborne for r in self.runs if r.flown]
         return float(np.median(a)) if a else math.nan
 
     def to_dict(self) -> dict:
@@ -192,11 +139,10 @@ class TestRow:
         ratio = self.airborne_s / lab.airborne_s if lab.airborne_s > 0 else math.nan
         return {"test": lab.test_id, "their_result": lab.result, "their_distance_m": _r(lab.distance),
                 "our_distance_m": _r(self.distance), "our_failure_probability": _r(self.failure_probability),
-                "our_status": self.status, "our_statuses": " ".join(f"{s}:{n}" for s, n in
-                                                                    Counter(r.status for r in self.runs).items()),
+                "our_status": self.status, "our_statuses": statuses_text(self.runs),
                 "runs": len(self.runs), "their_airborne_s": _r(lab.airborne_s, 1),
                 "our_airborne_s": _r(self.airborne_s, 1), "airborne_ratio": _r(ratio),
-                "our_duration_s": _r(float(np.median([r.duration_s for r in self.runs])), 1)}
+                "our_duration_s": _r(float(np.median([r.duration for r in self.runs])), 1)}
 
 
 @dataclass(frozen=True, slots=True)
@@ -241,7 +187,7 @@ class FidelityReport:
                "labels_file": self.labels_file, "tests": len(self.rows), "runs_per_test": self.runs,
                "seed": self.seed, "close_m": self.close_m, "uav": self.uav,
                "their_results": dict(Counter(r.label.result for r in self.rows)),
-               "our_statuses": dict(Counter(run.status for r in self.rows for run in r.runs)),
+               "our_statuses": dict(status_counts(run for r in self.rows for run in r.runs)),
                "overall": _clean(_asdict(self.overall)), "close": _clean(_asdict(self.close)),
                "confusion": {k: dict(v) for k, v in self.confusion.items()}, "blocked": _clean(dict(self.blocked)),
                "unseen_statuses": _clean(dict(self.unseen)),
@@ -314,7 +260,7 @@ def region_stats(theirs: np.ndarray, ours: np.ndarray, failure_prob: np.ndarray)
         our_failure_rate=float(failure_prob.mean()) if n else math.nan)
 
 
-def build_report(lset: LabelledSet, outcomes: Sequence[tuple[RunOutcome, ...]], *, runs: int = 1, seed: int = 0,
+def build_report(lset: LabelledSet, outcomes: Sequence[tuple[RunRecord, ...]], *, runs: int = 1, seed: int = 0,
                  close: float = 3.0, buffer: float = 0.0, uav: str | None = None, wall_s: float = 0.0
                  ) -> FidelityReport:
     """Compare flown ``outcomes`` (one tuple of runs per test of ``lset``) with the labels."""
@@ -326,7 +272,7 @@ def build_report(lset: LabelledSet, outcomes: Sequence[tuple[RunOutcome, ...]], 
     near = theirs < close
     confusion: dict[str, Counter] = {}
     for r in rows:
-        confusion.setdefault(r.label.result, Counter()).update(run.status for run in r.runs)
+        confusion.setdefault(r.label.result, Counter()).update(status_counts(r.runs))
     statuses = [s for s in STATUS_ORDER if any(s in c for c in confusion.values())]
     statuses += sorted({s for c in confusion.values() for s in c} - set(statuses))
     confusion_table = FrozenDict({k: FrozenDict({s: c.get(s, 0) for s in statuses}) for k, c in confusion.items()})
@@ -363,7 +309,7 @@ def _durations(rows) -> FrozenDict | None:
 def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: int = 0, uav: str | None = None,
                      config=None, workers: int | None = None, limit: int | None = None, every: int = 1,
                      close: float = 3.0, buffer: float = 0.0,
-                     progress: Callable[[int, int], None] | None = None) -> FidelityReport:
+                     progress: Callable[[int, int], None] | None = None, executor=None) -> FidelityReport:
     """Fly a labelled set (see :func:`load_labelled_set`) and report how far our UAV agrees with the labels.
 
     Args:
@@ -371,7 +317,9 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
         runs: runs per test; seed: base seed of the noise.
         uav: UAV profile, a preset name or YAML (default ``px4-v1.12-sitl-iris``); config: the SimConfig the
             profile applies to (default :class:`~surrealist_gym.sim.config.SimConfig`).
-        workers: processes (default: all cores); limit, every: fly every ``every``-th test, at most ``limit``.
+        workers: processes (default: all cores); executor: a Dask scheduler's address, a ``distributed.Client`` or
+            an executor instead (:func:`fly_labelled_set`); limit, every: fly every ``every``-th test, at most
+            ``limit``.
         close: the close region is theirs < ``close`` [m]; buffer: polyline buffer of the distance [m].
         progress: called with (tests done, tests) as tests finish.
     """
@@ -382,7 +330,7 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
     lset = path if isinstance(path, LabelledSet) else load_labelled_set(path, labels, mission)
     lset = lset.subset(limit, every)
     start = time.perf_counter()
-    outcomes = fly_labelled_set(lset, runs, seed, config, workers, buffer, progress)
+    outcomes = fly_labelled_set(lset, runs, seed, config, workers, buffer, progress, executor)
     return build_report(lset, outcomes, runs=runs, seed=seed, close=close, buffer=buffer, uav=config.profile,
                         wall_s=time.perf_counter() - start)
 

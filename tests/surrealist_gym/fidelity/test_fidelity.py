@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from surrealist_gym.cli import main
-from surrealist_gym.fidelity.measure import (InvalidLabels, RunOutcome, airborne_time, build_report, load_labelled_set,
+from surrealist_gym.fidelity.measure import (InvalidLabels, airborne_time, build_report, load_labelled_set,
                                              measure_fidelity, region_stats)
+from surrealist_gym.outcomes import RunRecord
 from tests.conftest import SHARED_DATA
 
 COMPETITION = SHARED_DATA / "competition"
@@ -101,10 +102,13 @@ def test_build_report_counts_and_mapping(rilast):
     assert [label.result for label in lset.labels] == ["flown", "flown", "flown", "flown"]
     lset = type(lset)(lset.source, lset.labels_file, lset.labels[:3] + rilast.labels[5:6],
                       lset.tests[:3] + rilast.tests[5:6])  # random_run0_5 has no result
-    runs = [(RunOutcome("success", 4.0, 50, 55), RunOutcome("success", 1.0, 50, 55)),
-            (RunOutcome("stuck", 2.0, 30, 35), RunOutcome("collision", 0.0, 20, 22)),
-            (RunOutcome("timeout", 3.0, 100, 101), RunOutcome("error", math.nan, 0, 0)),
-            (RunOutcome("timeout", 3.0, 100, 101), RunOutcome("success", 2.5, 60, 65))]
+    def run(index, status, distance, airborne, duration):
+        return RunRecord(index, status, distance, duration, airborne=airborne)
+
+    runs = [(run(0, "success", 4.0, 50, 55), run(1, "success", 1.0, 50, 55)),
+            (run(0, "stuck", 2.0, 30, 35), run(1, "collision", 0.0, 20, 22)),
+            (run(0, "timeout", 3.0, 100, 101), run(1, "error", math.nan, 0, 0)),
+            (run(0, "timeout", 3.0, 100, 101), run(1, "success", 2.5, 60, 65))]
     report = build_report(lset, runs, runs=2, close=4.3)
     rows = report.rows
     assert rows[0].distance == 2.5 and rows[0].failure_probability == 0.5
@@ -134,7 +138,7 @@ def test_a_few_rilast_flights_pool_equals_inline(rilast):
     for row in pooled.rows:
         (run,) = row.runs
         assert run.status in ("success", "timeout", "stuck", "collision", "error")
-        assert 0 < run.airborne_s <= run.duration_s
+        assert 0 < run.airborne <= run.duration
         if run.status not in ("timeout", "error"):
             assert row.distance == run.distance >= 0
     flown = sum(r.label.result == "flown" and not math.isnan(r.distance) for r in pooled.rows)
