@@ -10,7 +10,7 @@ CASE_STUDY_ENV = PROBLEM_ENVS["case study"]
 
 
 def add_arguments(parser) -> None:
-    from .options import out_help
+    from .options import add_dask_argument, out_help
 
     parser.add_argument("--env", default=None,
                         help=f"env id: {', '.join(PROBLEM_ENVS.values())} (default {PROBLEM_ENVS['replicate']}; "
@@ -35,8 +35,7 @@ def add_arguments(parser) -> None:
                         help="local worker processes (default: all cores; not with --inline or --dask-scheduler)")
     parser.add_argument("--parallel", type=int, default=1,
                         help="searches run at the same time on the workers (default 1; not with --inline)")
-    parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS",
-                        help="run the simulations on a Dask cluster (tcp://host:port)")
+    add_dask_argument(parser)
     parser.add_argument("--inline", action="store_true",
                         help="simulate in this process (no worker processes; not with --dask-scheduler)")
     parser.add_argument("--common-noise", action="store_true",

@@ -96,7 +96,7 @@ def _uav_option(uav: str | None) -> str | None:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist evaluate``."""
-    from .options import add_buffer_argument
+    from .options import add_buffer_argument, add_dask_argument
 
     parser.add_argument("tests", metavar="TESTS", nargs="*", help="Aerialist test YAMLs, or folders of them")
     parser.add_argument("--runs", type=int, default=None,
@@ -107,6 +107,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "its tests drawn, test scores, 2024's rest score and similarity penalty, 2025's "
                              "duplicates and diversity, and the folders ranked per case study")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    add_dask_argument(parser)
     parser.add_argument("--random-seed", type=int, default=0, metavar="S",
                         help="base seed: run i of a test draws its noise from the test, S and i (default 0)")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
@@ -185,7 +186,7 @@ def run(args: argparse.Namespace) -> int:
                                       f"or choose another folder") from None
             except OSError as err:
                 raise SurrealistError(f"--out {out}: cannot write {RUN_FILE} ({err.strerror or err})") from None
-        return _evaluate(out, options, tests, uav, invalid)
+        return _evaluate(out, options, tests, uav, invalid, args.dask_scheduler)
     finally:
         _unlock(out)
 
@@ -254,7 +255,7 @@ def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
     return out, dataclasses.replace(options, workers=args.workers or options.workers)
 
 
-def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict) -> int:
+def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict, dask: str | None = None) -> int:
     """Fly the runs the store lacks (a progress bar from those stored), then the summary and the report; with
     ``--competition`` the folders' scores and ranks (``invalid``: the drawn tests not flown, with the rule each
     breaks)."""
@@ -276,7 +277,7 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict) ->
     try:
         try:
             ev = evaluate(flying, runs=options.runs, seed=options.random_seed, uav=uav, workers=options.workers,
-                          progress=progress, store=store,
+                          progress=progress, store=store, executor=dask,
                           identity={"any_layout": options.any_layout, "competition": options.competition},
                           buffer=options.buffer)
         finally:

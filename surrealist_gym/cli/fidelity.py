@@ -20,7 +20,7 @@ from ..errors import SurrealistError
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist fidelity``."""
-    from .options import add_buffer_argument, add_out_argument, add_random_seed_argument
+    from .options import add_buffer_argument, add_dask_argument, add_out_argument, add_random_seed_argument
 
     parser.add_argument("labels_set", metavar="LABELS", help="tests CSV, or a folder of Aerialist YAMLs")
     parser.add_argument("--labels", metavar="FILE", help="labels of a YAML folder (default <folder>/labels.csv)")
@@ -33,6 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--runs", type=int, default=1, help="runs per test (default 1)")
     add_random_seed_argument(parser, "base seed of the simulation noise (default 0)")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    add_dask_argument(parser)
     parser.add_argument("--limit", type=int, default=None, metavar="N", help="fly at most N tests")
     parser.add_argument("--every", type=int, default=1, metavar="K", help="fly every K-th test (default 1)")
     parser.add_argument("--close", type=float, default=3.0, metavar="M",
@@ -128,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         report = measure_fidelity(lset, runs=args.runs, seed=args.random_seed, uav=args.uav, workers=args.workers,
                                   limit=args.limit, every=args.every, close=args.close, buffer=args.buffer,
-                                  progress=progress)
+                                  progress=progress, executor=args.dask_scheduler)
     finally:
         bar.close()
     paths = write_report(report, args.out)

@@ -107,6 +107,9 @@ def refuse_inapplicable(args: argparse.Namespace, rules) -> None:
 BUFFER_HELP = ("half width added to the flight's polyline in the competition distance [m]: 0.125 is Aerialist's since "
                "Oct 2024, whose figures read that much lower; default 0, Aerialist's before then (and the labelled "
                "PX4 flights')")
+#: ``--dask-scheduler`` of every command that flies on workers: the searches (a SearchOptions field), compare,
+#: evaluate and fidelity (:func:`add_dask_argument`).
+DASK_HELP = "run the simulations on a Dask cluster (tcp://host:port)"
 
 
 _UAV_HELP = ("UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), px4-vision-case0, "
@@ -123,8 +126,7 @@ class SearchOptions:
     budget: int = _opt(PROBLEM_DEFAULTS["replicate"]["budget"], "evaluations allowed (default {default})", type=int)
     runs: int = _opt(PROBLEM_DEFAULTS["replicate"]["runs"], "simulations per evaluation (default {default})", type=int)
     workers: int | None = _opt(None, "local worker processes (default: all cores)", type=int)
-    dask_scheduler: str | None = _opt(None, "run the simulations on a Dask cluster (tcp://host:port)",
-                                      metavar="ADDRESS")
+    dask_scheduler: str | None = _opt(None, DASK_HELP, metavar="ADDRESS")
     preset: str = _opt("authors", _PRESET_HELP, choices=["paper", "authors"])
     agent: str = _opt(PROBLEM_DEFAULTS["replicate"]["agent"], "search agent: greedy, greedy-paper, random, cmaes, "
                                                              "suite, ppo:POLICY.zip, module:Class (default {default})")
@@ -326,6 +328,11 @@ def add_buffer_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--buffer", type=float, default=0.0, metavar="M", help=BUFFER_HELP)
 
 
+def add_dask_argument(parser: argparse.ArgumentParser) -> None:
+    """``--dask-scheduler ADDRESS`` (:data:`DASK_HELP`; an address that cannot be reached is one line)."""
+    parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS", help=DASK_HELP)
+
+
 def check_buffer(value, where: str = "--buffer") -> float:
     """``value`` if it is a buffer [m] (a finite number >= 0), else a one-line SurrealistError naming ``where``."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
@@ -379,7 +386,7 @@ def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tu
     return path
 
 
-__all__ = ["BUFFER_HELP", "CASE_STUDY_DEFAULTS", "GenerateOptions", "OUT_PATTERN", "PROBLEM_DEFAULTS", "PROBLEM_ENVS",
-           "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "add_buffer_argument", "add_out_argument",
-           "add_random_seed_argument", "check_at_least", "check_buffer", "check_writable", "default_out", "out_help",
-           "race_stages", "refuse_inapplicable"]
+__all__ = ["BUFFER_HELP", "CASE_STUDY_DEFAULTS", "DASK_HELP", "GenerateOptions", "OUT_PATTERN", "PROBLEM_DEFAULTS",
+           "PROBLEM_ENVS", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "add_buffer_argument",
+           "add_dask_argument", "add_out_argument", "add_random_seed_argument", "check_at_least", "check_buffer",
+           "check_writable", "default_out", "out_help", "race_stages", "refuse_inapplicable"]
