@@ -4,18 +4,48 @@
 (additive mutators; the default value 0 leaves the test unchanged). Moves are along the world axes (x north,
 y east); resizes keep the footprint centre and the base; rotations are in degrees, positive from north toward east.
 An invalid result (non-positive size, overlapping obstacles) raises :class:`InvalidTestCase`: never simulate it.
-:class:`UavMutator` and :class:`WindMutator` change a UAV setting or the test's wind with the same interface.
+:class:`UavMutator` and :class:`WindMutator` change a UAV setting or the test's wind with the same interface,
+:class:`PropertyMutator`, which the envs and agents rely on.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
 from enum import Enum
+from typing import Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
 from .errors import InvalidTestCase
 from .testcase import MAX_WIND_SPEED_MS, TestCase, Wind
+
+
+@runtime_checkable
+class PropertyMutator(Protocol):
+    """What the envs and the agents ask of a mutator of one test property (obstacle, UAV setting, wind).
+
+    Attributes:
+        default_step / min_step: the adaptive line search's first and smallest steps (units of the property).
+        low, high: the range of the mutator value (an action's -1 and 1; agents that sample draw from it).
+        default_value: the value that leaves the test unchanged (0: the mutators are additive).
+    """
+
+    __slots__ = ()  # plain attributes, so the frozen dataclasses that declare the protocol keep their fields
+    default_step: float
+    min_step: float
+    low: float
+    high: float
+    default_value: float
+
+    @property
+    def name(self) -> str:
+        """The mutator's name in results and options, e.g. ``obstacle0.x``, ``uav.takeoff_delay_s``."""
+
+    def valid_range(self, test: TestCase) -> tuple[float, float]:
+        """The part of ``[low, high]`` that gives a valid property on ``test``."""
+
+    def apply(self, test: TestCase, value: float) -> TestCase:
+        """A new test case with the property changed by ``value``; InvalidTestCase when the result is invalid."""
 
 
 class MutatorKind(str, Enum):
@@ -37,7 +67,7 @@ AUTHORS_ORDER = (MutatorKind.MOVE_Y, MutatorKind.MOVE_X, MutatorKind.ROTATE,
 
 
 @dataclass(frozen=True, slots=True)
-class Mutator:
+class Mutator(PropertyMutator):
     """An additive mutator of one obstacle property.
 
     Attributes:
@@ -118,7 +148,7 @@ class Mutator:
 
 
 @dataclass(frozen=True, slots=True)
-class UavMutator:
+class UavMutator(PropertyMutator):
     """An additive mutator of one UAV setting (paper section 3: the UAV's configuration is a test property too).
 
     It sets the test's param ``uav.<setting>`` (``takeoff_delay_s``, ``planner.<field>``;
@@ -187,7 +217,7 @@ class WindKind(str, Enum):
 
 
 @dataclass(frozen=True, slots=True)
-class WindMutator:
+class WindMutator(PropertyMutator):
     """An additive mutator of the test's wind (Aerialist's wind plugin fields, :class:`~surrealist_gym.testcase.Wind`).
 
     ``speed`` adds ``value`` [m/s] to ``velocity_mean`` and raises ``velocity_max`` to the new mean when a given
@@ -289,7 +319,7 @@ def default_mutators(test: TestCase, kinds=AUTHORS_ORDER, obstacles=None) -> tup
     return tuple(Mutator(i, k) for i in indices for k in kinds)
 
 
-def apply_action(test: TestCase, mutators, action) -> TestCase:
+def apply_action(test: TestCase, mutators: Sequence[PropertyMutator], action) -> TestCase:
     """The test that an action stands for: one value in [-1, 1] per mutator, scaled to the mutator's range
     (centre + value x half range; values rounded to 1e-9, so equal actions give equal keys). The obstacle mutators
     change their obstacles first and the layout is checked once, as a whole (a box may pass through another on the

@@ -19,13 +19,14 @@ from __future__ import annotations
 
 import copy
 from pathlib import Path
+from typing import Sequence
 
 import gymnasium as gym
 import numpy as np
 
 from ..errors import InvalidTestCase
 from ..evaluation import Evaluation, Evaluator
-from ..mutators import apply_action
+from ..mutators import PropertyMutator, apply_action
 from ..store import EvaluationStore
 from ..testcase import TestCase
 
@@ -38,7 +39,7 @@ class SurrealistEnv(gym.Env):
     metadata = {"render_modes": []}
     steps_per_budget = INVALID_STEPS_FACTOR  # the episode also ends after this many steps per evaluation budgeted
 
-    def __init__(self, seed_test: TestCase, mutators, budget: int, runs: int, executor=None, store=None,
+    def __init__(self, seed_test: TestCase, mutators: Sequence[PropertyMutator], budget: int, runs: int, executor=None, store=None,
                  random_seed: int = 0, sim_config=None, workers: int | None = None, uav=None):
         if budget < 1:
             raise ValueError(f"budget must be >= 1, got {budget}")
@@ -92,7 +93,7 @@ class SurrealistEnv(gym.Env):
 
     # --- properties -----------------------------------------------------------------------------------------------
     @property
-    def mutators(self):
+    def mutators(self) -> tuple[PropertyMutator, ...]:
         """The mutators, in the order of the action vector."""
         return self._mutators
 

@@ -42,6 +42,8 @@ import numpy as np
 from numba import njit, types
 from numba.typed import Dict
 
+from .planner import Planner, PlannerCommand
+
 __all__ = ["AvoidanceConfig", "PlannerOutput", "LocalPlanner", "YawMode"]
 
 
@@ -147,8 +149,8 @@ class AvoidanceConfig:
 
 
 @dataclass(frozen=True, slots=True)
-class PlannerOutput:
-    """One planner decision.
+class PlannerOutput(PlannerCommand):
+    """One planner decision (a velocity setpoint: ``position`` is None).
 
     Attributes:
         velocity: World-frame velocity setpoint (vx, vy, vz) [m/s].
@@ -162,8 +164,9 @@ class PlannerOutput:
     position = None  #: this planner commands a velocity, not a position setpoint
 
 
-class LocalPlanner:
-    """Chooses a velocity setpoint from a memory of depth hits; call :meth:`update` at ~10-20 Hz.
+class LocalPlanner(Planner):
+    """Chooses a velocity setpoint from a memory of depth hits; call :meth:`update` (or the run loop's
+    :meth:`step`) at ~10-20 Hz.
 
     Args:
         config: Planner parameters.
@@ -196,6 +199,11 @@ class LocalPlanner:
     def memory_size(self) -> int:
         """Number of remembered voxels."""
         return len(self._memory)
+
+    def step(self, t, position, velocity, yaw, goal, prev_goal, hits, cruise) -> PlannerOutput:
+        """The run loop's cycle (:meth:`~surrealist_gym.sim.planner.Planner.step`): :meth:`update` at the mission's
+        speed; this planner reads neither the yaw nor the mission line."""
+        return self.update(t, position, velocity, goal, hits, max_speed=cruise)
 
     def update(self, t: float, position, velocity, goal, hits: np.ndarray,
                max_speed: float | None = None) -> PlannerOutput:

@@ -12,9 +12,13 @@ import math
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 from .ranges import UAV_SETTING_PREFIX, FrozenDict  # a test's params uav.<setting> set the simulated UAV (profiles.py)
+
+if TYPE_CHECKING:  # the planners and the sensor load numba and PyBullet; a config names them only
+    from .planner import PlannerConfig
+    from .sensor import DepthSensorConfig
 
 # PX4 v1.12 defaults of the parameters the simulated UAV reads (sources: the *_params.c / *_params.yaml of
 # mc_pos_control, mc_att_control, mc_rate_control, navigator, land_detector, commander in PX4-Autopilot v1.12).
@@ -148,8 +152,8 @@ class SimConfig:
     airframe_params: Mapping[str, float] = field(default_factory=dict)
     profile: str | None = None
     obstacle_collision_scale: float = 1.0
-    avoidance_config: Any = None
-    sensor_config: Any = None
+    avoidance_config: PlannerConfig | None = None
+    sensor_config: DepthSensorConfig | None = None
     competition_buffer_m: float = 0.0
 
     def __post_init__(self):

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry import line_projection
+from .planner import Planner, PlannerCommand
 from .px4_avoidance_tree import (  # noqa: F401 - re-exported: the kernels and constants live there
     _R2D, ALPHA_RES, MAX_NODES, N_E, N_E2, N_Z, N_Z2, SUB_RES, KernelSettings, _atan2_deg, _best_cells, _build_tree,
     _hist_index, _histogram, _process_cloud, _smooth_columns, _smooth_row)
@@ -117,7 +118,7 @@ class Px4AvoidanceConfig:
 
 
 @dataclass(frozen=True, slots=True)
-class Px4PlannerOutput:
+class Px4PlannerOutput(PlannerCommand):
     """One cycle's message to PX4 and what produced it.
 
     Attributes:
@@ -158,8 +159,9 @@ def sensor_limited_speed(acc: float, jerk: float, sensor_range: float) -> float:
     return 0.5 * (-b + math.sqrt(b * b + 8.0 * acc * sensor_range))
 
 
-class Px4LocalPlanner:
-    """The planner and waypoint generator of one vehicle; call :meth:`update` once per planner cycle.
+class Px4LocalPlanner(Planner):
+    """The planner and waypoint generator of one vehicle; call :meth:`update` (or the run loop's :meth:`step`) once
+    per planner cycle.
 
     Args:
         config: Planner parameters.
@@ -195,6 +197,11 @@ class Px4LocalPlanner:
     def cloud(self) -> np.ndarray:
         """The planner's current point cloud (new and remembered points) [m]."""
         return self._cloud
+
+    def step(self, t, position, velocity, yaw, goal, prev_goal, hits, cruise) -> Px4PlannerOutput:
+        """The run loop's cycle (:meth:`~surrealist_gym.sim.planner.Planner.step`): :meth:`update`, level; the
+        speed is the cruise speed the planner was built with (PX4-Avoidance reads MPC_XY_CRUISE at start-up)."""
+        return self.update(t, position, velocity, yaw, goal, prev_goal, hits)
 
     def update(self, t: float, position, velocity, yaw: float, goal, prev_goal, hits: np.ndarray,
                pitch: float = 0.0) -> Px4PlannerOutput:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import TYPE_CHECKING, Callable, Mapping
 
 import numpy as np
 from .pybullet_quiet import pb
@@ -27,6 +27,10 @@ from .noise import NoiseSource, run_seed_sequence
 from .ranges import FrozenDict
 from .vehicle import preset
 from .world import World
+
+if TYPE_CHECKING:
+    from .planner import Planner
+    from .sensor import DepthSensor
 
 
 @dataclass(frozen=True, slots=True)
@@ -192,11 +196,9 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     return [_result(r, test, cfg, params, seed) for r in runs]
 
 
-def _avoidance(test, cfg: SimConfig, params):
-    """The depth sensor and a factory of per-run planning steps for the configured avoidance model.
-
-    A planning step is ``step(t, position, velocity, yaw, navigator, hits) -> planner output`` (world frame, z up),
-    so the run loop does not care which planner flies."""
+def _avoidance(test, cfg: SimConfig, params) -> tuple[DepthSensor, Callable[[], Planner]]:
+    """The depth sensor and a factory of per-run planners (:class:`~surrealist_gym.sim.planner.Planner`) for the
+    configured avoidance model; the run loop calls their ``step`` and does not care which planner flies."""
     from .config import AvoidanceModel
     from .sensor import DepthSensor, DepthSensorConfig
 
@@ -206,20 +208,13 @@ def _avoidance(test, cfg: SimConfig, params):
 
         sensor = DepthSensor(test.obstacles, cfg.sensor_config or SITL_IRIS.sensor_config())
         plan_cfg = cfg.avoidance_config or Px4AvoidanceConfig()
-
-        def px4_step():
-            planner = Px4LocalPlanner(plan_cfg, params["MPC_XY_CRUISE"], params["MPC_ACC_HOR"], params["MPC_JERK_MAX"])
-            return lambda t, pos, vel, yaw, nav, hits: planner.update(t, pos, vel, yaw, nav.goal(), nav.prev, hits)
-        return sensor, px4_step
+        return sensor, lambda: Px4LocalPlanner(plan_cfg, params["MPC_XY_CRUISE"], params["MPC_ACC_HOR"],
+                                               params["MPC_JERK_MAX"])
     from .avoidance import AvoidanceConfig, LocalPlanner
 
     sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig())
     plan_cfg = cfg.avoidance_config or AvoidanceConfig()
-
-    def simple_step():
-        planner = LocalPlanner(plan_cfg)
-        return lambda t, pos, vel, yaw, nav, hits: planner.update(t, pos, vel, nav.goal(), hits, max_speed=nav.cruise)
-    return sensor, simple_step
+    return sensor, lambda: LocalPlanner(plan_cfg)
 
 
 def _initial_yaw(mission) -> float:
@@ -320,7 +315,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
             hits = sensor.scan((pos[0], pos[1], -pos[2]), yaw, r.noise.rng)
             if len(hits):
                 hits = hits + np.array([pe[0], pe[1], -(pe[2])])
-            r.plan_out = r.planner(t, pos_up, vel_up, yaw, nav, hits)
+            r.plan_out = r.planner.step(t, pos_up, vel_up, yaw, nav.goal(), nav.prev, hits, nav.cruise)
         plan = r.plan_out
     pos_sp, vel_ff, acc_ff, yaw_sp = nav.update(t, pos_up, vel_up, yaw, outer_dt, r.ground, plan)
     r.ground = False  # collects the contacts of the next outer period
