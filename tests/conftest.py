@@ -14,6 +14,27 @@ REFERENCE_CSV = SHARED_DATA / "reference" / "case0_reference_trajectory.csv"
 CASE_STUDIES = SHARED_DATA / "competition" / "case_studies"
 
 
+#: Three CAMBA tests that fly quickly (about 0.6 s a run each).
+CAMBA_FAST = ("26-11-13-35-31-5O9PN", "04-12-14-10-41-5O9PN", "24-11-07-48-39-5O9PN")
+
+
+@pytest.fixture(scope="module")
+def camba_fast_folder(tmp_path_factory) -> Path:
+    """A folder ``tests/`` holding the three CAMBA_FAST tests, with ``case_studies/`` beside it (their
+    ``mission_file`` is relative)."""
+    import shutil
+
+    competition = SHARED_DATA / "competition"
+    if not competition.is_dir():
+        pytest.skip(_MISSING)
+    root = tmp_path_factory.mktemp("suite")
+    shutil.copytree(competition / "case_studies", root / "case_studies")
+    (root / "tests").mkdir()
+    for name in CAMBA_FAST:
+        shutil.copy(competition / "camba-collection" / f"{name}.yaml", root / "tests")
+    return root / "tests"
+
+
 _SHARED_PATHS = (SHARED_DATA, EXPERIMENTS, FORMATS, CASE0_ULG, REFERENCE_CSV, CASE_STUDIES)
 _MISSING = f"needs the shared data folder {SHARED_DATA} (clone the project beside ../shared)"
 

@@ -5,7 +5,6 @@ CAMBA tests, a few rows of the RILAST labelled set), real processes, a real clus
 import csv
 import dataclasses
 import math
-import shutil
 import warnings
 
 import numpy as np
@@ -15,30 +14,17 @@ from surrealist_gym.cli import main
 from surrealist_gym.executors import InlineExecutor, LocalPoolExecutor, _jobs, fly_many
 from surrealist_gym.outcomes import RunRecord, status_counts, statuses_text
 from surrealist_gym.sim.profiles import SITL_IRIS
-from tests.conftest import SHARED_DATA
+from tests.conftest import CAMBA_FAST, SHARED_DATA
 
 COMPETITION = SHARED_DATA / "competition"
-FAST = ["26-11-13-35-31-5O9PN", "04-12-14-10-41-5O9PN", "24-11-07-48-39-5O9PN"]  # ~0.6 s a run each
 RILAST = COMPETITION / "rilast-mission1" / "tests.csv"
 
 
 @pytest.fixture(scope="module")
-def tests_folder(tmp_path_factory):
-    if not COMPETITION.is_dir():
-        pytest.skip(f"needs the shared data folder {SHARED_DATA}")
-    root = tmp_path_factory.mktemp("suite")
-    shutil.copytree(COMPETITION / "case_studies", root / "case_studies")  # their mission_file is relative
-    (root / "tests").mkdir()
-    for name in FAST:
-        shutil.copy(COMPETITION / "camba-collection" / f"{name}.yaml", root / "tests")
-    return root / "tests"
-
-
-@pytest.fixture(scope="module")
-def tests(tests_folder):
+def tests(camba_fast_folder):
     from surrealist_gym.competition.reevaluation import load_tests
 
-    return [test for _, test in load_tests([tests_folder])][:2]
+    return [test for _, test in load_tests([camba_fast_folder])][:2]
 
 
 @pytest.fixture(scope="module")
@@ -125,10 +111,10 @@ def test_a_test_that_cannot_be_flown_becomes_error_runs(tests):
 
 
 # --- evaluate and fidelity on a Dask cluster -----------------------------------------------------------------------
-def test_evaluate_on_a_dask_cluster_equals_local_workers(tests_folder, cluster, tmp_path, capsys):
+def test_evaluate_on_a_dask_cluster_equals_local_workers(camba_fast_folder, cluster, tmp_path, capsys):
     local, remote = tmp_path / "local", tmp_path / "dask"
-    assert main(["evaluate", str(tests_folder), "--runs", "2", "--workers", "2", "--out", str(local)]) == 0
-    assert main(["evaluate", str(tests_folder), "--runs", "2", "--dask-scheduler", cluster.scheduler_address,
+    assert main(["evaluate", str(camba_fast_folder), "--runs", "2", "--workers", "2", "--out", str(local)]) == 0
+    assert main(["evaluate", str(camba_fast_folder), "--runs", "2", "--dask-scheduler", cluster.scheduler_address,
                  "--out", str(remote)]) == 0
     assert "on 2 worker(s)" in capsys.readouterr().out
     assert _rows(local / "runs.csv") == _rows(remote / "runs.csv")  # statuses, distances, durations: exactly
@@ -146,10 +132,11 @@ def test_fidelity_on_a_dask_cluster_equals_local_workers(cluster, tmp_path, shar
 
 
 @pytest.mark.parametrize("command", ["evaluate", "fidelity"])
-def test_a_scheduler_that_cannot_be_reached_is_one_line(command, tests_folder, tmp_path, capsys, shared_data):
+def test_a_scheduler_that_cannot_be_reached_is_one_line(command, camba_fast_folder, tmp_path, capsys, shared_data):
     import dask
 
-    given = [str(tests_folder / f"{FAST[0]}.yaml")] if command == "evaluate" else [str(RILAST), "--limit", "1"]
+    first = str(camba_fast_folder / f"{CAMBA_FAST[0]}.yaml")
+    given = [first] if command == "evaluate" else [str(RILAST), "--limit", "1"]
     with dask.config.set({"distributed.comm.timeouts.connect": "2s"}), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         code = main([command, *given, "--dask-scheduler", "tcp://127.0.0.1:1", "--out", str(tmp_path / "out")])

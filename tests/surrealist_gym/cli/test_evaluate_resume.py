@@ -7,7 +7,6 @@ import csv
 import dataclasses
 import errno
 import json
-import shutil
 import signal
 import sqlite3
 import subprocess
@@ -18,31 +17,18 @@ import pytest
 
 from surrealist_gym.cli import main
 from surrealist_gym.sim.profiles import load_profile, save_profile
-from tests.conftest import ROOT, SHARED_DATA
+from tests.conftest import CAMBA_FAST, ROOT, SHARED_DATA
 
 COMPETITION = SHARED_DATA / "competition"
-FAST = ["26-11-13-35-31-5O9PN", "04-12-14-10-41-5O9PN", "24-11-07-48-39-5O9PN"]  # ~0.6 s a run each
 REPORT = ["report.md", "evaluation.csv", "runs.csv", "distances.png", "top-views.png", "suite-map.png"]
 ARGS = ["--runs", "2", "--workers", "2"]
 
 
 @pytest.fixture(scope="module")
-def tests_folder(tmp_path_factory):
-    if not COMPETITION.is_dir():
-        pytest.skip(f"needs the shared data folder {SHARED_DATA}")
-    root = tmp_path_factory.mktemp("suite")
-    shutil.copytree(COMPETITION / "case_studies", root / "case_studies")  # their mission_file is relative
-    (root / "tests").mkdir()
-    for name in FAST:
-        shutil.copy(COMPETITION / "camba-collection" / f"{name}.yaml", root / "tests")
-    return root / "tests"
-
-
-@pytest.fixture(scope="module")
-def uninterrupted(tests_folder, tmp_path_factory):
+def uninterrupted(camba_fast_folder, tmp_path_factory):
     """The folder of an evaluation flown in one go."""
     out = tmp_path_factory.mktemp("full") / "out"
-    assert main(["evaluate", str(tests_folder), *ARGS, "--out", str(out)]) == 0
+    assert main(["evaluate", str(camba_fast_folder), *ARGS, "--out", str(out)]) == 0
     return out
 
 
@@ -88,9 +74,9 @@ def _one_line(capsys) -> str:
 
 
 @pytest.mark.slow
-def test_killed_evaluation_resumes_to_the_same_report(tests_folder, uninterrupted, tmp_path, capsys):
+def test_killed_evaluation_resumes_to_the_same_report(camba_fast_folder, uninterrupted, tmp_path, capsys):
     out = tmp_path / "out"
-    process = _start(tests_folder, *ARGS, "--out", out)
+    process = _start(camba_fast_folder, *ARGS, "--out", out)
     _wait_for_runs(out, process)
     process.kill()  # SIGKILL: no clean-up of any kind
     process.wait()
@@ -104,11 +90,11 @@ def test_killed_evaluation_resumes_to_the_same_report(tests_folder, uninterrupte
 
 
 @pytest.mark.slow
-def test_second_writer_refused_and_ctrl_c_keeps_the_runs(tests_folder, uninterrupted, tmp_path, capsys):
+def test_second_writer_refused_and_ctrl_c_keeps_the_runs(camba_fast_folder, uninterrupted, tmp_path, capsys):
     out = tmp_path / "out"
-    first = _start(tests_folder, *ARGS, "--out", out)
+    first = _start(camba_fast_folder, *ARGS, "--out", out)
     _wait_for_runs(out, first)
-    assert main(["evaluate", str(tests_folder), *ARGS, "--out", str(out)]) == 2  # a second evaluation into it
+    assert main(["evaluate", str(camba_fast_folder), *ARGS, "--out", str(out)]) == 2  # a second evaluation into it
     assert _one_line(capsys) == f"error: {out}: another process is writing to this folder"
     assert main(["evaluate", "--resume", str(out)]) == 2  # or resuming it while it runs
     assert _one_line(capsys) == f"error: {out}: another process is writing to this folder"
@@ -123,8 +109,8 @@ def test_second_writer_refused_and_ctrl_c_keeps_the_runs(tests_folder, uninterru
     _same_report(uninterrupted, out)
 
 
-def test_out_holding_anything_else_is_refused_before_flying(tests_folder, uninterrupted, tmp_path, capsys):
-    test = str(tests_folder / f"{FAST[0]}.yaml")
+def test_out_holding_anything_else_is_refused_before_flying(camba_fast_folder, uninterrupted, tmp_path, capsys):
+    test = str(camba_fast_folder / f"{CAMBA_FAST[0]}.yaml")
     assert main(["evaluate", test, "--out", str(uninterrupted)]) == 2  # an earlier evaluation
     assert _one_line(capsys) == (f"error: --out {uninterrupted}: holds an evaluation already; finish it with "
                                  f"--resume {uninterrupted}, or choose another folder")
@@ -152,7 +138,7 @@ def test_out_holding_anything_else_is_refused_before_flying(tests_folder, uninte
 
 
 @pytest.mark.slow
-def test_full_disk_leaves_no_half_report_and_resume_writes_it(tests_folder, uninterrupted, tmp_path, capsys,
+def test_full_disk_leaves_no_half_report_and_resume_writes_it(camba_fast_folder, uninterrupted, tmp_path, capsys,
                                                               monkeypatch):
     disk = tmp_path / "disk"
     disk.mkdir()
@@ -165,7 +151,7 @@ def test_full_disk_leaves_no_half_report_and_resume_writes_it(tests_folder, unin
         monkeypatch.setattr("surrealist_gym.competition.report_plots.plot_suite_map", full)
     out = disk / "out"
     try:
-        assert main(["evaluate", str(tests_folder), *ARGS, "--out", str(out)]) == 2
+        assert main(["evaluate", str(camba_fast_folder), *ARGS, "--out", str(out)]) == 2
         assert _one_line(capsys) == (f"error: {out}: cannot write the report (No space left on device); every run "
                                      f"is stored in {out / 'evaluations.sqlite'}: surrealist evaluate --resume "
                                      f"{out} writes the report")
@@ -183,13 +169,13 @@ def test_full_disk_leaves_no_half_report_and_resume_writes_it(tests_folder, unin
             subprocess.run(["umount", str(disk)], check=True)
 
 
-def test_runs_in_error_are_counted_apart(tests_folder, tmp_path, capsys):
+def test_runs_in_error_are_counted_apart(camba_fast_folder, tmp_path, capsys):
     """A UAV whose pitch-rate damping flips it in the air: every run ends in error, none passes or fails."""
     iris = load_profile("px4-v1.12-sitl-iris")
     profile = tmp_path / "flipping.yaml"
     save_profile(dataclasses.replace(iris, name="flipping", params={**iris.params, "MC_PITCHRATE_D": 1.0}), profile)
     out = tmp_path / "out"
-    code = main(["evaluate", str(tests_folder / f"{FAST[0]}.yaml"), "--runs", "2", "--workers", "1", "--uav",
+    code = main(["evaluate", str(camba_fast_folder / f"{CAMBA_FAST[0]}.yaml"), "--runs", "2", "--workers", "1", "--uav",
                  str(profile), "--out", str(out)])
     if code == 2:
         pytest.skip(f"this UAV profile is refused before flying: {capsys.readouterr().err.strip()}")
