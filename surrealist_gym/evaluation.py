@@ -19,8 +19,8 @@ from typing import Protocol, Sequence
 import numpy as np
 
 from .errors import SurrealistError
-from .fitness import average_runs, generation_fitness
-from .metrics import dtw, frechet
+from .fitness import generation_fitness, replication_fitness
+from .metrics import frechet
 from .outcomes import Measure, judged_distance, outcomes
 from .store import EvaluationStore, StoredEvaluation
 from .testcase import TestCase
@@ -117,9 +117,9 @@ class ReplicationObjective:
         trajectories = [r.trajectory for r in runs if len(r.trajectory) > 0]
         if not trajectories:
             return NO_SCORE
-        averaged = np.asarray(getattr(averaged := average_runs(trajectories, self.averaging), "xyz", averaged))
-        distance = dtw(self.reference, averaged)
-        return Score(-distance, {"dtw": distance, "frechet": frechet(self.reference, averaged)}, averaged)
+        fitness, averaged = replication_fitness(self.reference, trajectories, self.averaging)
+        averaged = np.asarray(getattr(averaged, "xyz", averaged))
+        return Score(fitness, {"dtw": -fitness, "frechet": frechet(self.reference, averaged)}, averaged)
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ import json
 import math
 import os
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from enum import IntEnum
 
 from .errors import MissionError, regular_file
@@ -113,16 +113,6 @@ class Mission:
     def waypoints(self) -> list[tuple[float, float, float]]:
         """Positions of the items that have one, in order."""
         return [(it.x, it.y, it.z) for it in self.items if it.has_position]
-
-    def with_home(self, lat: float, lon: float, alt: float | None = None) -> "Mission":
-        """The same mission expressed relative to another home (positions move, geography does not)."""
-        lat0, lon0, alt0 = self.home
-        dx, dy = geo_to_local(lat0, lon0, lat, lon)
-        dz = 0.0 if alt is None else alt0 - alt
-        items = tuple(
-            replace(it, x=it.x + dx, y=it.y + dy, z=it.z + dz) if it.has_position else it for it in self.items
-        )
-        return replace(self, items=items, home=(lat, lon, alt0 if alt is None else alt))
 
     def to_plan(self) -> dict:
         """The QGroundControl plan dictionary of this mission (items in MAV_FRAME_GLOBAL_RELATIVE_ALT)."""

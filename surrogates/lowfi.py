@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from surrealist_gym.fitness import generation_fitness
-from surrealist_gym.metrics import dtw, frechet
+from surrealist_gym.fitness import generation_fitness, replication_fitness
+from surrealist_gym.metrics import frechet
 from surrealist_gym.outcomes import RunStatus, run_status
 from surrealist_gym.sim import NoiseConfig, SimConfig
 from surrealist_gym.sim.config import resolve_params
@@ -73,8 +73,8 @@ class LowFidelity:
             else:
                 top = (xyz[:, 2].max(), xyz[:, 1].min(), xyz[:, 1].max())
                 if self.reference is not None:
-                    d, f = dtw(self.reference, xyz), frechet(self.reference, xyz)
-                    fitness = -d
+                    fitness, _ = replication_fitness(self.reference, [xyz])  # one run: its own average
+                    d, f = -fitness, frechet(self.reference, xyz)
                 else:
                     fitness = generation_fitness([xyz], test.obstacles).fitness
             self._cache[key] = np.array([fitness, d, f, np.log1p(d), np.log1p(f), min(run.min_distance_2d, 50.0),

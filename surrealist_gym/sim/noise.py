@@ -37,7 +37,7 @@ class _OU:
         from scipy.signal import lfilter
 
         w = self.rng.standard_normal((n, self.dims)) * self.std * math.sqrt(1 - self.a * self.a)
-        out, zf = lfilter([1.0], [1.0, -self.a], w, axis=0, zi=(self.a * self.state)[None, :])
+        out, _ = lfilter([1.0], [1.0, -self.a], w, axis=0, zi=(self.a * self.state)[None, :])
         self.state = out[-1]
         return out
 
