@@ -129,9 +129,9 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         make_agent(options.agent)  # an unknown agent fails here, before any folder or worker exists
     changes = {}
     if options.uav is not None:
-        from ..sim.profiles import PRESETS, load_profile
+        from ..sim.profiles import PRESETS, resolve_uav
 
-        load_profile(options.uav)  # a bad profile fails here, before any folder exists
+        resolve_uav(options.uav)  # a bad profile fails here, before any folder exists
         if options.uav not in PRESETS:
             changes["uav"] = str(Path(options.uav).resolve())
     from ..envs.replicate import SEEDS
@@ -267,7 +267,7 @@ def sim_config_of(options: SearchOptions):
 
     config = SimConfig(common_noise=options.common_noise)
     if options.uav is not None:
-        from ..sim.profiles import load_profile
+        from ..sim.profiles import resolve_uav
 
-        config = load_profile(options.uav).sim_config(config)
+        config = resolve_uav(options.uav).sim_config(config)
     return config

@@ -33,7 +33,7 @@ def run(args) -> int:
     from ..fidelity.calibration import calibrate, format_calibration, plot_calibration
     from ..executors import LocalPoolExecutor
     from ..logs import read_flight
-    from ..sim.profiles import load_profile, save_profile
+    from ..sim.profiles import resolve_uav, save_profile
     from ..aerialist import load_test
 
     check_at_least(args, runs=1, workers=1)
@@ -45,7 +45,7 @@ def run(args) -> int:
         if flight.damage:
             raise SurrealistError(f"{flight.path}: {flight.damage}; a flight cut short cannot be calibrated on")
         flights.append(flight)
-    base = load_profile(args.uav) if args.uav else None
+    base = resolve_uav(args.uav or None, flight=flights[0])  # --uav, else the first log's vehicle
     seed = load_test(args.seed) if args.seed else None
     start = time.perf_counter()
     executor = LocalPoolExecutor(args.workers)

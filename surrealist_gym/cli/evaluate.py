@@ -149,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
     summary and write the report."""
     from ..competition.reevaluation import flight_configs, load_tests, rule_broken
     from ..competition.scoring import edition
-    from ..sim.profiles import default_profile, load_profile
+    from ..sim.profiles import resolve_uav
     from ._search import _unlock
     from .options import check_at_least, check_buffer
 
@@ -164,12 +164,12 @@ def run(args: argparse.Namespace) -> int:
             edition(args.competition)
         out = _empty_folder(Path(args.out or default_out("evaluate")))
         options = EvaluateOptions.from_args(args)
-    uav = None if options.uav is None else load_profile(options.uav if args.resume else args.uav)  # named as given
+    uav = None if options.uav is None else resolve_uav(options.uav if args.resume else args.uav)  # named as given
     scored = bool(options.competition)  # a drawn test that breaks the rules is not flown and scores 0
     tests = load_tests(args.tests if not (args.resume or scored) else options.files,
                        any_layout=options.any_layout or scored)
     tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
-    flight_configs(tests, [uav or default_profile(test) for _, test in tests])  # uav.* settings the UAV takes
+    flight_configs(tests, [resolve_uav(uav, test=test) for _, test in tests])  # uav.* settings the UAV takes
     invalid = {path: broken for path, test in tests if scored and not options.any_layout
                and (broken := rule_broken(test))}
     if scored and len(invalid) == len(tests):

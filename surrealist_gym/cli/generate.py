@@ -25,8 +25,8 @@ def run(args) -> int:
     if args.case_study and not args.resume:
         return _case_study(args)
     if args.uav is None and not args.resume:  # the seed test's default UAV, recorded in run.json
-        from ..sim.profiles import default_profile
-        args.uav = default_profile(load_test(args.test or data_path("rq2-seed.yaml"))).name
+        from ..sim.profiles import resolve_uav
+        args.uav = resolve_uav(test=load_test(args.test or data_path("rq2-seed.yaml"))).name
     with search_folder(args, GenerateOptions) as (out, options):
         if options.case_study:
             return _case_study_search(out, options)

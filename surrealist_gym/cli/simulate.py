@@ -96,8 +96,8 @@ def run(args: argparse.Namespace) -> int:
     if args.vehicle is not None:
         config = replace(config, vehicle=args.vehicle)
     else:
-        from ..sim.profiles import default_profile, load_profile
-        config = (load_profile(args.uav) if args.uav is not None else default_profile(test)).sim_config(config)
+        from ..sim.profiles import resolve_uav
+        config = resolve_uav(args.uav, test=test).sim_config(config)
     from ..errors import InvalidTestCase
     from ..sim.profiles import test_uav_settings, with_uav_settings
 

@@ -239,7 +239,7 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     """Fly ``runs`` runs of each (file, test) (from :func:`load_tests`) and compute the report's figures.
 
     ``uav``: a profile name, YAML or :class:`~surrealist_gym.sim.profiles.UavProfile` for every test (default: each
-    test's :func:`~surrealist_gym.sim.profiles.default_profile`). ``store``: an SQLite file
+    test's own, :func:`~surrealist_gym.sim.profiles.resolve_uav`). ``store``: an SQLite file
     (:class:`~surrealist_gym.store.EvaluationStore`) that holds this evaluation's runs: those it holds are read back,
     not flown, and each chunk flown is written to it as it completes. It records the evaluation's identity
     (:func:`evaluation_identity`, with ``identity``: anything else the runs depend on), so a store of another
@@ -248,13 +248,13 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     ``distributed.Client`` or an executor (:func:`~surrealist_gym.executors.make_executor`; default ``workers``
     local processes, all cores and at most 8; 1: this process)."""
     from ..executors import executor_for, fly_many
-    from ..sim.profiles import default_profile, load_profile
+    from ..sim.profiles import resolve_uav
     from .suite import Suite
 
     if runs < 1:
         raise SurrealistError(f"runs: expected a whole number >= 1, got {runs!r}")
-    given = None if uav is None else load_profile(uav)
-    profiles = [given or default_profile(test) for _, test in tests]
+    given = None if uav is None else resolve_uav(uav)  # a bad profile fails once, before any test flies
+    profiles = [resolve_uav(given, test=test) for _, test in tests]
     configs = [replace(c, competition_buffer_m=buffer) for c in flight_configs(tests, profiles)]
     have: list[dict] = [{} for _ in tests]
     db = None

@@ -52,18 +52,13 @@ class SurrealistEnv(gym.Env):
         if executor is None and workers is not None:
             from ..executors import LocalPoolExecutor
             executor = LocalPoolExecutor(workers)
-        self.uav_profile = None  # the UavProfile flown, None for a bare SimConfig
-        if uav is not None:  # a UAV profile (preset name, YAML path or UavProfile) applied to sim_config
-            from ..sim.config import SimConfig
-            from ..sim.profiles import load_profile
-            self.uav_profile = load_profile(uav)
-            sim_config = self.uav_profile.sim_config(SimConfig.coerce(sim_config))
-        elif sim_config is None:  # neither: the seed test's default UAV
-            from ..sim.profiles import default_profile
-            self.uav_profile = default_profile(seed_test)
-            sim_config = self.uav_profile.sim_config()
         from ..sim.config import SimConfig
-        from ..sim.profiles import test_uav_settings, with_uav_settings
+        from ..sim.profiles import resolve_uav, test_uav_settings, with_uav_settings
+
+        self.uav_profile = None  # the UavProfile flown, None for a bare SimConfig
+        if uav is not None or sim_config is None:  # the UAV chosen (applied to sim_config), else the seed's default
+            self.uav_profile = resolve_uav(uav, test=seed_test)
+            sim_config = self.uav_profile.sim_config(SimConfig.coerce(sim_config))
 
         # a seed whose uav.* settings are invalid fails here in one line, not as error runs in the workers
         with_uav_settings(SimConfig.coerce(sim_config), test_uav_settings(seed_test))

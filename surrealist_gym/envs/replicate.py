@@ -16,7 +16,7 @@ from ..errors import InvalidTestCase, LogFormatError
 from ..evaluation import ReplicationObjective
 from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_mutators_of
 from ..sim.config import SimConfig
-from ..sim.profiles import default_profile, load_profile, profile_for_flight
+from ..sim.profiles import resolve_uav
 from ..testcase import Obstacle, TestCase
 from .base import SurrealistEnv
 
@@ -63,11 +63,11 @@ class ReplicateEnv(SurrealistEnv):
             self.reference = self.flight.trajectory
         self.averaging = averaging
         if uav is None and self.flight is not None and not isinstance(sim_config, SimConfig):
-            uav = profile_for_flight(self.flight)
+            uav = resolve_uav(flight=self.flight)
         mutators = tuple(mutators or default_mutators(seed_test, AUTHORS_ORDER))
         if uav_mutators:
             if uav_mutators is True or all(isinstance(m, str) for m in uav_mutators):
-                profile = load_profile(uav) if uav is not None else default_profile(seed_test)
+                profile = resolve_uav(uav, test=seed_test)
                 names = None if uav_mutators is True else list(uav_mutators)
                 uav_mutators = uav_mutators_of(profile, names)
             mutators += tuple(uav_mutators)

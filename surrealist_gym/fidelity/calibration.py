@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
 from ..sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
-from ..sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, profile_for_flight, vehicle_of
+from ..sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, resolve_uav, vehicle_of
 from ..sim.ranges import FrozenDict
 from ..testcase import TestCase
 from ..trajectory import Phases, Trajectory, phases, profile as time_profile
@@ -110,7 +110,7 @@ def _mission_test(flight, seed_test: TestCase | None) -> TestCase:
 def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: TestCase | None = None, runs: int = 2,
               executor=None, grid: int = 5, passes: int = 2, seed: int = 0,
               progress: Callable[[str], None] | None = None) -> Calibration:
-    """Fit the settings of ``base`` (default: :func:`profile_for_flight` of the first log) that the logs' PX4
+    """Fit the settings of ``base`` (default: the first log's vehicle, :func:`resolve_uav`) that the logs' PX4
     parameters do not fix, to the logs' phases.
 
     Args:
@@ -128,7 +128,7 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
         raise LogFormatError("calibrate: no log given")
     for flight in flights:
         check_multirotor(flight)
-    base = base or profile_for_flight(flights[0])
+    base = resolve_uav(base, flight=flights[0])
     for flight in flights:
         _check_vehicle(flight, base)
     executor = executor or InlineExecutor()

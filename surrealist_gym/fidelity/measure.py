@@ -57,9 +57,9 @@ def sim_config_for(uav=None, config=None):
     """The one place where a UAV profile becomes a SimConfig: ``uav`` (a preset name, a YAML path or a
     :class:`~surrealist_gym.sim.profiles.UavProfile`; default the PX4 SITL Iris that produced the competition's
     labels) applied to ``config``."""
-    from ..sim.profiles import SITL_IRIS, load_profile
+    from ..sim.profiles import resolve_uav
 
-    return load_profile(uav if uav is not None else SITL_IRIS).sim_config(config)
+    return resolve_uav(uav).sim_config(config)
 
 
 def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,

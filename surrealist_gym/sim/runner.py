@@ -127,7 +127,7 @@ def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None
         runs: number of runs (flown together in one world).
         seed: base seed.
         config: simulator configuration (default: the test's UAV,
-            :func:`~surrealist_gym.sim.profiles.default_profile`).
+            :func:`~surrealist_gym.sim.profiles.resolve_uav`).
 
     Returns:
         One :class:`RunResult` per run, in run order.
@@ -142,8 +142,8 @@ def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None
     if runs < 1:
         raise ValueError(f"runs must be >= 1, got {runs}")
     if config is None:
-        from .profiles import default_profile
-        config = default_profile(test).sim_config()
+        from .profiles import resolve_uav
+        config = resolve_uav(test=test).sim_config()
     return simulate_runs(test, range(runs), seed, config)
 
 

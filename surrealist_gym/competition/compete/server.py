@@ -16,8 +16,8 @@ tests in the same order gets the same flights.
 
 Example::
 
-    >>> from surrealist_gym.sim.profiles import load_profile                       # doctest: +SKIP
-    >>> with SimulationServer(folder, budget=10, config=load_profile("px4-v1.12-sitl-iris").sim_config()) as s:
+    >>> from surrealist_gym.sim.profiles import resolve_uav                        # doctest: +SKIP
+    >>> with SimulationServer(folder, budget=10, config=resolve_uav("px4-v1.12-sitl-iris").sim_config()) as s:
     ...     run_the_tool(s.address, s.authkey)                                    # doctest: +SKIP
     >>> s.spent, [f.statuses for f in s.flights]                                  # doctest: +SKIP
 """

@@ -139,7 +139,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         seed: base seed of the runs' noise.
         uav: the UAV profile flown (default the competition's PX4 v1.12 SITL Iris).
     """
-    from ...sim.profiles import load_profile
+    from ...sim.profiles import resolve_uav
 
     for name, value in (("budget", budget), ("--runs-per-test", runs_per_test), ("--workers", workers)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -152,7 +152,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
     out = (Path(out) if out is not None else Path("results") / f"compete-{datetime.now():%Y%m%d-%H%M%S}").absolute()
     if out.exists() or out.is_symlink():
         raise SurrealistError(f"--out {out}: exists; give a new folder")
-    load_profile(uav)
+    resolve_uav(uav)  # a bad profile fails here, before any folder exists
     argument, file = _case_study(tool.resolve(), case_study)
     apis = tool_apis(tool)
     if len(apis) > 1:
@@ -243,7 +243,7 @@ def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs
 # --- the run ---------------------------------------------------------------------------------------------------------
 def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) -> CompeteResult:
     """Run the tool (see the module docstring); ``on_flight`` is called with each Flight as the server records it."""
-    from ...sim.profiles import load_profile
+    from ...sim.profiles import resolve_uav
 
     start = time.perf_counter()
     plan.out.mkdir(parents=True)
@@ -252,7 +252,7 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     for folder in PREPARED_FOLDERS:  # as the competition's Dockerfile prepares the tool's working folder
         (work / folder).mkdir(exist_ok=True)
     stdout, stderr = plan.out / "tool-stdout.txt", plan.out / "tool-stderr.txt"
-    config = load_profile(plan.uav).sim_config()
+    config = resolve_uav(plan.uav).sim_config()
     command = [sys.executable, "cli.py", "generate", plan.case_study, str(plan.budget)]
     with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight) as server, \
             open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
