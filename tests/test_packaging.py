@@ -1,7 +1,10 @@
 """The three packages ship their type annotations: a py.typed marker (PEP 561) each, declared as package data, so the
 wheel holds it (checked by building one: ``pip wheel . --no-deps``)."""
-import tomllib
 from pathlib import Path
+
+import pytest
+
+tomllib = pytest.importorskip("tomllib")  # Python 3.11+
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("surrealist_gym", "search", "surrogates")
