@@ -15,7 +15,7 @@ Example::
 """
 from __future__ import annotations
 
-from ..envs.base import SurrealistEnv
+from ..envs.base import EnvSetup, SurrealistEnv
 from ..errors import InvalidTestCase
 from ..evaluation import GenerationObjective
 from ..outcomes import Measure
@@ -47,7 +47,9 @@ class CaseStudyEnv(SurrealistEnv):
             mutators += wind_mutators()
         if uav is None and sim_config is None:
             uav = DEFAULT_UAV
-        super().__init__(seed, mutators, budget, runs, executor, store, random_seed, sim_config, workers, uav)
+        setup = EnvSetup(runs=runs, random_seed=random_seed, sim_config=sim_config, uav=uav, executor=executor,
+                         workers=workers, store=store)
+        super().__init__(seed, mutators, budget, setup=setup)
 
     def _objective(self):
         return GenerationObjective(self.aggregate, Measure.COMPETITION.value)

@@ -1,4 +1,4 @@
 """Gymnasium environments (registered by ``import surrealist_gym``)."""
-from .base import SurrealistEnv
+from .base import EnvSetup, SurrealistEnv
 
-__all__ = ["SurrealistEnv"]
+__all__ = ["EnvSetup", "SurrealistEnv"]

@@ -13,13 +13,15 @@ runs the episode's evaluations stand for; an invalid test (overlap, non-positive
 budget and scores a penalty. The episode is truncated when the budget is spent. A wrapper that changes what is
 charged (e.g. ``surrogates.racing.Racing``) is a :class:`~surrealist_gym.envs.wrapper.SurrealistWrapper`.
 
-Subclasses override only the hooks ``_objective`` and, if needed, ``_terminated``.
+Subclasses override only the hooks ``_objective`` and, if needed, ``_terminated``, and hand the base class their
+seed test, mutators, budget and one :class:`EnvSetup` (how evaluations fly: runs, UAV, noise seed, where, store).
 """
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import gymnasium as gym
 import numpy as np
@@ -33,14 +35,40 @@ from ..testcase import TestCase
 INVALID_STEPS_FACTOR = 4  # an episode also ends after this many steps per unit of budget (invalid actions)
 
 
+@dataclass(frozen=True, slots=True, kw_only=True)
+class EnvSetup:
+    """What every env shares, whatever its problem: how an evaluation flies and where it is kept. Each field is the
+    env keyword (``gym.make(id, runs=..., uav=...)``) of the same name.
+
+    Attributes:
+        runs: runs flown per evaluation.
+        random_seed: base seed of the runs' noise.
+        sim_config: a :class:`~surrealist_gym.sim.config.SimConfig` (or a mapping of its fields, e.g.
+            ``{"common_noise": True}``); the UAV below is applied to it.
+        uav: the UAV profile (preset name, YAML path or profile); None: the seed test's
+            (:func:`~surrealist_gym.sim.profiles.resolve_uav`) unless ``sim_config`` is given.
+        executor: where the runs fly (:mod:`surrealist_gym.executors`); None: ``workers`` local processes, or this
+            process when ``workers`` is None too.
+        workers: local processes when no executor is given.
+        store: an :class:`~surrealist_gym.store.EvaluationStore` or its SQLite path, None for none.
+    """
+
+    runs: int
+    random_seed: int = 0
+    sim_config: Any = None
+    uav: Any = None
+    executor: Any = None
+    workers: int | None = None
+    store: Any = None
+
+
 class SurrealistEnv(gym.Env):
     """Base of Surrealist-Replicate-v0 and Surrealist-Generate-v0."""
 
     metadata = {"render_modes": []}
     steps_per_budget = INVALID_STEPS_FACTOR  # the episode also ends after this many steps per evaluation budgeted
 
-    def __init__(self, seed_test: TestCase, mutators: Sequence[PropertyMutator], budget: int, runs: int, executor=None, store=None,
-                 random_seed: int = 0, sim_config=None, workers: int | None = None, uav=None):
+    def __init__(self, seed_test: TestCase, mutators: Sequence[PropertyMutator], budget: int, *, setup: EnvSetup):
         if budget < 1:
             raise ValueError(f"budget must be >= 1, got {budget}")
         if not mutators:
@@ -48,10 +76,12 @@ class SurrealistEnv(gym.Env):
         self._seed_test = seed_test
         self._mutators = tuple(mutators)
         self._budget = int(budget)
+        self.setup = setup
+        store, executor, sim_config, uav = setup.store, setup.executor, setup.sim_config, setup.uav
         store = EvaluationStore(store) if isinstance(store, (str, Path)) else store
-        if executor is None and workers is not None:
+        if executor is None and setup.workers is not None:
             from ..executors import LocalPoolExecutor
-            executor = LocalPoolExecutor(workers)
+            executor = LocalPoolExecutor(setup.workers)
         from ..sim.config import SimConfig
         from ..sim.profiles import resolve_uav, test_uav_settings, with_uav_settings
 
@@ -62,7 +92,7 @@ class SurrealistEnv(gym.Env):
 
         # a seed whose uav.* settings are invalid fails here in one line, not as error runs in the workers
         with_uav_settings(SimConfig.coerce(sim_config), test_uav_settings(seed_test))
-        self.evaluator = Evaluator(self._objective(), runs=runs, seed=random_seed, sim_config=sim_config,
+        self.evaluator = Evaluator(self._objective(), runs=setup.runs, seed=setup.random_seed, sim_config=sim_config,
                                    executor=executor, store=store)
         n = len(self._mutators)
         low = np.array([m.low for m in self._mutators], dtype=np.float64)

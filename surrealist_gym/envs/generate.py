@@ -13,7 +13,7 @@ from ..evaluation import GenerationObjective
 from ..mutators import MOVE_KINDS, default_mutators
 from ..outcomes import Measure, measure_for
 from ..testcase import TestCase
-from .base import SurrealistEnv
+from .base import EnvSetup, SurrealistEnv
 
 
 class GenerateEnv(SurrealistEnv):
@@ -31,7 +31,9 @@ class GenerateEnv(SurrealistEnv):
         self.aggregate = aggregate
         self.distance_measure = Measure(distance) if distance is not None else measure_for(seed_test)
         mutators = mutators or default_mutators(seed_test, MOVE_KINDS, obstacles=[0])
-        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers, uav)
+        setup = EnvSetup(runs=runs, random_seed=random_seed, sim_config=sim_config, uav=uav, executor=executor,
+                         workers=workers, store=store)
+        super().__init__(seed_test, mutators, budget, setup=setup)
 
     def _objective(self):
         return GenerationObjective(self.aggregate, self.distance_measure.value)

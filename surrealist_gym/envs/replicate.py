@@ -18,7 +18,7 @@ from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_muta
 from ..sim.config import SimConfig
 from ..sim.profiles import resolve_uav
 from ..testcase import Obstacle, TestCase
-from .base import SurrealistEnv
+from .base import EnvSetup, SurrealistEnv
 
 
 class ReplicateEnv(SurrealistEnv):
@@ -71,7 +71,9 @@ class ReplicateEnv(SurrealistEnv):
                 names = None if uav_mutators is True else list(uav_mutators)
                 uav_mutators = uav_mutators_of(profile, names)
             mutators += tuple(uav_mutators)
-        super().__init__(seed_test, mutators, budget, runs, executor, store, random_seed, sim_config, workers, uav)
+        setup = EnvSetup(runs=runs, random_seed=random_seed, sim_config=sim_config, uav=uav, executor=executor,
+                         workers=workers, store=store)
+        super().__init__(seed_test, mutators, budget, setup=setup)
 
     def _objective(self):
         return ReplicationObjective(self.reference, self.averaging)

@@ -199,3 +199,20 @@ def test_a_seed_test_that_cannot_fly_is_a_one_line_error(tmp_path):
     env = GenerateEnv(seed_test=str(test), runs=1, budget=2, executor="inline")
     with pytest.raises(SimulationError, match="seed test: none of its runs could be judged"):
         env.reset()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_the_shared_keywords_become_one_frozen_setup(env_id, tmp_path):
+    """What every env shares reaches the base class as one EnvSetup, each field the gym.make keyword of its name."""
+    import dataclasses
+
+    from surrealist_gym.envs import EnvSetup
+
+    env = make(env_id, runs=2, random_seed=7, uav="px4-v1.12-sitl-iris", store=str(tmp_path / "s.db")).unwrapped
+    assert env.setup == EnvSetup(runs=2, random_seed=7, uav="px4-v1.12-sitl-iris", executor="inline",
+                                 store=str(tmp_path / "s.db"))
+    assert env.evaluator.runs == 2 and env.evaluator.sim_config.profile == "px4-v1.12-sitl-iris"
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        env.setup.runs = 3
+    with pytest.raises(TypeError):
+        EnvSetup(2)  # keywords only: no setting passed on by position
