@@ -38,8 +38,8 @@ RILAST = COMPETITION / "rilast-mission1" / "tests.csv"
 
 def write_rilast(folder: Path, count: int = 9, every: int = 150) -> Path:
     """``count`` rilast tests (every ``every``-th row) as Aerialist YAMLs in ``folder``."""
-    from surrealist_gym.fidelity.labels import load_labelled_set
     from surrealist_gym.aerialist import save_test
+    from surrealist_gym.fidelity.labels import load_labelled_set
 
     lset = load_labelled_set(RILAST)
     folder.mkdir(parents=True, exist_ok=True)

@@ -133,10 +133,10 @@ def main() -> None:
         sys.exit(f"needs the shared data folder {COMPETITION}")
     warnings.filterwarnings("ignore", message=".*MAV_CMD 530 is not supported.*")  # mission2/3's camera item
 
+    from surrealist_gym.aerialist import load_test
     from surrealist_gym.competition.feasibility import FeasibilityConfig, infeasible
     from surrealist_gym.fidelity.labels import load_labelled_set
     from surrealist_gym.sim.profiles import load_profile
-    from surrealist_gym.aerialist import load_test
 
     cfg = FeasibilityConfig()
     print(f"{cfg}")

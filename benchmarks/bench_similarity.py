@@ -31,11 +31,11 @@ CAMBA = ROOT.parent / "shared" / "data" / "competition" / "camba-collection"
 
 
 def main() -> None:
-    from surrealist_gym.fitness import average_runs
-    from surrealist_gym.metrics import dtw
     from surrealist_gym.competition.reevaluation import evaluate, load_tests
     from surrealist_gym.competition.scoring import SIMILAR_FLIGHT_M, case_study_of
     from surrealist_gym.competition.suite import trajectory_distance
+    from surrealist_gym.fitness import average_runs
+    from surrealist_gym.metrics import dtw
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("results/similarity"), help="folder of the runs' store")

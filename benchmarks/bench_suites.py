@@ -43,9 +43,9 @@ def one_search(mission: str, agent: str, rep: int, budget: int, confirm: int, ou
         return json.loads(stem.with_suffix(".json").read_text())
     from search.registry import make_agent
     from surrealist_gym.competition.case_study_env import CaseStudyEnv
-    from surrealist_gym.competition.suite_env import RecordSuite
     from surrealist_gym.competition.reevaluation import evaluate
     from surrealist_gym.competition.suite import diversity
+    from surrealist_gym.competition.suite_env import RecordSuite
     from surrealist_gym.competition.suite_export import export_suite
 
     start = time.perf_counter()
@@ -82,9 +82,9 @@ def one_search(mission: str, agent: str, rep: int, budget: int, confirm: int, ou
 
 def summarise(records: list[dict], missions, agents) -> str:
     import numpy as np
+    from scipy.stats import mannwhitneyu
 
     from search.statistics import vargha_delaney_a12
-    from scipy.stats import mannwhitneyu
 
     lines = ["| case study | agent | searches | distinct failures found | confirmed among those re-flown | "
              "confirmed, estimated for the whole suite | p-value vs suite | A12 suite vs agent | search time [s] |",

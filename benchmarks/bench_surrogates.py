@@ -46,13 +46,13 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from reproduce_paper import paper_agent, paper_env, run_one
 
 import surrealist_gym as sg
-from reproduce_paper import paper_agent, paper_env, run_one
 from search.metrics import SearchMetrics
 from search.repetitions import run_repetition
-from surrealist_gym.cli.options import race_stages
 from search.statistics import compare, vargha_delaney_a12
+from surrealist_gym.cli.options import race_stages
 from surrogates.config import RULES, SkipAccounting
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model

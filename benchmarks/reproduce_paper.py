@@ -21,11 +21,11 @@ import surrealist_gym as sg
 from search import AdaptiveGreedy
 from search.metrics import SearchMetrics
 from search.repetitions import run_repetition
+from search.statistics import cohens_d, compare, reduction, vargha_delaney_a12
 from surrealist_gym.envs.generate import GenerateEnv
 from surrealist_gym.envs.replicate import ReplicateEnv
 from surrealist_gym.outcomes import UNSAFE_DISTANCE_M
 from surrealist_gym.sim import SimConfig
-from search.statistics import cohens_d, compare, reduction, vargha_delaney_a12
 
 PAPER = {  # the paper's figures, by SearchMetrics name (eval_s: seconds per evaluation)
     "rq1-seed1": {"seed_dtw": 383.5, "best_dtw": 63.15, "seed_frechet": 6.87, "best_frechet": 1.14,

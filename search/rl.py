@@ -92,10 +92,10 @@ class ProceduralEnv(gym.Env):
 
     def __init__(self, config: ProblemConfig | None = None, sim_config=None, executor="inline", **overrides):
         from surrealist_gym import data_path
+        from surrealist_gym.aerialist import load_test
         from surrealist_gym.mutators import AUTHORS_ORDER, MOVE_KINDS, default_mutators
         from surrealist_gym.sim import SimConfig
         from surrealist_gym.testcase import TestCase
-        from surrealist_gym.aerialist import load_test
 
         self.config = ProblemConfig(**overrides) if config is None else config
         seed_test = self.config.seed_test

@@ -13,8 +13,15 @@ from __future__ import annotations
 from importlib import resources as _resources
 
 from .aerialist import load_test, save_test
-from .errors import (DependencyNotInstalled, InvalidTestCase, LogFormatError, MissionError, SimulationError,
-                     SurrealistError, UnknownAgent)
+from .errors import (
+    DependencyNotInstalled,
+    InvalidTestCase,
+    LogFormatError,
+    MissionError,
+    SimulationError,
+    SurrealistError,
+    UnknownAgent,
+)
 from .mission import Command, Mission, MissionItem, read_mission, read_plan, read_waypoints, write_plan
 from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind
 from .trajectory import Trajectory

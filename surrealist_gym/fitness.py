@@ -27,7 +27,7 @@ import numpy as np
 
 from .geometry import competition_distance, obstacle_distances
 from .metrics import TrajectoryLike, dba, dtw, soft_dtw_barycenter
-from .outcomes import UNSAFE_DISTANCE_M, Measure
+from .outcomes import Measure
 from .testcase import Obstacle
 from .trajectory import as_points
 

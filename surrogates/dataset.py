@@ -41,8 +41,7 @@ from surrealist_gym.outcomes import outcomes
 from surrealist_gym.store import EvaluationStore
 from surrealist_gym.testcase import Obstacle, TestCase
 
-from .lowfi import NAMES as LOWFI_NAMES
-from .lowfi import LowFidelity
+from .lowfi import NAMES as LOWFI_NAMES, LowFidelity
 
 PER_OBSTACLE = ("present", "l", "w", "h", "x", "y", "z", "sin_r", "cos_r", "sin_2r", "cos_2r", "area",
                 "along", "lateral", "half_across", "gap", "dist_path", "dist_reference", "near_reference",

@@ -88,8 +88,8 @@ class LowFidelity:
 
     def save(self, folder) -> None:
         """Write the problem (seed test with its mission and frozen parameters; the reference) to ``folder``."""
-        from surrealist_gym.mission import write_plan
         from surrealist_gym.aerialist import save_test
+        from surrealist_gym.mission import write_plan
 
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)

@@ -33,10 +33,9 @@ from pathlib import Path
 import numpy as np
 
 from search.base import Agent, SearchResult
+from surrealist_gym.envs.wrapper import SurrealistWrapper
 from surrealist_gym.errors import InvalidTestCase, SurrealistError
 from surrealist_gym.evaluation import describe_noise
-
-from surrealist_gym.envs.wrapper import SurrealistWrapper
 
 from .config import PrescreenConfig, SkipAccounting
 from .dataset import Featurizer, stack_rows

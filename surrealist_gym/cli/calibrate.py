@@ -30,11 +30,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
-    from ..fidelity.calibration import calibrate, format_calibration, plot_calibration
+    from ..aerialist import load_test
     from ..executors import LocalPoolExecutor
+    from ..fidelity.calibration import calibrate, format_calibration, plot_calibration
     from ..logs import read_flight
     from ..sim.profiles import resolve_uav, save_profile
-    from ..aerialist import load_test
 
     check_at_least(args, runs=1, workers=1)
     out = check_writable(args.out, "--out", "file", (".yaml", ".yml"))  # before any log is read or flown

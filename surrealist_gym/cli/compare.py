@@ -53,10 +53,10 @@ def run(args) -> int:
     if args.env is None:
         args.env = CASE_STUDY_ENV if args.case_study is not None else PROBLEM_ENVS["replicate"]
 
+    from gymnasium.envs.registration import registry
+
     from search.compare import compare
     from search.registry import make_agent
-
-    from gymnasium.envs.registration import registry
 
     from ..errors import InvalidTestCase, SurrealistError, one_line
 

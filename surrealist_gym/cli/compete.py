@@ -43,8 +43,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from tqdm import tqdm
 
-    from ..competition.compete import prepare
-    from ..competition.compete import run as run_tool
+    from ..competition.compete import prepare, run as run_tool
     from ..errors import SurrealistError
     from .options import check_at_least, check_writable, default_out
 

@@ -15,10 +15,10 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from .. import data_path
+    from ..aerialist import load_test
     from ..envs.generate import GenerateEnv
     from ..errors import InvalidTestCase
     from ..mutators import AUTHORS_ORDER, default_mutators
-    from ..aerialist import load_test
 
     if not args.resume:  # an option of the other problem, before any work
         refuse_inapplicable(args, GenerateOptions.inapplicable(args))

@@ -118,7 +118,6 @@ def run(args: argparse.Namespace) -> int:
     """Read the log, print its summary (text or JSON) and write the plot."""
     from .. import data_path
     from ..logs import read_flight
-
     from .options import check_writable
 
     if args.log is None:

@@ -14,9 +14,8 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ..envs.replicate import ReplicateEnv
-    from ..sim.profiles import PRESETS, save_profile
-
     from ..errors import InvalidTestCase
+    from ..sim.profiles import PRESETS, save_profile
 
     if not args.resume:
         refuse_inapplicable(args, ReplicateOptions.inapplicable(args))

@@ -75,7 +75,6 @@ def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from .. import load_test
     from ..sim import SimConfig, simulate
-
     from .options import check_at_least, check_writable, default_out
 
     check_at_least(args, runs=1, random_seed=0)

@@ -29,10 +29,10 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from tqdm import tqdm
-
     import math
     from pathlib import Path
+
+    from tqdm import tqdm
 
     from ..errors import SurrealistError
     from .options import check_at_least, check_writable, default_out

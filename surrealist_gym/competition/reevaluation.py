@@ -41,10 +41,22 @@ import numpy as np
 from ..errors import InvalidTestCase, SurrealistError, one_line
 from ..outcomes import RunRecord, statuses_text
 from ..sim.ranges import FrozenDict
-from ..testcase import Obstacle, TestCase
-from .reevaluation_report import (REPORT_FILES, SCORING_FILES, _f, _leaderboard_row, _p_text,  # noqa: F401
-                                  _r, _scoring_section, _test_score_row, _write_csv, report_text,
-                                  scoring_lines, suite_lines, write_report)  # the report, re-exported
+from ..testcase import TestCase
+from .reevaluation_report import (  # noqa: F401 - the report, re-exported
+    REPORT_FILES,
+    SCORING_FILES,
+    _f,
+    _leaderboard_row,
+    _p_text,
+    _r,
+    _scoring_section,
+    _test_score_row,
+    _write_csv,
+    report_text,
+    scoring_lines,
+    suite_lines,
+    write_report,
+)
 
 if TYPE_CHECKING:
     from .suite import Suite

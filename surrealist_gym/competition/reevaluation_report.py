@@ -215,8 +215,8 @@ def _scoring_section(board: Sequence, runs: int) -> list[str]:
 
     ed = EDITIONS[board[0].suite.edition]
     flown = f"each flown {runs} time{'s' if runs != 1 else ''} (the edition: {ed.runs})"
-    score = (f"test_score = avg_point x 10 / (n_obstacles^2 x avg_time), avg_time the mean flight time in minutes "
-             f"(simulated, from arming to the end of the run).")
+    score = ("test_score = avg_point x 10 / (n_obstacles^2 x avg_time), avg_time the mean flight time in minutes "
+             "(simulated, from arming to the end of the run).")
     if ed.name == "2024":
         how = [f"Scored as the 2024 edition (SBFT) did: {ed.tests} tests drawn at random from each folder (seeded by "
                f"the base seed), {flown}. {score} A folder of more than {ed.tests} tests earns half the mean test "

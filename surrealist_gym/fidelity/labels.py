@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Sequence
 
 from ..aerialist import load_test
-from ..errors import InvalidLabels, InvalidTestCase, SurrealistError, regular_file
+from ..errors import InvalidLabels, InvalidTestCase, regular_file
 from ..testcase import Obstacle, TestCase
 
 # their result (lower case) -> normalised result

@@ -32,8 +32,7 @@ import numpy as np
 from search.statistics import vargha_delaney_a12
 
 from ..errors import SurrealistError
-from ..outcomes import BLOCKED as _BLOCKED
-from ..outcomes import UNSAFE_DISTANCE_M, RunRecord, RunStatus, status_counts, statuses_text
+from ..outcomes import BLOCKED as _BLOCKED, UNSAFE_DISTANCE_M, RunRecord, RunStatus, status_counts, statuses_text
 from ..sim.ranges import FrozenDict
 from ..trajectory import airborne_time  # noqa: F401 - the airborne time of the report, named here too
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set

@@ -379,7 +379,7 @@ def load_profile(name_or_path) -> UavProfile:
     if key in PRESETS:
         return PRESETS[key]
     path = Path(key)
-    if not path.suffix.lower() in (".yaml", ".yml"):
+    if path.suffix.lower() not in (".yaml", ".yml"):
         raise InvalidProfile(f"{key!r}: not a preset ({', '.join(PRESETS)}) nor a .yaml file")
     from ..aerialist import safe_yaml
 

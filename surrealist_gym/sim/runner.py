@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Callable, Mapping
 
 import numpy as np
-from .pybullet_quiet import pb
 
 from ..errors import SimulationError
 from ..geometry import competition_distance, obstacle_distances
@@ -24,6 +23,7 @@ from .config import SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
+from .pybullet_quiet import pb
 from .ranges import FrozenDict
 from .vehicle import preset
 from .world import World

@@ -11,9 +11,8 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-from .pybullet_quiet import pb
-
 from ..testcase import Obstacle, Shape
+from .pybullet_quiet import pb
 from .vehicle import GRAVITY, VehicleParams
 
 _STATIC_GROUP, _VEHICLE_GROUP = 1, 2

@@ -1,8 +1,8 @@
 """A tiny comparison (2 agents x 2 repetitions) writes its reports; running it again simulates nothing."""
-from pathlib import Path
 import csv
 import json
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest

@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from search.statistics import (a12_magnitude, cohens_d, compare, reduction, shapiro_wilk,
-                                       vargha_delaney_a12)
+from search.statistics import a12_magnitude, cohens_d, compare, reduction, shapiro_wilk, vargha_delaney_a12
 
 RNG = np.random.default_rng(42)
 NORMAL_A = RNG.normal(383.5, 20.0, 10)

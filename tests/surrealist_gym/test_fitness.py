@@ -6,10 +6,17 @@ import math
 import numpy as np
 import pytest
 
-from surrealist_gym.fitness import (Aggregate, Averaging, GenerationFitness, average_runs, generation_fitness,
-                                    replication_fitness, run_distances)
-from surrealist_gym.outcomes import Measure, RunStatus, judged_distance, measure_for, outcomes
+from surrealist_gym.fitness import (
+    Aggregate,
+    Averaging,
+    GenerationFitness,
+    average_runs,
+    generation_fitness,
+    replication_fitness,
+    run_distances,
+)
 from surrealist_gym.metrics import dtw, soft_dtw_barycenter
+from surrealist_gym.outcomes import Measure, RunStatus, judged_distance, measure_for, outcomes
 from surrealist_gym.testcase import Obstacle, Shape
 from surrealist_gym.trajectory import Trajectory
 from tests.conftest import REFERENCE_CSV

@@ -7,8 +7,7 @@ import pytest
 
 import surrealist_gym as sg
 from surrealist_gym.cli import main
-from surrealist_gym.mutators import (MutatorKind, WindKind, WindMutator, apply_action, default_mutators,
-                                     wind_mutators)
+from surrealist_gym.mutators import MutatorKind, WindKind, WindMutator, apply_action, default_mutators, wind_mutators
 from surrealist_gym.outcomes import RunStatus
 from surrealist_gym.testcase import MAX_WIND_SPEED_MS, Obstacle
 from tests.conftest import SHARED_DATA

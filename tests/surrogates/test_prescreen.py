@@ -9,9 +9,9 @@ import pytest
 import surrealist_gym  # noqa: F401 - registers the envs
 from search import AdaptiveGreedy
 from surrealist_gym.errors import SurrealistError
+from surrogates.config import SkipAccounting
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import SurrogateModel, train_model
-from surrogates.config import SkipAccounting
 from surrogates.prescreen import PrescreenConfig, Prescreened, wrap
 from surrogates.racing import race_margin, tie_improvements
 from surrogates.replay import replay_margin

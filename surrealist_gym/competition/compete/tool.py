@@ -359,10 +359,10 @@ def ulog_distance(ulg, test_file) -> float:
     """The competition distance [m] of a ULog's flight to the obstacles of a test (our YAML): the least over the
     boxes of the distance from the footprint to the polyline of Aerialist's 0.5 s trajectory of the log
     (:meth:`~surrealist_gym.trajectory.Trajectory.aerialist`; unbuffered)."""
-    from ..rules import load_competition_test
     from ...geometry import competition_distance
     from ...logs import read_flight
     from ...trajectory import Trajectory
+    from ..rules import load_competition_test
 
     test = load_competition_test(test_file)
     p = read_flight(ulg).positions

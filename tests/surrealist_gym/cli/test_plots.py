@@ -2,8 +2,8 @@
 import pytest
 
 from surrealist_gym import Obstacle, Shape
-from surrealist_gym.logs import read_flight
 from surrealist_gym.cli.plots import plot_flight, plot_trajectories
+from surrealist_gym.logs import read_flight
 from tests.conftest import CASE0_ULG
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -111,7 +111,7 @@ def test_every_command_that_writes_a_folder_defaults_to_one_pattern():
 
     assert re.fullmatch(r"results/simulate-\d{8}-\d{6}", default_out("simulate").as_posix())
     for command in ("simulate", "replicate", "generate", "compare", "fidelity", "evaluate", "compete"):
-        assert f"--out DIR" in _help(command), command
+        assert "--out DIR" in _help(command), command
         assert f"(default results/{command}-YYYYmmdd-HHMMSS)" in _help(command), command
     assert "(default results/train-YYYYmmdd-HHMMSS/policy.zip)" in _help("train")
     for old in ("sim_out", "fidelity_out", "<time>", "<timestamp>"):

@@ -8,8 +8,15 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import surrealist_gym  # noqa: F401  (registers the envs)
-from surrealist_gym.competition.rules import (RULES, case_study_path, layout_mutators, load_case_study, points,
-                                              seed_layout, violations)
+from surrealist_gym.competition.rules import (
+    RULES,
+    case_study_path,
+    layout_mutators,
+    load_case_study,
+    points,
+    seed_layout,
+    violations,
+)
 from surrealist_gym.competition.suite import Member, Suite, diversity, layout_distance, trajectory_distance
 from surrealist_gym.competition.suite_env import RecordSuite
 from surrealist_gym.errors import InvalidTestCase

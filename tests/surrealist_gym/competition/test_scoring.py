@@ -8,9 +8,23 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from surrealist_gym.competition.scoring import (EDITIONS, Draw, SuiteScore, area_diversity, area_similarity, draw,
-                                                duplicates, edition, ranks, rest_score, score_suite, similar_flights,
-                                                standings, test_score, writing_order)
+from surrealist_gym.competition.scoring import (
+    EDITIONS,
+    Draw,
+    SuiteScore,
+    area_diversity,
+    area_similarity,
+    draw,
+    duplicates,
+    edition,
+    ranks,
+    rest_score,
+    score_suite,
+    similar_flights,
+    standings,
+    test_score,
+    writing_order,
+)
 from surrealist_gym.errors import SurrealistError
 from surrealist_gym.testcase import Obstacle, TestCase
 

@@ -7,7 +7,6 @@ import yaml
 
 from surrealist_gym.cli import main
 from surrealist_gym.errors import InvalidTestCase, LogFormatError
-from surrealist_gym.fidelity.calibration import calibrate
 from surrealist_gym.logs import read_flight
 from surrealist_gym.mutators import uav_mutators
 from surrealist_gym.sim import simulate

@@ -8,8 +8,14 @@ import numpy as np
 import pytest
 
 from surrealist_gym.cli import main
-from surrealist_gym.fidelity.measure import (InvalidLabels, airborne_time, build_report, load_labelled_set,
-                                             measure_fidelity, region_stats)
+from surrealist_gym.fidelity.measure import (
+    InvalidLabels,
+    airborne_time,
+    build_report,
+    load_labelled_set,
+    measure_fidelity,
+    region_stats,
+)
 from surrealist_gym.outcomes import RunRecord
 from tests.conftest import SHARED_DATA
 

@@ -7,8 +7,15 @@ import numpy as np
 import pytest
 
 from surrealist_gym.sim.config import PX4_DEFAULTS
-from surrealist_gym.sim.control import (AttitudeRateControl, PositionControl, attitude_from_thrust, inner_step,
-                                        kernel_params, position_params, position_step)
+from surrealist_gym.sim.control import (
+    AttitudeRateControl,
+    PositionControl,
+    attitude_from_thrust,
+    inner_step,
+    kernel_params,
+    position_params,
+    position_step,
+)
 from surrealist_gym.sim.vehicle import IRIS, PX4_VISION
 
 

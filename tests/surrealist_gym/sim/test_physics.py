@@ -1,8 +1,6 @@
 """Analytic cases in the PyBullet world: free fall with the motors off, hover holding its altitude, frames."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pybullet as pb
 import pytest

@@ -5,18 +5,25 @@ import dataclasses
 import math
 
 import numpy as np
-
 import pytest
 
 from surrealist_gym import load_test
 from surrealist_gym.cli import main
 from surrealist_gym.errors import InvalidProfile
 from surrealist_gym.geometry import competition_distance
+from surrealist_gym.logs import read_flight
 from surrealist_gym.sim import RunStatus, simulate
 from surrealist_gym.sim.config import AvoidanceModel, VehicleModel, resolve_params
-from surrealist_gym.logs import read_flight
-from surrealist_gym.sim.profiles import (PRESETS, SITL_IRIS, VISION_CASE0, default_profile, load_profile,
-                                         profile_for_flight, resolve_uav, save_profile)
+from surrealist_gym.sim.profiles import (
+    PRESETS,
+    SITL_IRIS,
+    VISION_CASE0,
+    default_profile,
+    load_profile,
+    profile_for_flight,
+    resolve_uav,
+    save_profile,
+)
 from surrealist_gym.testcase import Obstacle
 from tests.conftest import CASE0_ULG, EXPERIMENTS, SHARED_DATA
 

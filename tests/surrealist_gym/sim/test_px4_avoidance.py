@@ -6,12 +6,21 @@ import math
 import numpy as np
 import pytest
 
-from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
-from surrealist_gym.sim.px4_avoidance import (N_E, N_Z, KernelSettings, Px4AvoidanceConfig, Px4LocalPlanner,
-                                              _atan2_deg, _smooth_columns, _smooth_row, kernel_settings)
 from surrealist_gym.sim.config import PX4_DEFAULTS
-from surrealist_gym.sim.sensor import DepthSensor
+from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
 from surrealist_gym.sim.profiles import SITL_IRIS
+from surrealist_gym.sim.px4_avoidance import (
+    N_E,
+    N_Z,
+    KernelSettings,
+    Px4AvoidanceConfig,
+    Px4LocalPlanner,
+    _atan2_deg,
+    _smooth_columns,
+    _smooth_row,
+    kernel_settings,
+)
+from surrealist_gym.sim.sensor import DepthSensor
 from surrealist_gym.testcase import Obstacle
 
 CAMERA = SITL_IRIS.sensor_config()

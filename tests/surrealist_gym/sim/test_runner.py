@@ -7,14 +7,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from surrealist_gym import Mission, MissionItem, TestCase
+from surrealist_gym import Mission, MissionItem, Obstacle, TestCase
 from surrealist_gym.errors import SimulationError
 from surrealist_gym.geometry import obstacle_distances
 from surrealist_gym.mission import Command
 from surrealist_gym.sim import NoiseConfig, RunStatus, SimConfig, simulate, simulate_runs
 from surrealist_gym.sim.noise import run_seed_sequence
-
-from surrealist_gym import Obstacle
 
 LAND_XY = (-16.645876487856597, 6.859186808331832)  # case0.plan's landing point [m from home]
 OFF = SimConfig(avoidance=False)

@@ -34,7 +34,6 @@ from pathlib import Path
 import yaml
 from aerialist.px4.aerialist_test import AerialistTest
 from aerialist.px4.obstacle import Obstacle
-
 from testcase import TestCase
 
 HERE = Path(__file__).resolve().parent

@@ -4,8 +4,8 @@ snippet does, so the competition's platform runs it on its own infrastructure.""
 import copy
 import logging
 
-from decouple import config
 from aerialist.px4.aerialist_test import AerialistTest, AgentConfig
+from decouple import config
 
 AGENT = config("AGENT", default=AgentConfig.DOCKER)
 
