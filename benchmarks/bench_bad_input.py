@@ -6,7 +6,8 @@ file; never a traceback, never over 10 s or 1 GB.
 
 Refusals: a seeded corpus of inputs that are wrong on purpose, over every command (simulate, replicate, generate,
 generate --case-study, calibrate, fidelity, evaluate, surrogate train/eval, compare, train, inspect): bad option
-values, options that do not apply to the problem or were renamed (``--seed`` where ``--random-seed`` is meant), UAV profiles outside their physical ranges or malformed, tests with out-of-range or non-numeric settings,
+values, options that do not apply to the problem or were renamed (``--seed`` where ``--random-seed`` is meant), UAV
+profiles outside their physical ranges or malformed, tests with out-of-range or non-numeric settings,
 outputs that cannot be written (a file, a path under a file, a read-only tmpfs where this machine mounts one), FIFOs,
 folders and devices where a file is expected, empty files, bad case-study names, argparse errors. Each case runs in
 its own folder with cheap settings (``--budget 1 --runs 1``), so a command that wrongly accepts its input ends soon.
@@ -276,7 +277,10 @@ def corpus(rng: np.random.Generator) -> list[Case]:
     from surrealist_gym.sim.ranges import RANGES
 
     cases = []
-    add = lambda kind, name, argv, setup=lambda folder: None: cases.append(Case(kind, name, tuple(argv), setup))
+
+    def add(kind, name, argv, setup=lambda folder: None):
+        cases.append(Case(kind, name, tuple(argv), setup))
+
     # bad option values (two drawn where more are listed)
     for command, flag, values in OPTIONS:
         picked = values if len(values) <= 2 else [str(v) for v in rng.choice(values, size=2, replace=False)]

@@ -29,9 +29,9 @@ interrupted (an interrupted cell's folder is kept beside, renamed ``*.interrupte
 
 Usage::
 
-    python benchmarks/bench_competition.py                                   # 5 tools x 3 case studies x 3 reps, budget 100
+    python benchmarks/bench_competition.py                  # 5 tools x 3 case studies x 3 reps, budget 100
     python benchmarks/bench_competition.py --missions mission2 --repetitions 1 --budget 10 --out results/bench-smoke
-    python benchmarks/bench_competition.py --summary-only                    # the table of what --out holds
+    python benchmarks/bench_competition.py --summary-only   # the table of what --out holds
 """
 from __future__ import annotations
 
@@ -196,7 +196,8 @@ def summarise(records: list[dict], missions, tools) -> str:
                         if tool != OUR_GENERATOR else ("", ""))
             div = [r["diversity"] for r in rows if not math.isnan(r["diversity"])]
             lines.append(f"| {mission} | {tool} | {len(rows)} | {mean_r[tool]:.2f} | "
-                         f"{', '.join(format(r['r'], 'g') for r in rows)} | {np.mean([r['failure'] for r in rows]):.2f} | "
+                         f"{', '.join(format(r['r'], 'g') for r in rows)} | "
+                         f"{np.mean([r['failure'] for r in rows]):.2f} | "
                          f"{np.mean(div) if div else math.nan:.2f} | "
                          f"{', '.join(str(r['failing']) for r in rows)} | {place[tool]} | {p_r} | {a_r} | {p_f} | "
                          f"{a_f} |")

@@ -150,7 +150,8 @@ def main(argv=None) -> int:
     records = []
     start = time.perf_counter()
     with ProcessPoolExecutor(args.workers) as pool:
-        futures = {pool.submit(one_search, m, a, r, args.budget, args.confirm, out, args.confirm_max): (m, a, r) for m, a, r in jobs}
+        futures = {pool.submit(one_search, m, a, r, args.budget, args.confirm, out, args.confirm_max): (m, a, r)
+                   for m, a, r in jobs}
         for future in as_completed(futures):
             record = future.result()
             records.append(record)

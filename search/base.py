@@ -96,6 +96,8 @@ class Agent(ABC):
 
     @property
     def result(self) -> SearchResult:
+        """The search's outcome: best action, fitness and info, evaluation counts, history and stop reason
+        (RuntimeError before a run)."""
         if self._best is None:
             raise RuntimeError("no result before a run")
         action, fitness, info = self._best
@@ -145,4 +147,5 @@ class Agent(ABC):
 
     @property
     def best(self) -> tuple[np.ndarray, float, dict[str, Any]]:
+        """The best evaluation so far as (action, fitness, info); None before the first."""
         return self._best

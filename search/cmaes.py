@@ -62,8 +62,8 @@ class CMAES(Agent):
             import cma
         except ImportError as err:
             raise DependencyNotInstalled("the CMA-ES agent needs pycma: pip install cma") from err
-        options = {"bounds": [list(self._low), list(self._high)], "seed": int(self.rng.integers(1, 2**31 - 1)), "verbose": -9,
-                   "verb_log": 0, "verb_disp": 0}
+        options = {"bounds": [list(self._low), list(self._high)], "seed": int(self.rng.integers(1, 2**31 - 1)),
+                   "verbose": -9, "verb_log": 0, "verb_disp": 0}
         if self.config.popsize is not None:
             options["popsize"] = self.config.popsize
         if len(x0) < 2:

@@ -72,6 +72,7 @@ class CompareResult:
 
     @property
     def new_simulations(self) -> int:
+        """Simulations flown by this call over all searches (those read back from their JSON count 0)."""
         return sum(s.new_simulations for s in self.searches)
 
 

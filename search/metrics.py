@@ -47,14 +47,17 @@ class SearchMetrics:
 
     @property
     def dtw_reduction(self) -> float | None:
+        """Table 2's DTW reduction, ``1 - best_dtw / seed_dtw`` (None without both figures)."""
         return _reduction(self.best_dtw, self.seed_dtw)
 
     @property
     def frechet_reduction(self) -> float | None:
+        """The Fréchet reduction, ``1 - best_frechet / seed_frechet`` (None without both figures)."""
         return _reduction(self.best_frechet, self.seed_frechet)
 
     @property
     def min_distance_reduction(self) -> float | None:
+        """The minimum-distance reduction, ``1 - best / seed`` (None without both figures)."""
         return _reduction(self.best_min_distance, self.seed_min_distance)
 
     def figures(self) -> dict:
@@ -63,6 +66,7 @@ class SearchMetrics:
         return {name: getattr(self, name) for name in names if getattr(self, name) is not None}
 
     def to_json(self) -> dict:
+        """The figures and the convergence trace as JSON values (read back by :meth:`from_json`)."""
         return {**self.figures(), "trace": [list(point) for point in self.trace]}
 
     @classmethod

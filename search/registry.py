@@ -3,8 +3,8 @@
 Names:
     ``greedy`` (the adaptive greedy with the authors' preset), ``greedy-paper`` (paper Table 1), ``random``,
     ``cmaes``, ``suite`` (suites of distinct failures), ``ppo:POLICY.zip`` / ``sac:POLICY.zip`` (a policy
-    trained by ``surrealist train``), any name added with :func:`register_agent`, and ``module:Class`` or ``path/to/file.py:Class`` for an Agent subclass
-    of your own (built as ``Class(seed=seed, **options)``).
+    trained by ``surrealist train``), any name added with :func:`register_agent`, and ``module:Class`` or
+    ``path/to/file.py:Class`` for an Agent subclass of your own (built as ``Class(seed=seed, **options)``).
 
 Example:
     >>> make_agent("random", seed=0).name

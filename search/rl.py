@@ -148,6 +148,7 @@ class ProceduralEnv(gym.Env):
                               f"(spread {cfg.spread}); lower the spread")
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Close the current problem, draw a new one from ``self.np_random`` and reset it; its (observation, info)."""
         super().reset(seed=seed)
         if self.inner is not None:
             self.inner.close()
@@ -156,9 +157,11 @@ class ProceduralEnv(gym.Env):
         return self.inner.reset(seed=int(self.np_random.integers(0, 2**31 - 1)))
 
     def step(self, action):
+        """One step of the current problem's env."""
         return self.inner.step(action)
 
     def close(self):
+        """Close the current problem's env, if any."""
         if self.inner is not None:
             self.inner.close()
             self.inner = None

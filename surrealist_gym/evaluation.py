@@ -42,6 +42,7 @@ class RunSummary:
 
     @classmethod
     def of(cls, run) -> "RunSummary":
+        """The summary of a simulated run (a RunResult or a stored run)."""
         status = getattr(run.status, "value", run.status)
         trajectory = getattr(run.trajectory, "xyz", run.trajectory)
         return cls(int(run.seed), int(run.index), str(status), float(run.min_distance),
@@ -49,6 +50,7 @@ class RunSummary:
                    float(getattr(run, "competition_distance", math.nan)), np.asarray(trajectory, dtype=np.float64))
 
     def to_dict(self) -> dict:
+        """The figures as JSON values (without the trajectory)."""
         return {"seed": self.seed, "index": self.index, "status": self.status, "min_distance": self.min_distance,
                 "min_distance_2d": self.min_distance_2d, "duration": self.duration,
                 "competition_distance": self.competition_distance}
@@ -78,6 +80,7 @@ class Evaluation:
 
     @property
     def statuses(self) -> tuple[str, ...]:
+        """The status of each run, in order."""
         return tuple(r.status for r in self.runs)
 
 
@@ -103,7 +106,8 @@ NO_SCORE = Score(-np.inf)
 class Objective(Protocol):
     """Turns the runs of a test (each with a ``trajectory``: a Trajectory or (N, 3) points) into a :class:`Score`."""
 
-    def __call__(self, test: TestCase, runs: Sequence) -> Score: ...
+    def __call__(self, test: TestCase, runs: Sequence) -> Score:
+        """The score of ``test`` from its runs."""
 
 
 @dataclass(frozen=True)
@@ -114,6 +118,7 @@ class ReplicationObjective:
     averaging: str = "dba"
 
     def __call__(self, test, runs):
+        """The fitness ``-DTW`` of the runs' average to the reference, with the DTW, Fréchet distance and average."""
         trajectories = [r.trajectory for r in runs if len(r.trajectory) > 0]
         if not trajectories:
             return NO_SCORE
@@ -131,6 +136,7 @@ class GenerationObjective:
     measure: str = "paper"
 
     def __call__(self, test, runs):
+        """The generation fitness of the flown runs against the test's obstacles, with their outcomes."""
         flown = [r for r in runs if len(r.trajectory) > 0]
         if not flown or not test.obstacles:
             return NO_SCORE
@@ -228,6 +234,7 @@ class Evaluator:
         return self.simulations if self.store is None else self.store.simulations + self._uncounted
 
     def close(self) -> None:
+        """Close the executor; with a store, first record the simulations it has not counted yet."""
         self.executor.close()
         if self.store is not None and self._uncounted:
             try:

@@ -152,6 +152,7 @@ class InlineExecutor(_Executor):
     """Simulate in this process, the n runs of a test together in one world."""
 
     def submit(self, task, test, indices, seed, config):
+        """Fly the runs now, in this process, when the result is asked for."""
         return _Done(task, test, list(indices), seed, config)
 
 
@@ -164,6 +165,7 @@ class LocalPoolExecutor(_Executor):
         self._pool: ProcessPoolExecutor | None = None
 
     def submit(self, task, test, indices, seed, config):
+        """Submit the runs to the pool (a new pool, once, if the pool is broken); a future."""
         for attempt in (1, 2):
             if self._pool is None:
                 self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=_die_with_parent)
@@ -185,6 +187,7 @@ class LocalPoolExecutor(_Executor):
             self._pool = None
 
     def close(self) -> None:
+        """Shut the pool down, cancelling what has not started."""
         if self._pool is not None:
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
@@ -249,10 +252,12 @@ class DaskExecutor(_Executor):
         self.patience = patience
 
     def submit(self, task, test, indices, seed, config):
+        """Submit the runs to the Dask cluster; a future given up on after ``patience`` cut off from the scheduler."""
         return _Watched(self.client.submit(task, test, list(indices), seed, config, pure=False), self.client,
                         self.patience)
 
     def close(self) -> None:
+        """Close the Dask client if this executor made it."""
         if self._own:
             self.client.close()
 

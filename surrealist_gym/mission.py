@@ -81,6 +81,7 @@ class MissionItem:
 
     @property
     def has_position(self) -> bool:
+        """Whether the item has a position (x is not nan)."""
         return not math.isnan(self.x)
 
     def _values(self) -> tuple:

@@ -104,6 +104,7 @@ class Mutator(PropertyMutator):
 
     @property
     def name(self) -> str:
+        """The mutator's name: ``obstacle<index>.<kind>``."""
         return f"obstacle{self.obstacle}.{self.kind.value}"
 
     def valid_range(self, test: TestCase) -> tuple[float, float]:
@@ -168,9 +169,11 @@ class UavMutator(PropertyMutator):
 
     @property
     def name(self) -> str:
+        """The mutator's name, also its key in the test's params: ``uav.<setting>``."""
         return "uav." + self.setting
 
     def current(self, test: TestCase) -> float:
+        """The setting's value on ``test`` (its base value when the test does not set it)."""
         return float(test.params.get(self.name, self.base))
 
     def valid_range(self, test: TestCase) -> tuple[float, float]:
@@ -261,6 +264,7 @@ class WindMutator(PropertyMutator):
 
     @property
     def name(self) -> str:
+        """The mutator's name: ``wind.<kind>``."""
         return "wind." + self.kind.value
 
     def valid_range(self, test: TestCase) -> tuple[float, float]:

@@ -84,14 +84,17 @@ class Outcomes:
 
     @property
     def crash_rate(self) -> float:
+        """Share of the runs that crashed (nan without runs)."""
         return self.crashes / self.runs if self.runs else math.nan
 
     @property
     def unsafe_rate(self) -> float:
+        """Share of the runs that were unsafe (nan without runs)."""
         return self.unsafe / self.runs if self.runs else math.nan
 
     @property
     def blocked_rate(self) -> float:
+        """Share of the runs that were blocked (nan without runs)."""
         return self.blocked / self.runs if self.runs else math.nan
 
 

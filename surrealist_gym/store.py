@@ -187,9 +187,11 @@ class EvaluationStore:
             return int(row[0]) if row is not None else sum(len(e.runs) for e in self)
 
     def searches(self) -> list[str]:
+        """The names of the searches the store holds, sorted."""
         return [r[0] for r in self._db.execute("SELECT DISTINCT search FROM evaluations ORDER BY search")]
 
     def close(self) -> None:
+        """Close the database."""
         self._db.close()
 
     def __enter__(self) -> "EvaluationStore":

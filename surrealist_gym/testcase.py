@@ -21,6 +21,7 @@ from .sim.ranges import FrozenDict, param_problem
 
 
 class Shape(str, Enum):
+    """An obstacle's shape, as Aerialist's YAML names it."""
     BOX = "box"
     CYLINDER = "cylinder"
 
@@ -36,7 +37,7 @@ MAX_EXTENT_M = 10_000.0  # [m] obstacles beyond this size or distance are a typo
 class Obstacle:
     """A box or cylinder obstacle (metres, degrees)."""
 
-    l: float
+    l: float  # noqa: E741 - Aerialist's name for the length, kept in our YAML and API
     w: float
     h: float
     x: float
@@ -150,6 +151,7 @@ class RuntimeCommand:
         object.__setattr__(self, "mode", int(self.mode))
 
     def to_dict(self) -> dict:
+        """The command as Aerialist's YAML writes it."""
         return {"timestamp": self.timestamp, "mode": self.mode, "x": self.x, "y": self.y, "z": self.z, "r": self.r}
 
 
@@ -218,6 +220,7 @@ class Wind:
                                       f"{prefix}velocity_mean ({mean:g} m/s), got {vmax:g}")
 
     def to_dict(self) -> dict:
+        """The wind as YAML values (directions as lists)."""
         return {f.name: (list(getattr(self, f.name)) if f.name.endswith("direction") else getattr(self, f.name))
                 for f in fields(self)}
 

@@ -136,18 +136,22 @@ class Trajectory:
 
     @property
     def x(self) -> np.ndarray:
+        """North coordinates, x [m]."""
         return self.xyz[:, 0]
 
     @property
     def y(self) -> np.ndarray:
+        """East coordinates, y [m]."""
         return self.xyz[:, 1]
 
     @property
     def z(self) -> np.ndarray:
+        """Heights, z up [m]."""
         return self.xyz[:, 2]
 
     @property
     def duration(self) -> float:
+        """Time from the first sample to the last [s] (0 when empty)."""
         return float(self.t[-1] - self.t[0]) if len(self) else 0.0
 
     def shifted(self, dx: float = 0.0, dy: float = 0.0, dz: float = 0.0) -> "Trajectory":
@@ -212,6 +216,7 @@ class Profile:
 
     @property
     def duration(self) -> float:
+        """Time from the first sample to the last [s] (0 when empty)."""
         return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
 
     def summary(self) -> dict:

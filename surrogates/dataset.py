@@ -201,7 +201,8 @@ class Featurizer:
         else:
             d_ref = obstacle_distances(self._reference_xy, [o])[:, 0]
             dist_ref, near = float(d_ref.min()), float((d_ref < NEAR).sum())
-            r_along, r_lat = frame(self._reference_xy)  # where the reference passed, across the path, beside the obstacle
+            # where the reference passed, across the path, beside the obstacle
+            r_along, r_lat = frame(self._reference_xy)
             beside = (r_along >= c_along.min() - 1.0) & (r_along <= c_along.max() + 1.0)
             ref_lateral = float(r_lat[beside].mean()) if beside.any() else 0.0
         return [1.0, o.l, o.w, o.h, o.x, o.y, o.z, math.sin(rad), math.cos(rad), math.sin(2 * rad),

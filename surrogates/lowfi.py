@@ -103,6 +103,7 @@ class LowFidelity:
 
     @classmethod
     def load(cls, folder) -> "LowFidelity":
+        """The problem :meth:`save` wrote to ``folder``."""
         from surrealist_gym.aerialist import load_test
 
         folder = Path(folder)

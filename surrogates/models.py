@@ -41,7 +41,8 @@ def _torch():
     try:
         import torch
     except ImportError as err:
-        raise DependencyNotInstalled("surrogate models need torch: pip install torch==2.13.0 (CPU build), or pip install -e '.[surrogates]'") from err
+        raise DependencyNotInstalled("surrogate models need torch: pip install torch==2.13.0 (CPU build), "
+                                     "or pip install -e '.[surrogates]'") from err
     return torch
 
 
@@ -76,6 +77,7 @@ class EnsembleRegressor:
         self.state: dict | None = None
 
     def fit(self, X: np.ndarray, y: np.ndarray, seed: int = 0) -> "EnsembleRegressor":
+        """Train the ensemble on ``X`` (features) and ``y`` (fitness), seeded; returns self."""
         torch = _torch()
         threads = torch.get_num_threads()
         torch.set_num_threads(1)  # tiny matrices: one thread is fastest, and leaves the cores to the simulations
@@ -116,6 +118,7 @@ class EnsembleRegressor:
         return self
 
     def predict(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The ensemble's mean and std of the fitness for each row of ``X`` (RuntimeError before :meth:`fit`)."""
         torch = _torch()
         if self.state is None:
             raise RuntimeError("predict() before fit()")
@@ -156,6 +159,7 @@ class KNNRegressor:
         self.state: dict | None = None
 
     def fit(self, X: np.ndarray, y: np.ndarray, seed: int = 0) -> "KNNRegressor":
+        """Keep the standardised training rows (nothing to fit); returns self."""
         X, y = np.asarray(X, dtype=np.float64), np.asarray(y, dtype=np.float64)
         x_mean, x_std = X.mean(axis=0), X.std(axis=0)
         x_std[x_std < 1e-9] = 1.0
@@ -163,6 +167,8 @@ class KNNRegressor:
         return self
 
     def predict(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The distance-weighted mean and std of the fitness of each row's k nearest training rows (RuntimeError
+        before :meth:`fit`)."""
         if self.state is None:
             raise RuntimeError("predict() before fit()")
         s = self.state

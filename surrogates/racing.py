@@ -77,10 +77,12 @@ class Racing(SurrealistWrapper):
         return evaluation
 
     def reset(self, **kwargs):
+        """Reset the env and forget the tests raced so far."""
         self._raced = {}
         return self.env.reset(**kwargs)
 
     def step(self, action):
+        """Step the env; ``info`` carries the racing budget left, and the episode is truncated once it is spent."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         test = info.get("test")
         if test is not None and not info.get("memo"):

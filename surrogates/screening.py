@@ -34,6 +34,7 @@ class LowFidelityShortfall:
     name: str = "lowfi"
 
     def verdict(self, test, incumbent, best_fitness: float) -> Skip | None:
+        """Skip when the candidate's low-fidelity fitness falls short of the incumbent's by more than ``margin``."""
         if incumbent is None:
             return None
         shortfall = float(self.lowfi.fitness(incumbent.obstacles) - self.lowfi.fitness(test.obstacles))
@@ -54,6 +55,7 @@ class ModelImprovement:
     pessimism: float = 1.0
 
     def verdict(self, test, incumbent, best_fitness: float) -> Skip | None:
+        """Skip when the model's expected (or probable) improvement over the best fitness is below ``threshold``."""
         mean, std = self.predict(test)
         best = float(self.model.to_scale(best_fitness))
         z = (mean - best) / std

@@ -76,6 +76,7 @@ def _version() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``surrealist`` on ``argv`` (default: the command line); returns the exit code, 2 for refused input."""
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
         parser = _parser()

@@ -30,6 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args) -> int:
+    """Fly the logs' missions, fit the UAV profile, write it (and its plot); returns the exit code."""
     from ..aerialist import load_test
     from ..executors import LocalPoolExecutor
     from ..fidelity.calibration import calibrate, format_calibration, plot_calibration

@@ -10,6 +10,7 @@ CASE_STUDY_ENV = PROBLEM_ENVS["case study"]
 
 
 def add_arguments(parser) -> None:
+    """Arguments of ``surrealist compare``."""
     from .options import add_dask_argument, out_help
 
     parser.add_argument("--env", default=None,
@@ -45,6 +46,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run the agents' searches, write the tables and the plot; returns the exit code."""
     from tqdm import tqdm
 
     from .options import check_at_least, check_writable, default_out, refuse_inapplicable

@@ -72,11 +72,13 @@ class EvaluateOptions:
         return tuple(f for d in self.draws for f in d.drawn) if self.competition else self.tests
 
     def to_json(self) -> dict:
+        """The options as the folder's ``run.json`` records them (read back by :meth:`from_json`)."""
         return {"command": "evaluate", **dataclasses.asdict(self), "tests": list(self.tests),
                 "draws": [d.to_json() for d in self.draws]}
 
     @classmethod
     def from_json(cls, path: Path) -> "EvaluateOptions":
+        """The options a results folder's ``run.json`` records (one-line errors for another command's file)."""
         try:
             values = json.loads(path.read_text())
             if values.pop("command", None) != "evaluate":

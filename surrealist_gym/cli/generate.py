@@ -10,10 +10,12 @@ from .options import CASE_STUDY_DEFAULTS, GenerateOptions, refuse_inapplicable
 
 
 def add_arguments(parser) -> None:
+    """Arguments of ``surrealist generate``."""
     GenerateOptions.add_arguments(parser)
 
 
 def run(args) -> int:
+    """Search for unsafe tests near the seed (or a case study's suite of failures); returns the exit code."""
     from .. import data_path
     from ..aerialist import load_test
     from ..envs.generate import GenerateEnv

@@ -191,6 +191,7 @@ class SearchOptions:
 
     @classmethod
     def from_args(cls, args: argparse.Namespace) -> "SearchOptions":
+        """The options the command line gave, checked (one-line errors)."""
         return cls(**{f.name: getattr(args, f.name) for f in dataclasses.fields(cls)}).check()
 
     @classmethod
@@ -242,7 +243,8 @@ class ReplicateOptions(SearchOptions):
     seed: str | None = _opt(None, "seed test case, or: tall (default for a log other than case0: a 3 x 3 m box in "
                                   "the middle of the mission line, 2 m taller than the flight), paper (the same "
                                   "box 3 m tall, as the paper), detours (a tall box where the real flight leaves its "
-                                  "mission line, one per detour); default for case0: the paper's seed 1", metavar="TEST.yaml|tall|paper|detours")
+                                  "mission line, one per detour); default for case0: the paper's seed 1",
+                           metavar="TEST.yaml|tall|paper|detours")
     averaging: str = _opt("dba", "how the runs of a test are averaged before the DTW (default dba)",
                           choices=["dba", "soft_dtw"])
     allow_partial: bool = _opt(False, "replicate a damaged (truncated) log as far as it is readable",
@@ -252,6 +254,7 @@ class ReplicateOptions(SearchOptions):
                                    "found)", action="store_true")
 
     def check(self, where=lambda name: "--" + name.replace("_", "-")) -> "ReplicateOptions":
+        """The common checks, then replicate's own (no --search-uav with pre-screening); returns self."""
         super().check(where)
         if self.search_uav and self.prescreened:
             raise SurrealistError(f"{where('search_uav')}: not with pre-screening (--surrogate, --first-runs, ...): "
@@ -269,9 +272,9 @@ class GenerateOptions(SearchOptions):
                        f"--case-study {CASE_STUDY_DEFAULTS['budget']})", type=int)
     runs: int = _opt(PROBLEM_DEFAULTS["generate"]["runs"], "simulations per evaluation (default {default}; with "
                      f"--case-study {CASE_STUDY_DEFAULTS['runs']})", type=int)
-    agent: str = _opt(PROBLEM_DEFAULTS["generate"]["agent"], "search agent: greedy, greedy-paper, random, cmaes, suite, "
-                                                            "ppo:POLICY.zip, module:Class (default {default}; with "
-                                                            f"--case-study {CASE_STUDY_DEFAULTS['agent']})")
+    agent: str = _opt(PROBLEM_DEFAULTS["generate"]["agent"],
+                      "search agent: greedy, greedy-paper, random, cmaes, suite, ppo:POLICY.zip, module:Class "
+                      f"(default {{default}}; with --case-study {CASE_STUDY_DEFAULTS['agent']})")
     uav: str | None = _opt(None, _UAV_HELP + "; default: px4-vision-case0 for a seed test with a reference log, as "
                                              "the paper's, else px4-v1.12-sitl-iris (with --case-study too)",
                            metavar="NAME_OR_YAML")
@@ -294,6 +297,7 @@ class GenerateOptions(SearchOptions):
     buffer: float = _opt(0.0, BUFFER_HELP, type=float, metavar="M")
 
     def check(self, where=lambda name: "--" + name.replace("_", "-")) -> "GenerateOptions":
+        """The common checks, then generate's own (--confirm, --case-study and what goes with it); returns self."""
         super().check(where)
         if self.confirm < 0 or isinstance(self.confirm, bool):
             raise SurrealistError(f"{where('confirm')}: expected a whole number >= 0, got {self.confirm!r}")

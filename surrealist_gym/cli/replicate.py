@@ -9,10 +9,12 @@ from .options import RUN_FILE, ReplicateOptions, refuse_inapplicable
 
 
 def add_arguments(parser) -> None:
+    """Arguments of ``surrealist replicate``."""
     ReplicateOptions.add_arguments(parser)
 
 
 def run(args) -> int:
+    """Search for the obstacles that make the simulated flight match the log; returns the exit code."""
     from ..envs.replicate import ReplicateEnv
     from ..errors import InvalidTestCase
     from ..sim.profiles import PRESETS, save_profile

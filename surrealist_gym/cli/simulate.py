@@ -37,8 +37,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fly this vehicle preset with the simulator's default planner instead of a UAV profile")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
                         help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
-                             "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a test with a reference "
-                             "log, else px4-v1.12-sitl-iris)")
+                             "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a test with a "
+                             "reference log, else px4-v1.12-sitl-iris)")
     avoid = parser.add_mutually_exclusive_group()
     avoid.add_argument("--avoidance", dest="avoidance", action="store_true", default=None,
                        help="fly with the avoidance planner (default: the parameter COM_OBS_AVOID)")

@@ -9,6 +9,7 @@ from ..errors import SurrealistError
 
 
 def add_arguments(parser) -> None:
+    """Arguments of ``surrealist surrogate train`` and ``surrealist surrogate eval``."""
     sub = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
     train = sub.add_parser("train", help="train a model on one or more evaluation stores",
                            description="train a model on one or more evaluation stores (.sqlite)")
@@ -87,6 +88,7 @@ def _check_inputs(args) -> None:
 
 
 def run(args) -> int:
+    """Train a model on the stores, or measure one on held-out stores; returns the exit code."""
     import warnings
 
     import numpy as np

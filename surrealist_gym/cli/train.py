@@ -7,6 +7,7 @@ import time
 
 
 def add_arguments(parser) -> None:
+    """Arguments of ``surrealist train``."""
     from .options import OUT_PATTERN
 
     parser.add_argument("--steps", type=int, default=2000, help="env steps (evaluations) to train for (default 2000)")
@@ -29,6 +30,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Train the policy across generated problems and save it; returns the exit code."""
     import math
     from pathlib import Path
 

@@ -168,6 +168,7 @@ class TestStats:
 
     @property
     def name(self) -> str:
+        """The test file's name without its suffix."""
         return Path(self.file).stem
 
     @property

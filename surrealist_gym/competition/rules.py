@@ -32,12 +32,13 @@ class Rules:
     max_obstacles: int = 3
     x: tuple[float, float] = (-40.0, 30.0)
     y: tuple[float, float] = (10.0, 40.0)
-    l: tuple[float, float] = (2.0, 20.0)
+    l: tuple[float, float] = (2.0, 20.0)  # noqa: E741 - the obstacle field it bounds (Obstacle.l)
     w: tuple[float, float] = (2.0, 20.0)
     h: tuple[float, float] = (10.0, 25.0)
     r: tuple[float, float] = (0.0, 90.0)
 
     def bounds(self, field: str) -> tuple[float, float]:
+        """The inclusive (low, high) bounds of an obstacle field (``x``, ``y``, ``l``, ``w``, ``h``, ``r``)."""
         return getattr(self, field)
 
 
@@ -81,11 +82,11 @@ def endpoint_failure(test: TestCase) -> str | None:
     whatever the planner does. Such a test is a failure of its layout, not of the UAV."""
     if test.mission is None:
         return None
-    points = {"take-off point": (0.0, 0.0)}
+    ends = {"take-off point": (0.0, 0.0)}
     positioned = [item for item in test.mission.items if item.has_position]
     if positioned:
-        points["landing point"] = (positioned[-1].x, positioned[-1].y)
-    for name, (x, y) in points.items():
+        ends["landing point"] = (positioned[-1].x, positioned[-1].y)
+    for name, (x, y) in ends.items():
         for i, o in enumerate(test.obstacles):
             gap = o.distance_2d(x, y)
             if gap < UNSAFE_DISTANCE_M:

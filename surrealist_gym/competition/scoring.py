@@ -112,10 +112,12 @@ class Draw:
     drawn: tuple[str, ...]
 
     def to_json(self) -> dict:
+        """The draw as JSON values (read back by :meth:`from_json`)."""
         return {"folder": self.folder, "case_study": self.case_study, "tests": self.tests, "drawn": list(self.drawn)}
 
     @classmethod
     def from_json(cls, values: dict) -> "Draw":
+        """A draw from :meth:`to_json`'s values."""
         return cls(str(values["folder"]), str(values["case_study"]), int(values["tests"]),
                    tuple(str(f) for f in values["drawn"]))
 
@@ -249,6 +251,7 @@ class SuiteScore:
 
     @property
     def name(self) -> str:
+        """The tool's output folder name."""
         return Path(self.folder).name
 
     @property

@@ -88,6 +88,7 @@ class Member:
 
     @property
     def points(self) -> int:
+        """The competition's points of the member's run (from its status and distance)."""
         from ..outcomes import run_points
 
         return run_points(self.status, self.distance)

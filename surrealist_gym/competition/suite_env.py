@@ -25,11 +25,13 @@ class RecordSuite(SurrealistWrapper):
         self.suite = suite if suite is not None else Suite()
 
     def reset(self, **kwargs):
+        """Reset the env and offer the seed's evaluation to the suite."""
         obs, info = self.env.reset(**kwargs)
         self._offer(info)
         return obs, info
 
     def step(self, action):
+        """Step the env and offer the evaluated test to the suite."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         self._offer(info)
         return obs, reward, terminated, truncated, info

@@ -19,6 +19,7 @@ from .suite import Member, Suite, layout_distance, trajectory_distance
 
 
 def member_name(index: int) -> str:
+    """The file stem of the member at ``index`` (0-based): ``failure-01``, ``failure-02``, ..."""
     return f"failure-{index + 1:02d}"
 
 

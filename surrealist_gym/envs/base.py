@@ -124,10 +124,12 @@ class SurrealistEnv(gym.Env):
 
     @property
     def seed_test(self) -> TestCase:
+        """The test the mutators start from."""
         return self._seed_test
 
     @property
     def budget(self) -> int:
+        """Evaluations allowed per episode."""
         return self._budget
 
     @property
@@ -202,6 +204,8 @@ class SurrealistEnv(gym.Env):
         return self._observation(evaluation.fitness), self._info(evaluation, None, False)
 
     def step(self, action):
+        """Evaluate the seed mutated by ``action`` (clipped to [-1, 1]); an invalid test or a memo hit costs no
+        simulation."""
         action = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
         self._steps += 1
         self._last_action = action
@@ -220,6 +224,7 @@ class SurrealistEnv(gym.Env):
         return self._observation(fitness), float(fitness), terminated, truncated, info
 
     def close(self):
+        """Close the evaluator (and its executor)."""
         self.evaluator.close()
 
     # --- internals ------------------------------------------------------------------------------------------------

@@ -101,6 +101,7 @@ class TestRow:
 
     @property
     def distances(self) -> list[float]:
+        """Competition distances [m] of the runs that flew (nan ones left out)."""
         return [r.distance for r in self.runs if r.status not in NO_DISTANCE and not math.isnan(r.distance)]
 
     @property
@@ -134,6 +135,7 @@ class TestRow:
         return float(np.median(a)) if a else math.nan
 
     def to_dict(self) -> dict:
+        """The row of ``fidelity.csv``: their figures and ours side by side, rounded."""
         lab = self.label
         ratio = self.airborne_s / lab.airborne_s if lab.airborne_s > 0 else math.nan
         return {"test": lab.test_id, "their_result": lab.result, "their_distance_m": _r(lab.distance),
@@ -195,6 +197,7 @@ class FidelityReport:
                "tests_per_s": round(len(self.rows) / self.wall_s, 3) if self.wall_s > 0 else None}
 
     def to_json(self) -> str:
+        """The report as indented JSON (:meth:`to_dict`)."""
         return json.dumps(self.to_dict(), indent=2)
 
 
@@ -413,13 +416,14 @@ def plot_report(report: FidelityReport, path, floor: float = 0.05) -> None:
              f"{'AUC, theirs < 1.5 m':26}{format_figure(o.auc):>8}{format_figure(c.auc):>8}",
              f"{'precision, ours < 1.5 m':26}{format_figure(o.precision):>8}{format_figure(c.precision):>8}",
              f"{'recall, ours < 1.5 m':26}{format_figure(o.recall):>8}{format_figure(c.recall):>8}",
-             f"{'failure rate theirs':26}{format_figure(o.their_failure_rate):>8}{format_figure(c.their_failure_rate):>8}",
+             f"{'failure rate theirs':26}{format_figure(o.their_failure_rate):>8}"
+             f"{format_figure(c.their_failure_rate):>8}",
              f"{'failure rate ours':26}{format_figure(o.our_failure_rate):>8}{format_figure(c.our_failure_rate):>8}"]
     if report.durations is not None:
         d = report.durations
         lines += ["", f"airborne time ours / theirs: median {format_figure(d['median_ratio'])}",
-                  f"  (quartiles {format_figure(d['q1_ratio'])}-{format_figure(d['q3_ratio'])}, Spearman {format_figure(d['spearman'])}, "
-                  f"{d['tests']} tests)"]
+                  f"  (quartiles {format_figure(d['q1_ratio'])}-{format_figure(d['q3_ratio'])}, "
+                  f"Spearman {format_figure(d['spearman'])}, {d['tests']} tests)"]
     side.text(0.0, 0.55, "\n".join(lines), family="monospace", fontsize=9, va="top", transform=side.transAxes)
     source = Path(report.source)
     fig.suptitle(f"fidelity: {source.parent.name}/{source.name}, {len(report.rows)} tests, {report.runs} run(s) each")

@@ -232,9 +232,9 @@ class LocalPlanner(Planner):
         dist_goal_h = math.hypot(gx, gy)
         az_goal = math.atan2(gy, gx) if dist_goal_h > 1e-9 else (self._yaw or 0.0)
         el_goal = math.degrees(math.atan2(gz, dist_goal_h))
-        best, blocked, d_near, d_min, top = _plan(self._memory, pts, t, c.memory_time, c.voxel_size, px, py, pz, vx, vy, vz,
-                                      math.degrees(az_goal), el_goal, self._cand, self._cand_az, self._cand_el,
-                                      self._params)
+        best, blocked, d_near, d_min, top = _plan(self._memory, pts, t, c.memory_time, c.voxel_size, px, py, pz,
+                                                  vx, vy, vz, math.degrees(az_goal), el_goal, self._cand,
+                                                  self._cand_az, self._cand_el, self._params)
         speed = min(speed_max, math.sqrt(2.0 * c.goal_brake_accel * dist_goal))
         if dist_goal <= c.goal_tolerance:
             speed = 0.0

@@ -272,6 +272,8 @@ def _qm(aw, ax, ay, az, bw, bx, by, bz):
 
 @njit(cache=True)
 def inner_step(orn, lin, ang, q_sp, thrust, wind, dt, armed, integrate, P, S):
+    """Compiled physics-rate step: attitude and rate control, mixer, motor lag and drag; the world-frame force and
+    torque (fx, fy, fz, tx, ty, tz). State S: [0:3] rate integrators, [3:6] previous rates, [6:10] motor outputs."""
     qx, qy, qz, qw = orn
     r00, r01, r02 = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)
     r10, r11, r12 = 2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)

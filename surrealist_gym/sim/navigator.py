@@ -83,10 +83,12 @@ class Navigator:
 
     @property
     def armed(self) -> bool:
+        """Whether the motors run: in every phase but DONE, and in DONE if the mission ended in the air."""
         return self.phase != Phase.DONE or self.finished_in_air
 
     @property
     def on_ground_phase(self) -> bool:
+        """Whether the UAV is on the ground: idle, landed, or done after landing."""
         return self.phase in (Phase.IDLE, Phase.LANDED) or (self.phase == Phase.DONE and not self.finished_in_air)
 
     def goal(self) -> tuple[float, float, float]:

@@ -63,6 +63,7 @@ class NoiseSource:
         self.pos_list, self.vel_list, self.yaw_list, self.wind_list = [], [], [], []
 
     def at(self, k: int):
+        """Step ``k``'s position and velocity estimate errors, yaw error and wind (blocks drawn as needed)."""
         while k >= len(self.pos_list):
             self._draw_block()
         return self.pos_list[k], self.vel_list[k], self.yaw_list[k], self.wind_list[k]

@@ -57,6 +57,7 @@ class Range:
     unit: str = ""
 
     def holds(self, value: float) -> bool:
+        """Whether ``value`` lies in the range (each end open or closed as set)."""
         above = value > self.low if self.low_open else value >= self.low
         below = value < self.high if self.high_open else value <= self.high
         return above and below

@@ -113,9 +113,9 @@ class RunResult:
 class _Run:
     """Mutable per-vehicle state inside the loop."""
 
-    __slots__ = ("body", "pp", "ps", "kp", "ks", "wind", "armed", "integ", "nav", "planner", "noise", "q_sp", "thrust", "status", "message",
-                 "end_t", "log", "true", "plan_out", "anchor", "anchor_t", "anchor_phase", "ground", "active",
-                 "index")
+    __slots__ = ("body", "pp", "ps", "kp", "ks", "wind", "armed", "integ", "nav", "planner", "noise", "q_sp", "thrust",
+                 "status", "message", "end_t", "log", "true", "plan_out", "anchor", "anchor_t", "anchor_phase",
+                 "ground", "active", "index")
 
 
 def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
@@ -385,6 +385,6 @@ def _result(r: _Run, test, cfg: SimConfig, params, seed: int) -> RunResult:
         compet = competition_distance(Trajectory.aerialist(ts, lp.x, lp.y, lp.z, lp.heading), test.obstacles,
                                       cfg.competition_buffer_m)
     return RunResult(trajectory=traj, status=r.status, min_distance=min3, min_distance_2d=min2,
-                     competition_distance=compet, clearances=tuple(clearances), duration=float(r.end_t), seed=int(seed), index=r.index,
-                     local_position=lp, true_t=true_t, true_xyz=true_xyz, message=r.message,
-                     params=FrozenDict(dict(params)))
+                     competition_distance=compet, clearances=tuple(clearances), duration=float(r.end_t),
+                     seed=int(seed), index=r.index, local_position=lp, true_t=true_t, true_xyz=true_xyz,
+                     message=r.message, params=FrozenDict(dict(params)))

@@ -36,6 +36,7 @@ class AerialistSource:
     path: Path | None = None
 
     def describe(self) -> str:
+        """One line for the user: the Aerialist version, its test APIs and where it was found."""
         where = self.path if self.path is not None else f"{self.package} (installed)"
         return f"Aerialist {self.version} ({', '.join(self.apis) or 'no test API'}) from {where}"
 

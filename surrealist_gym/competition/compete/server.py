@@ -101,6 +101,7 @@ class SimulationServer:
         return self._listener.address
 
     def start(self) -> "SimulationServer":
+        """Listen on a new socket in a background thread; returns self."""
         self.folder.mkdir(parents=True, exist_ok=True)
         self._listener = Listener(family="AF_UNIX", authkey=self.authkey)
         self._thread = threading.Thread(target=self._accept, name="surrealist-compete-server", daemon=True)
@@ -108,6 +109,7 @@ class SimulationServer:
         return self
 
     def stop(self) -> None:
+        """Stop listening and wake the accepting thread (once; later calls do nothing)."""
         if self._listener is None or self._closing:
             return
         self._closing = True
@@ -128,6 +130,7 @@ class SimulationServer:
     # --- what it has done ----------------------------------------------------------------------------------------
     @property
     def flights(self) -> tuple[Flight, ...]:
+        """The flights served so far, in order."""
         with self._lock:
             return tuple(self._flights)
 

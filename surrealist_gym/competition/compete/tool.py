@@ -105,6 +105,7 @@ class CompeteResult:
         return tuple(t for t in self.tests if t.points)
 
     def to_dict(self) -> dict:
+        """The run as JSON values: the plan, the Aerialist used, the outcome and each test written."""
         plan = self.plan
         return {
             "tool": str(plan.tool), "case_study": str(plan.case_study_file), "budget": plan.budget,

@@ -53,6 +53,7 @@ class ToolSettings:
     agent: str = "suite"  # generate --agent: the search (suite, the default; cmaes, random, greedy to compare)
 
     def check(self) -> "ToolSettings":
+        """Check every setting (one-line errors naming export-tool's flag); returns self."""
         from ...cli.options import check_buffer
 
         lowest = {"sim_budget_factor": 1, "obstacles": 1, "confirm": 0, "seed": 0, "workers": 1}

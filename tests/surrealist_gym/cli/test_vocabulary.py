@@ -126,7 +126,7 @@ def test_simulate_without_out_writes_results_simulate_time(tmp_path, monkeypatch
     assert len(folders) == 1 and re.fullmatch(r"results/simulate-\d{8}-\d{6}", folders[0])
 
 
-# --- defaults stated once per problem -----------------------------------------------------------------------------------
+# --- defaults stated once per problem ---------------------------------------------------------------------------------
 def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
     from surrealist_gym.cli.generate import CASE_STUDY_DEFAULTS
     from surrealist_gym.cli.options import PROBLEM_DEFAULTS, GenerateOptions, ReplicateOptions
@@ -156,7 +156,7 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
     assert "(default 5; with --competition the edition's: 2024 5, 2025 3)" in _help("evaluate")
 
 
-# --- an option that does not apply is refused, before any work ----------------------------------------------------------
+# --- an option that does not apply is refused, before any work --------------------------------------------------------
 @pytest.mark.parametrize("argv, message", [
     (["generate", "--obstacles", "2", "--confirm", "3"], "--obstacles: applies only with --case-study"),
     (["generate", "--confirm", "3"], "--confirm: applies only with --case-study"),
@@ -205,7 +205,7 @@ def test_an_option_that_applies_is_not_refused():
         check({"--preset"}, case_study="mission1")
 
 
-# --- train: PPO or SAC; train-ppo still works --------------------------------------------------------------------------
+# --- train: PPO or SAC; train-ppo still works -------------------------------------------------------------------------
 def test_train_ppo_is_an_alias_of_train(tmp_path, capsys):
     for command in ("train", "train-ppo"):
         assert main([command, "--steps", "0", "--out", str(tmp_path / "p.zip")]) == 2
@@ -228,7 +228,7 @@ def test_train_with_sac_runs_a_few_steps_and_its_policy_searches(tmp_path, capsy
     make_agent(f"sac:{out}", seed=0)  # a SAC policy, loadable as an agent
 
 
-# --- compare --case-study ----------------------------------------------------------------------------------------------
+# --- compare --case-study ---------------------------------------------------------------------------------------------
 def test_compare_runs_on_a_case_study(tmp_path, capsys):
     out = tmp_path / "cmp"
     case_study = CASE_STUDIES / "mission1.yaml"

@@ -288,7 +288,8 @@ def test_a_tool_that_crashes_or_names_no_output_folder(tmp_path, capsys):
 def test_aerialist_lookup(tmp_path, monkeypatch):
     assert tool_apis(SNIPPETS) == ("AerialistTest",) and tool_apis(AMBIEGEN) == ("DroneTest",)
     assert find_aerialist(("DroneTest",)).version == "0.2.1"  # the second folder of $SURREALIST_AERIALIST
-    assert find_aerialist(("AerialistTest",), MASTER / "aerialist").path == MASTER.resolve()  # the package folder works too
+    # the package folder works too
+    assert find_aerialist(("AerialistTest",), MASTER / "aerialist").path == MASTER.resolve()
     monkeypatch.setenv(AERIALIST_ENV, str(tmp_path))
     with pytest.raises(SurrealistError, match="not an Aerialist folder"):
         find_aerialist(("DroneTest",))

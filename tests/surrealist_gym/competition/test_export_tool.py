@@ -133,7 +133,8 @@ def test_an_unwritable_folder_is_refused(tmp_path, capsys, target, message):
     ("--confirm", "-1", "--confirm: expected a whole number >= 0, got -1"),
     ("--workers", "0", "--workers: expected a whole number >= 1, got 0"),
     ("--buffer", "-0.1", "--buffer: expected a non-negative number of metres, got -0.1"),
-    ("--agent", "ppo", "surrealist export-tool: argument --agent: invalid choice: 'ppo' (choose from 'suite', 'cmaes', 'random', 'greedy')"),
+    ("--agent", "ppo", "surrealist export-tool: argument --agent: invalid choice: 'ppo' "
+                       "(choose from 'suite', 'cmaes', 'random', 'greedy')"),
 ])
 def test_bad_settings_are_refused_before_anything_is_written(tmp_path, capsys, option, value, message):
     assert main(["export-tool", str(tmp_path / "tool"), option, value]) == 2

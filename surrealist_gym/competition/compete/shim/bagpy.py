@@ -3,4 +3,5 @@
 
 
 def bagreader(*args, **kwargs):
+    """Raise ImportError: ROS .bag logs cannot be read under ``surrealist compete``."""
     raise ImportError("bagpy is a stand-in under surrealist compete: ROS .bag logs cannot be read")

@@ -48,6 +48,7 @@ logger = logging.getLogger("surrealist-tool")
 
 
 def points(distance):
+    """The competition's points of one run at ``distance`` [m] from the obstacles (0 at 1.5 m or more)."""
     return next((p for limit, p in POINTS if distance < limit), 0)
 
 
@@ -108,11 +109,13 @@ def neighbours(out, members, executed, failed):
 
 
 def layout(obstacles):
+    """A hashable key of the obstacles: each one's (x, y, r, l, w, h)."""
     return tuple((o["position"]["x"], o["position"]["y"], o["position"]["r"], o["size"]["l"], o["size"]["w"],
                   o["size"]["h"]) for o in obstacles)
 
 
 def centre(obstacle):
+    """The obstacle's (x, y) position [m]."""
     return obstacle["position"]["x"], obstacle["position"]["y"]
 
 
@@ -180,6 +183,7 @@ def write(tests, folder):
 
 
 def generate(case_study, budget):
+    """Search, execute the budget's tests and write the failures to a new folder of generated tests."""
     settings = json.loads(SETTINGS_FILE.read_text(encoding="utf-8"))
     stamp = datetime.now().strftime("%Y%m%d-%H%M%S")
     results = RESULTS_FOLDER / f"surrealist-{stamp}"
@@ -193,6 +197,7 @@ def generate(case_study, budget):
 
 
 def main():
+    """The tool's command line: ``generate TEST.yaml BUDGET``; exit 1 when the generation fails."""
     parser = argparse.ArgumentParser(description="surrealist-gym's UAV test generator")
     commands = parser.add_subparsers(dest="command", required=True)
     command = commands.add_parser("generate", description="generate tests")

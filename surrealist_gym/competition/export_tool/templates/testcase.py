@@ -27,6 +27,7 @@ def agent_class():
 
 
 class TestCase:
+    """A case study with the given obstacles, flown by the Aerialist agent ``AGENT`` names."""
     def __init__(self, casestudy, obstacles):
         self.test = copy.deepcopy(casestudy)
         self.test.simulation.obstacles = obstacles
@@ -53,4 +54,5 @@ class TestCase:
         self.plot_file = plot(self.test, self.test_results)
 
     def save_yaml(self, path):
+        """Write the test as an Aerialist YAML to ``path``."""
         self.test.to_yaml(path)
