@@ -14,6 +14,14 @@ REFERENCE_CSV = SHARED_DATA / "reference" / "case0_reference_trajectory.csv"
 CASE_STUDIES = SHARED_DATA / "competition" / "case_studies"
 
 
+def sigint_as_a_terminal_gives_it() -> None:
+    """``Popen(preexec_fn=...)``: the child takes SIGINT as Ctrl-C (KeyboardInterrupt), even when these tests run as a
+    background job, whose children inherit SIGINT ignored (and Python keeps an ignored SIGINT ignored)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 #: Three CAMBA tests that fly quickly (about 0.6 s a run each).
 CAMBA_FAST = ("26-11-13-35-31-5O9PN", "04-12-14-10-41-5O9PN", "24-11-07-48-39-5O9PN")
 

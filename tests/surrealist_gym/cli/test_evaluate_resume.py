@@ -17,7 +17,7 @@ import pytest
 
 from surrealist_gym.cli import main
 from surrealist_gym.sim.profiles import load_profile, save_profile
-from tests.conftest import CAMBA_FAST, ROOT, SHARED_DATA
+from tests.conftest import CAMBA_FAST, ROOT, SHARED_DATA, sigint_as_a_terminal_gives_it
 
 COMPETITION = SHARED_DATA / "competition"
 REPORT = ["report.md", "evaluation.csv", "runs.csv", "distances.png", "top-views.png", "suite-map.png"]
@@ -55,7 +55,8 @@ def _stored(out) -> int:
 def _start(*argv) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-c", "import sys; from surrealist_gym.cli import main; "
                              "sys.exit(main(sys.argv[1:]))", "evaluate", *map(str, argv)], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=sigint_as_a_terminal_gives_it)
 
 
 def _wait_for_runs(out, process, at_least: int = 1) -> int:

@@ -14,6 +14,7 @@ import pytest
 
 from surrealist_gym.cli import main
 from surrealist_gym.cli._search import stored_evaluations
+from tests.conftest import sigint_as_a_terminal_gives_it
 
 BUDGET = "12"
 SEARCH = ["generate", "--budget", BUDGET, "--runs", "1", "--workers", "1"]
@@ -34,7 +35,8 @@ def uninterrupted(tmp_path_factory) -> list[dict]:
 
 def _start(out: Path) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "surrealist_gym.cli", *SEARCH, "--out", str(out)],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=sigint_as_a_terminal_gives_it)
 
 
 def _wait_for_stored(proc: subprocess.Popen, out: Path, n: int) -> None:
