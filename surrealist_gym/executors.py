@@ -219,16 +219,11 @@ class _Watched:
         return self._future.cancel()
 
     def result(self):
-        lost_since = None
         while True:
             try:
                 return self._future.result(timeout=1.0)
             except TimeoutError:
-                if self._client.status == "running":
-                    lost_since = None
-                    continue
-                lost_since = lost_since or time.monotonic()
-                if time.monotonic() - lost_since > self._patience:
+                if self.done() and not self._future.done():  # the scheduler lost for longer than the patience
                     # the search reports the lost scheduler in one line; the client's reconnect traceback goes
                     logging.getLogger("distributed.client").setLevel(logging.CRITICAL)
                     raise ConnectionError(f"the Dask scheduler has been unreachable for {self._patience:.0f} s "
