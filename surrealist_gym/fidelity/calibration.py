@@ -163,7 +163,7 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
     def mean(figs: list[Phases], name: str) -> float:
         return float(np.mean([getattr(f, name) for f in figs]))
 
-    before_figs, before_trajs = fly(values)
+    before_trajs = fly(values)[1]  # the flights before calibration, for the figure
     notes: dict[str, str] = {}
     for _ in range(passes):
         for fit in FITS[base.avoidance_model]:
