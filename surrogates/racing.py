@@ -2,19 +2,23 @@
 incumbent's same first runs by more than a margin, or (with common random numbers) score exactly as they did.
 
 :class:`Racing` is the env with partial evaluations: ``race(action, k)`` flies a test's first k runs, charged to the
-budget as k/n of an evaluation, and ``step`` on it later flies and charges only the rest. The margins per stage are
-calibrated like the screening margin (:mod:`surrogates.replay`), on the fitness of the first k runs of the stored
-evaluations a model learnt from.
+budget as k/n of an evaluation, and ``step`` on it later flies and charges only the rest. :class:`Race` is the rule
+for the model in force: its margin per stage, calibrated like the screening margin (:mod:`surrogates.replay`) on the
+fitness of the first k runs of the stored evaluations a model learnt from, and whether ties drop.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from surrealist_gym.envs.wrapper import SurrealistWrapper
 from surrealist_gym.evaluation import Evaluation
 
+from .config import RaceConfig
 from .models import SurrogateModel
 from .replay import replay_margin, replayed_improvements
+from .screening import Skip
 
 TIE_TOLERANCE = 1e-9  # relative: first runs whose fitness differs by less score as a tie (identical flights)
 
@@ -48,6 +52,50 @@ def race_margin(model: SurrogateModel, first_runs: int, miss_rate: float = 0.02)
     if first is None or first.shape[1] < first_runs:
         return None
     return replay_margin(first[:, first_runs - 1], model.train_y, model.train_groups, miss_rate)
+
+
+@dataclass(frozen=True, slots=True)
+class Race:
+    """Racing's rule for the model in force: the margin per stage, as (run count, margin) pairs in increasing run
+    counts (a margin None: not calibrated), and whether a tie drops a candidate. No stages: racing is off."""
+
+    margins: tuple[tuple[int, float | None], ...] = ()
+    drop_ties: bool = False
+
+    @classmethod
+    def calibrated(cls, config: RaceConfig, model: SurrogateModel | None, miss_rate: float,
+                   common_noise: bool) -> "Race":
+        """The configured margin at every stage, else one per stage calibrated on the model's training data at an
+        equal share of ``miss_rate``; ties drop as configured, else (None) under common noise unless a tie improved
+        in the model's training stores."""
+        stages = config.stages
+        if config.margin is not None:
+            margins = tuple((k, float(config.margin)) for k in stages)
+        else:
+            share = miss_rate / max(len(stages), 1)
+            margins = tuple((k, None if model is None else race_margin(model, k, share)) for k in stages)
+        drop_ties = config.drop_ties
+        if drop_ties is None:
+            drop_ties = bool(common_noise) and (model is None or not tie_improvements(
+                model.train_first_runs, model.train_y, model.train_groups))
+        return cls(margins, drop_ties)
+
+    def verdict(self, env: "Racing", action, incumbent, best_fitness: float) -> Skip | None:
+        """Fly the candidate's first runs stage by stage (``env.race``) against the same first runs of the incumbent
+        test: a :class:`~surrogates.screening.Skip` told the best minus its shortfall at the first stage it falls
+        behind (or ties), or None to fly the rest. None at once without an incumbent or a margin to race on."""
+        for k, margin in self.margins:
+            if incumbent is None or (margin is None and not self.drop_ties):
+                return None
+            theirs = env.evaluator.evaluate(incumbent, runs=k).fitness
+            flown = env.race(action, k)
+            verdict = race_verdict(theirs, flown.fitness, margin, self.drop_ties)
+            if verdict:
+                shortfall = float(theirs - flown.fitness)
+                why = {"first_runs": k, "first_runs_fitness": float(flown.fitness), "race_shortfall": shortfall,
+                       "race_margin": margin, "tie": verdict == "tie"}
+                return Skip(best_fitness - shortfall, why, flown)
+        return None
 
 
 class Racing(SurrealistWrapper):
@@ -91,4 +139,4 @@ class Racing(SurrealistWrapper):
         return obs, reward, terminated, truncated or self.budget_left <= 0, info
 
 
-__all__ = ["TIE_TOLERANCE", "Racing", "is_tie", "race_margin", "race_verdict", "tie_improvements"]
+__all__ = ["TIE_TOLERANCE", "Race", "Racing", "is_tie", "race_margin", "race_verdict", "tie_improvements"]
