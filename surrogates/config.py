@@ -1,23 +1,28 @@
 """The settings of pre-screening (:class:`PrescreenConfig`), in three parts: how candidates are screened
 (:class:`ScreenConfig`), raced (:class:`RaceConfig`) and how the model learns online (:class:`OnlineConfig`);
-plus how skips are told to the inner agent and whether a stop is verified (:mod:`surrogates.prescreen`,
+plus how skips are told to the agent and whether a stop is verified (:mod:`surrogates.prescreen`,
 docs/surrogates.md). ``PrescreenConfig.of(**settings)`` takes the settings by name, without their part.
+
+:data:`MEASURED_PRESCREEN` holds the settings whose savings docs/results.md reports, and
+:func:`measured_prescreen` picks those for a model and a problem (what ``--surrogate MODEL`` alone runs).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 from enum import Enum
 
+from surrealist_gym.sim.ranges import FrozenDict
+
 RULES = ("auto", "lowfi", "ei", "pi", "none")
 
 
 class SkipAccounting(str, Enum):
-    """How a skipped (or raced-out) candidate is told to the inner agent; the env's budget counts real simulations
+    """How a skipped (or raced-out) candidate is told to the agent; the env's budget counts real simulations
     in every case."""
 
     MEMO = "memo"  #: as a free memo answer: the greedy does not charge it to its local budgets
-    EVALUATION = "evaluation"  #: as an evaluation: the inner agent plans its own budgets as without screening
-    BUDGET = "budget"  #: as an evaluation spent from the budget the inner agent sees, so it walks and stops as
+    EVALUATION = "evaluation"  #: as an evaluation: the agent plans its own budgets as without screening
+    BUDGET = "budget"  #: as an evaluation spent from the budget the agent sees, so it walks and stops as
     #: without screening, having simulated less; the real budget left is unused or goes to ``verify_stop``
 
 
@@ -102,8 +107,8 @@ class PrescreenConfig:
         screen, race, online: the three parts (above).
         miss_rate: share of the past real improvements that a calibrated margin (screening's, or racing's over all
             its stages) may drop.
-        skips: how a skip is told to the inner agent (:class:`SkipAccounting`).
-        verify_stop: when the inner agent stops with budget left, start it again from the best test with screening
+        skips: how a skip is told to the agent (:class:`SkipAccounting`).
+        verify_stop: when the agent stops with budget left, start it again from the best test with screening
             and racing off, so that a stop the skips may have caused is checked by simulation (tests already
             simulated are memo hits and cost nothing).
     """
@@ -145,4 +150,34 @@ class PrescreenConfig:
         return cls(**{name: kind(**values[name]) for name, kind in parts.items()}, **top)
 
 
-__all__ = ["RULES", "OnlineConfig", "PrescreenConfig", "RaceConfig", "ScreenConfig", "SkipAccounting"]
+# The pre-screening settings whose savings docs/results.md reports (PrescreenConfig.of's names), by the noise mode of
+# the model's training stores (True: common random numbers) and the problem.
+MEASURED_PRESCREEN = FrozenDict({
+    (True, "generate"): FrozenDict(first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET, verify_stop=True),
+    (True, "replicate"): FrozenDict(rule="none", first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET,
+                                    verify_stop=True),
+    (False, "replicate"): FrozenDict(first_runs=(1,)),
+    (False, "generate"): FrozenDict(first_runs=(3,)),
+})
+
+
+def measured_prescreen(common_noise: bool | None, problem: str, runs: int) -> FrozenDict:
+    """The measured settings (:data:`MEASURED_PRESCREEN`) for a model trained in the noise mode ``common_noise`` and
+    a search of ``problem`` (``replicate`` or ``generate``) flying ``runs`` runs per evaluation, by
+    :meth:`PrescreenConfig.of`'s names; racing stages at or above ``runs`` are left out. Empty when none were
+    measured (a model whose noise mode is unknown: None).
+
+    Example:
+        >>> dict(measured_prescreen(False, "generate", runs=10))
+        {'first_runs': (3,)}
+        >>> PrescreenConfig.of(**measured_prescreen(True, "replicate", runs=3)).race.stages
+        (1, 2)
+    """
+    settings = MEASURED_PRESCREEN.get((common_noise, problem))
+    if settings is None:
+        return FrozenDict()
+    return FrozenDict({**settings, "first_runs": tuple(k for k in settings["first_runs"] if k < runs)})
+
+
+__all__ = ["MEASURED_PRESCREEN", "RULES", "OnlineConfig", "PrescreenConfig", "RaceConfig", "ScreenConfig",
+           "SkipAccounting", "measured_prescreen"]

@@ -24,7 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
-from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
+from surrealist_gym.errors import DependencyNotInstalled, SurrealistError, regular_file
 
 from .dataset import Dataset, Featurizer
 
@@ -317,6 +317,16 @@ class SurrogateModel:
         except Exception as err:  # missing file, bad JSON, bad pickle, missing key: all mean "not a model"
             raise SurrogateModelError(f"{path}: not a surrogate model ({type(err).__name__}: {err})") from err
         return model
+
+
+def saved_noise_mode(path) -> bool | None:
+    """The noise mode of a saved model's training stores (``meta.json``'s ``common_noise``), read without loading
+    the model (nor torch); None when unknown, or when the folder is not a readable model (loading it says why)."""
+    try:
+        meta = json.loads(Path(regular_file(Path(path) / "meta.json", "surrogate model file")).read_text())
+        return meta.get("common_noise")
+    except (SurrealistError, OSError, ValueError, AttributeError):
+        return None
 
 
 def train_model(dataset: Dataset, featurizer: Featurizer, kind: str = "ensemble", target: str = "fitness",
