@@ -53,10 +53,10 @@ from search.metrics import SearchMetrics
 from search.repetitions import run_repetition
 from search.statistics import compare, vargha_delaney_a12
 from surrealist_gym.cli.options import race_stages
-from surrogates.config import RULES, SkipAccounting
+from surrogates.config import RULES, PrescreenConfig, SkipAccounting
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import evaluate_model, train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened
+from surrogates.prescreened import Prescreened
 
 PROBLEMS = ["rq1-seed1", "rq1-seed2", "rq2"]
 BUDGET_SIMULATIONS = 500  # budget x runs of every paper problem (100 x 5, 50 x 10): strict censoring

@@ -4,9 +4,10 @@
     python examples/prescreen_greedy.py --budget 3 --runs 2 --first-runs 1 --kind knn     # CI
 
 The model learns the RQ2 generation fitness from a stored search (by default the one shipped in
-tests/data/stores/), with one low-fidelity flight of each test among its features. Wrapped around the greedy, it
-skips candidates whose coarse flight falls clearly short of the best test's, and races the rest: their first runs
-are flown, the others only if they keep up. Same as ``surrealist generate --surrogate MODEL --first-runs K``.
+tests/data/stores/), with one low-fidelity flight of each test among its features. Between the greedy's ask and
+tell (``Prescreened`` runs that loop with a ``Prescreener``), it skips candidates whose coarse flight falls clearly
+short of the best test's, and races the rest: their first runs are flown, the others only if they keep up. Same as
+``surrealist generate --surrogate MODEL --first-runs K``.
 """
 import argparse
 import time
@@ -16,9 +17,10 @@ import gymnasium as gym
 
 import surrealist_gym  # noqa: F401 - registers the envs
 from search import AdaptiveGreedy
+from surrogates.config import PrescreenConfig
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened
+from surrogates.prescreened import Prescreened
 
 STORE = Path(__file__).resolve().parents[1] / "tests" / "data" / "stores" / "rq2-rep0.sqlite"
 
@@ -47,7 +49,8 @@ for name, agent in agents.items():
     line = (f"{name:>16}: fitness {result.history[0]:.2f} -> {result.best_fitness:.2f}, "
             f"{steps[-1]['simulations'] if steps else args.runs} simulations, {time.perf_counter() - start:.1f} s")
     if isinstance(agent, Prescreened):
-        line += (f"; {len(agent.skipped) - agent.dropped} candidates skipped, "
-                 f"{agent.dropped} dropped after their first runs")
+        screened = agent.prescreener  # what the batch evaluator between the greedy's ask and tell did
+        line += (f"; {len(screened.skipped) - screened.dropped} candidates skipped, "
+                 f"{screened.dropped} dropped after their first runs")
     print(line)
     env.close()

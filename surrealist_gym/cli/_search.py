@@ -11,7 +11,7 @@ from collections import Counter
 from contextlib import closing, contextmanager
 from pathlib import Path
 
-from ..errors import InfrastructureError, SurrealistError, one_line, regular_file
+from ..errors import InfrastructureError, SurrealistError, one_line
 from .options import RUN_FILE, SearchOptions, check_writable, default_out
 
 
@@ -152,36 +152,26 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
     return out, options
 
 
-# The pre-screening settings whose savings docs/results.md reports, by the model's noise mode and the command; what
-# `--surrogate MODEL` alone runs (racing stages at or above --runs are left out).
-MEASURED_PRESCREEN = {
-    (True, "generate"): {"first_runs": (1, 2, 3, 4), "skips_spend_budget": True, "verify_stop": True},
-    (True, "replicate"): {"screen": "none", "first_runs": (1, 2, 3, 4), "skips_spend_budget": True,
-                          "verify_stop": True},
-    (False, "replicate"): {"first_runs": (1,)},
-    (False, "generate"): {"first_runs": (3,)},
-}
-
-
 def measured_prescreen(options: SearchOptions) -> SearchOptions:
     """``--surrogate MODEL`` with none of the expert pre-screening flags: the measured settings for the noise mode
-    the model was trained in (MEASURED_PRESCREEN; none for an online model or a model whose mode is unknown)."""
+    the model was trained in (surrogates.config.MEASURED_PRESCREEN; none for an online model or a model whose mode
+    is unknown), said in one line."""
     expert = options.first_runs or options.screen != "auto" or options.skips_spend_budget or options.verify_stop
     if not options.surrogate or options.surrogate == "online" or expert:
         return options
-    try:
-        meta = regular_file(Path(options.surrogate) / "meta.json", "surrogate model file")
-        common = json.loads(Path(meta).read_text()).get("common_noise")
-    except (SurrealistError, OSError, ValueError, AttributeError):
-        return options  # the model's own loading reports what is wrong with it
-    settings = dict(MEASURED_PRESCREEN.get((common, options.command), {}))
+    from surrogates.config import SkipAccounting, measured_prescreen as measured
+    from surrogates.models import saved_noise_mode
+
+    common = saved_noise_mode(options.surrogate)  # an unreadable model: its own loading says what is wrong
+    settings = measured(common, options.command, options.runs)
     if not settings:
         return options
-    settings["first_runs"] = tuple(k for k in settings["first_runs"] if k < options.runs)
+    flags = {"rule": "screen", "first_runs": "first_runs", "skips": "skips_spend_budget", "verify_stop": "verify_stop"}
+    changes = {flags[k]: v is SkipAccounting.BUDGET if k == "skips" else v for k, v in settings.items()}
     mode = "common noise" if common else "each test's own noise"
     print(f"--surrogate {options.surrogate}: a model trained with {mode}; pre-screening as measured: "
-          + ", ".join(f"{k}={v}" for k, v in settings.items()), file=sys.stderr)
-    return dataclasses.replace(options, **settings)
+          + ", ".join(f"{k}={v}" for k, v in changes.items()), file=sys.stderr)
+    return dataclasses.replace(options, **changes)
 
 
 def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
@@ -202,13 +192,14 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
         agent = make_agent(name, seed=options.random_seed)
     stages = options.first_runs
     if options.prescreened:
-        from surrogates.config import SkipAccounting
-        from surrogates.prescreen import PrescreenConfig, wrap
+        from surrogates.config import PrescreenConfig, SkipAccounting
+        from surrogates.prescreened import wrap
 
         skips = SkipAccounting.BUDGET if options.skips_spend_budget else SkipAccounting.EVALUATION
         config = PrescreenConfig.of(rule=options.screen or "auto", first_runs=stages, skips=skips,
                                     verify_stop=options.verify_stop)
         agent = wrap(agent, options.surrogate or "online", env, config)
+    prescreener = getattr(agent, "prescreener", None)
     bar = tqdm(total=options.budget, unit="eval", desc=problem, dynamic_ncols=True, file=sys.stderr,
                disable=None)
     start = time.perf_counter()
@@ -223,8 +214,8 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
         bar.n = min(result.evaluations, bar.total)
         bar.close()
         summary = write_results(out, env, result, time.perf_counter() - start, problem)
-        if hasattr(agent, "skipped"):
-            (out / "skipped.json").write_text(json.dumps(agent.skipped, indent=1, default=str) + "\n")
+        if prescreener is not None:
+            (out / "skipped.json").write_text(json.dumps(prescreener.skipped, indent=1, default=str) + "\n")
     except KeyboardInterrupt:
         bar.close()
         env.close()
@@ -235,11 +226,12 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
     finally:
         bar.close()
         env.close()  # its pool's workers hold the folder's lock file (inherited) until they end
-    if hasattr(agent, "skipped"):
-        raced = agent.dropped
-        ties = sum(bool(s.get("tie")) for s in agent.skipped)
-        margin = "/".join("not calibrated" if m is None else f"{m:.2f}" for m in agent.race_margins.values())
-        print(f"pre-screening ({agent.rule}): {len(agent.skipped) - raced} candidates skipped without a simulation"
+    if prescreener is not None:
+        raced = prescreener.dropped
+        ties = sum(bool(s.get("tie")) for s in prescreener.skipped)
+        margin = "/".join("not calibrated" if m is None else f"{m:.2f}" for m in prescreener.race_margins.values())
+        print(f"pre-screening ({prescreener.rule}): {len(prescreener.skipped) - raced} candidates skipped without a "
+              f"simulation"
               + (f", {raced} dropped after their first {'/'.join(map(str, stages))} runs ({ties} of them tied the "
                  f"best; racing margin {margin})" if stages else "") + " (skipped.json)")
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "

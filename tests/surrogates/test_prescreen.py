@@ -1,4 +1,5 @@
-"""Pre-screening around the greedy on a tiny Generate env: real simulations only, skips logged, seeded."""
+"""Pre-screening between the greedy's ask and tell on a tiny Generate env: real simulations only, skips logged,
+seeded."""
 import json
 import warnings
 
@@ -7,12 +8,13 @@ import numpy as np
 import pytest
 
 import surrealist_gym  # noqa: F401 - registers the envs
-from search import AdaptiveGreedy
+from search import AdaptiveGreedy, Agent
 from surrealist_gym.errors import SurrealistError
-from surrogates.config import SkipAccounting
+from surrogates.config import MEASURED_PRESCREEN, PrescreenConfig, SkipAccounting, measured_prescreen
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import SurrogateModel, train_model
-from surrogates.prescreen import PrescreenConfig, Prescreened, wrap
+from surrogates.prescreen import Prescreener
+from surrogates.prescreened import Prescreened, wrap
 from surrogates.racing import race_margin, tie_improvements
 from surrogates.replay import replay_margin
 
@@ -52,8 +54,8 @@ def test_budget_counts_real_simulations_only(runs):
     agent, result, steps, env = runs[0]
     assert result.evaluations <= BUDGET
     assert env.unwrapped.evaluator.simulations == result.evaluations  # 1 run per evaluation; skips fly nothing
-    assert agent.skipped, "a strict threshold must skip candidates"
-    for entry in agent.skipped:
+    assert agent.prescreener.skipped, "a strict threshold must skip candidates"
+    for entry in agent.prescreener.skipped:
         assert entry["predicted_std"] > 0 and entry["told_fitness"] < result.best_fitness
     assert not any(s.get("skipped") for s in steps)  # the callback sees real steps only
     assert result.best_fitness == max(result.history)
@@ -61,14 +63,14 @@ def test_budget_counts_real_simulations_only(runs):
 
 def test_same_seed_same_search(runs):
     (a, ra, _, _), (b, rb, _, _) = runs
-    assert ra.history == rb.history and a.skipped == b.skipped
+    assert ra.history == rb.history and a.prescreener.skipped == b.prescreener.skipped
 
 
 def test_online_model_trains_as_evaluations_arrive():
     agent = Prescreened(AdaptiveGreedy("paper"), "online",
                         PrescreenConfig.of(min_points=2, retrain_every=1, kind="knn"), seed=1)
     result = agent.run(_env(), seed=1)
-    assert result.evaluations <= BUDGET and agent.retrains >= 1 and agent.model is not None
+    assert result.evaluations <= BUDGET and agent.prescreener.retrains >= 1 and agent.prescreener.model is not None
 
 
 def test_wrap(model, tmp_path):
@@ -83,20 +85,36 @@ def test_wrap(model, tmp_path):
 
 def test_free_then_most_promising_candidates_first(model):
     candidates = [np.array([0.1, 0.0]), np.array([-0.1, 0.3]), np.array([0.0, -1.0])]  # the last one overlaps
-
-    class Fixed(AdaptiveGreedy):
-        def _ask(self):
-            return candidates
-
     env = _env()
     _, info = env.reset(seed=0)
-    agent = Prescreened(Fixed("paper"), model, seed=0)
-    agent.setup(env, info)
-    asked = agent.ask()
-    means = [agent._predict(env.unwrapped.test_for(a))[0] for a in candidates[:2]]
-    assert asked[0] is candidates[2]  # free: the env rejects it without a simulation
-    assert [next(i for i, c in enumerate(candidates) if c is a) for a in asked[1:]] == sorted(
-        [0, 1], key=lambda i: -means[i])
+    prescreener = Prescreener(model, PrescreenConfig.of(rule="none"), seed=0)  # skips nothing: steps all three
+    prescreener.start(env, info)
+    batch = prescreener.evaluate(candidates)
+    stepped = [next(i for i, c in enumerate(candidates) if c is a) for a, _, _ in batch.stepped]
+    means = [model.predict_tests([env.unwrapped.test_for(a)])[0][0] for a in candidates[:2]]
+    assert stepped[0] == 2  # free: the env rejects it without a simulation
+    assert stepped[1:] == sorted([0, 1], key=lambda i: -means[i])
+    fitness_of = {i: fitness for i, (_, fitness, _) in zip(stepped, batch.stepped)}
+    assert list(batch.fitnesses) == [fitness_of[i] for i in range(3)]  # told in the order asked
+
+
+def test_the_prescreener_sits_between_any_agents_ask_and_tell(model, runs):
+    """An ask -> evaluate -> tell loop written by hand is the search Prescreened runs; neither is an agent."""
+    config = PrescreenConfig.of(threshold=0.5, max_skips=3)
+    env = _env()
+    _, info = env.reset(seed=0)
+    prescreener, greedy = Prescreener(model, config, seed=0), AdaptiveGreedy("paper", seed=0)
+    prescreener.start(env, info)
+    greedy.setup(prescreener.agent_env, info)
+    history = [info["fitness"]]
+    while not (prescreener.stop() or greedy.stop()):
+        actions = greedy.ask()
+        batch = prescreener.evaluate(actions)
+        history += [fitness for _, fitness, _ in batch.stepped]
+        greedy.tell(actions[:len(batch.fitnesses)], batch.fitnesses, batch.infos)
+    agent, result, _, _ = runs[0]
+    assert tuple(history) == result.history and prescreener.skipped == agent.prescreener.skipped
+    assert not isinstance(agent, Agent) and not hasattr(prescreener, "ask")
 
 
 def test_replay_margin_replays_each_search_in_order():
@@ -119,11 +137,12 @@ def test_lowfi_rule_skips_candidates_the_coarse_flight_finds_clearly_worse(lowfi
     env = gym.make("Surrealist-Replicate-v0", budget=6, runs=1, executor="inline")
     agent = Prescreened(AdaptiveGreedy("authors"), lowfi_model, PrescreenConfig.of(miss_rate=0.5), seed=0)
     result = agent.run(env, seed=0)
-    assert agent.rule == "lowfi" and agent.margin is not None  # auto: the model's stores calibrate a margin
+    screened = agent.prescreener
+    assert screened.rule == "lowfi" and screened.margin is not None  # auto: the model's stores calibrate a margin
     assert result.evaluations <= 6 and env.unwrapped.evaluator.simulations == result.evaluations
-    assert agent.skipped, "a margin at the median of past improvements must skip candidates"
-    for entry in agent.skipped:
-        assert entry["rule"] == "lowfi" and entry["lowfi_shortfall"] > agent.margin
+    assert screened.skipped, "a margin at the median of past improvements must skip candidates"
+    for entry in screened.skipped:
+        assert entry["rule"] == "lowfi" and entry["lowfi_shortfall"] > screened.margin
         assert entry["told_fitness"] < result.best_fitness
 
 
@@ -138,7 +157,7 @@ def test_racing_drops_candidates_whose_first_runs_fall_short():
     config = PrescreenConfig.of(rule="ei", first_runs=1, race_margin=0.0, lowfi=False)
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
-    raced = [s for s in agent.skipped if s["rule"] == "race"]
+    raced = [s for s in agent.prescreener.skipped if s["rule"] == "race"]
     assert raced, "a zero margin must drop candidates whose first run is worse than the incumbent's"
     for entry in raced:
         assert entry["race_shortfall"] > 0 and entry["told_fitness"] < result.best_fitness
@@ -152,8 +171,8 @@ def test_racing_in_stages_drops_a_candidate_at_the_first_stage_it_falls_behind()
     config = PrescreenConfig.of(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False)
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
-    assert agent.race_margins == {1: 0.0, 2: 0.0}
-    raced = [s for s in agent.skipped if s["rule"] == "race"]
+    assert agent.prescreener.race_margins == {1: 0.0, 2: 0.0}
+    raced = [s for s in agent.prescreener.skipped if s["rule"] == "race"]
     assert {s["first_runs"] for s in raced} == {1, 2}, "both stages drop candidates at a zero margin"
     assert all(s["race_shortfall"] > 0 for s in raced)
     assert len({s["test_key"] for s in raced}) == len(raced)  # asked again, a dropped test is a free memo answer
@@ -175,7 +194,7 @@ def test_skips_spend_the_inner_agents_budget(model):
     config = PrescreenConfig.of(rule="pi", threshold=1.0, max_skips=10**6, skips=SkipAccounting.BUDGET)
     agent = Prescreened(AdaptiveGreedy("paper"), model, config, seed=0)
     result = agent.run(env, seed=0)
-    assert len(agent.skipped) == 4 and agent.unspent == pytest.approx(4.0)
+    assert len(agent.prescreener.skipped) == 4 and agent.prescreener.unspent == pytest.approx(4.0)
     assert result.stop_reason.startswith("budget spent") and env.unwrapped.budget_left == 4
     assert env.unwrapped.evaluator.simulations == 1
     assert PrescreenConfig.of(skips="budget").skips is SkipAccounting.BUDGET
@@ -190,7 +209,7 @@ def test_the_inner_agent_stops_where_its_budget_with_skips_counted_ends():
     config = PrescreenConfig.of(rule="none", first_runs=1, race_margin=-1e9, lowfi=False, skips=SkipAccounting.BUDGET)
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
-    assert len(agent.skipped) == 3 and result.stop_reason.startswith("budget spent")
+    assert len(agent.prescreener.skipped) == 3 and result.stop_reason.startswith("budget spent")
     assert env.unwrapped.budget_left > 0  # the simulations saved are left unspent (no verify pass)
 
 
@@ -211,7 +230,7 @@ def test_a_test_asked_twice_in_one_ask_is_flown_once_and_then_a_memo_answer():
     agent = Prescreened(inner, "online", PrescreenConfig.of(rule="none", first_runs=1, lowfi=False), seed=0)
     agent.run(env, seed=0)
     (first, _), (second, info) = inner.told
-    assert second == first and info["memo"] and not agent.skipped  # not raced against itself
+    assert second == first and info["memo"] and not agent.prescreener.skipped  # not raced against itself
 
 
 def test_racing_drops_ties_under_common_noise():
@@ -223,7 +242,7 @@ def test_racing_drops_ties_under_common_noise():
     config = PrescreenConfig.of(rule="ei", first_runs=1, race_margin=1e9, lowfi=False)  # no drop by shortfall
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
-    ties = [s for s in agent.skipped if s["rule"] == "race"]
+    ties = [s for s in agent.prescreener.skipped if s["rule"] == "race"]
     assert ties and all(s["tie"] and s["race_shortfall"] == pytest.approx(0.0, abs=1e-6) for s in ties)
     assert env.unwrapped.evaluator.simulations == 3 * result.evaluations + len(ties)
 
@@ -256,11 +275,11 @@ def test_a_stop_the_skips_caused_is_verified_by_simulation(model):
         result = agent.run(env, seed=0)
         ends[verify] = (agent, result, env.unwrapped)
     agent, result, env = ends[False]
-    assert agent.skipped and agent.verified_at is None
+    assert agent.prescreener.skipped and agent.verified_at is None
     assert result.stop_reason == "no mutator improves the best" and env.budget_left > 0
     agent, result, env = ends[True]
     assert agent.verified_at == 1 and env.budget_left <= 0 and result.evaluations == 3
-    assert all(s["after_evaluations"] <= agent.verified_at for s in agent.skipped)  # no skip after the restart
+    assert all(s["after_evaluations"] <= agent.verified_at for s in agent.prescreener.skipped)  # none after it
     assert env.evaluator.simulations == 3  # the seed test, then the two candidates of the verify pass
 
 
@@ -305,7 +324,7 @@ def test_an_online_model_keeps_the_noise_mode_it_learnt_from():
     agent = Prescreened(AdaptiveGreedy("paper"), "online",
                         PrescreenConfig.of(min_points=2, retrain_every=1, kind="knn", lowfi=False), seed=0)
     agent.run(env, seed=0)
-    assert agent.model is not None and agent.model.common_noise is True
+    assert agent.prescreener.model is not None and agent.prescreener.model.common_noise is True
 
 
 def test_ties_are_raced_only_where_no_tie_improved_in_the_training_stores():
@@ -327,9 +346,9 @@ def test_ties_are_raced_only_where_no_tie_improved_in_the_training_stores():
         env = gym.make("Surrealist-Generate-v0", budget=1, runs=3, executor="inline",
                        sim_config={"common_noise": True})
         _, info = env.reset(seed=0)
-        agent = Prescreened(AdaptiveGreedy("paper"), model, PrescreenConfig.of(rule="none", first_runs=1), seed=0)
-        agent.setup(env, info)
-        return agent._drop_ties
+        prescreener = Prescreener(model, PrescreenConfig.of(rule="none", first_runs=1), seed=0)
+        prescreener.start(env, info)
+        return prescreener.calibration.race.drop_ties
 
     assert drops_ties([3, 4, 5]) and not drops_ties([0, 1, 2, 3, 4, 5])
 
@@ -349,3 +368,41 @@ def test_surrogate_alone_runs_the_measured_settings_for_its_noise_mode(model, tm
     assert main(["generate", "--budget", "2", "--runs", "4", "--workers", "1", "--surrogate", str(folder),
                  "--first-runs", "1", "--out", str(out2)]) == 0
     assert json.loads((out2 / "run.json").read_text())["first_runs"] == [1]
+
+
+def test_a_search_in_the_measured_shape_keeps_its_figures(model):
+    """Common noise, racing in stages, skips spending the greedy's budget, the unscreened restart and retraining: the
+    search the savings of docs/results.md were measured with. A regression test: these figures come from the code
+    that measured them, so a change that moves them changes what those savings mean."""
+    told = []
+
+    class Recording(AdaptiveGreedy):
+        def tell(self, actions, fitnesses, infos):
+            told.extend((f, bool(i.get("skipped"))) for f, i in zip(fitnesses, infos))
+            return super().tell(actions, fitnesses, infos)
+
+    env = gym.make("Surrealist-Generate-v0", budget=5, runs=3, executor="inline", sim_config={"common_noise": True})
+    config = PrescreenConfig.of(threshold=0.3, first_runs=(1, 2), race_margin=0.5, skips="budget", verify_stop=True,
+                                retrain_every=2)
+    agent = Prescreened(Recording("paper"), model, config, seed=0)
+    result = agent.run(env, seed=0)
+    skips = [-21.891654057399993, -21.891654057399993, -23.088361699353417]
+    steps = [-17.846900676814084, -17.888307930911587, -17.89165403550834, -21.89165403550834, -12.772812606535268]
+    assert [f for f, _ in told] == pytest.approx(skips + steps, rel=1e-9, abs=0)
+    assert [skipped for _, skipped in told] == [True] * 3 + [False] * 5
+    assert result.history == pytest.approx([-21.89165403550834, *steps], rel=1e-9, abs=0)
+    assert (result.evaluations, result.evaluations_to_best, result.simulations) == (5, 5, 15)
+    assert result.stop_reason == "budget spent" and agent.verified_at == 2
+    screened = agent.prescreener
+    assert [s["rule"] for s in screened.skipped] == ["ei"] * 3 and screened.retrains == 1
+
+
+def test_the_measured_settings_live_with_the_surrogates():
+    assert dict(measured_prescreen(False, "generate", runs=10)) == {"first_runs": (3,)}
+    settings = measured_prescreen(True, "replicate", runs=3)  # racing stages at or above the runs are left out
+    config = PrescreenConfig.of(**settings)
+    assert (config.screen.rule, config.race.stages, config.skips, config.verify_stop) == (
+        "none", (1, 2), SkipAccounting.BUDGET, True)
+    assert measured_prescreen(None, "generate", runs=10) == {}  # a model whose noise mode is unknown
+    with pytest.raises(TypeError):
+        MEASURED_PRESCREEN[(True, "generate")]["verify_stop"] = False
