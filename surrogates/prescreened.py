@@ -101,7 +101,7 @@ class Prescreened:
 
     def __init__(self, agent: Agent, model: SurrogateModel | str | Path = "online",
                  config: PrescreenConfig | None = None, seed: int | None = None):
-        self.inner = agent
+        self.agent = agent  #: the agent whose candidates are pre-screened
         self.seed = seed if seed is not None else agent.seed
         self.name = f"{agent.name}+prescreen"
         self.prescreener = Prescreener(model, config, self.seed)
@@ -115,7 +115,7 @@ class Prescreened:
     def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
         """Search on ``env`` until the agent stops or the budget is spent; ``callback`` gets the info of every step
         on the env."""
-        prescreener, agent = self.prescreener, self.inner
+        prescreener, agent = self.prescreener, self.agent
         _, info = env.reset(seed=seed if seed is not None else self.seed)
         prescreener.start(env, info)
         agent.setup(prescreener.agent_env, info)
@@ -131,9 +131,9 @@ class Prescreened:
     def _stop(self, info: dict, record: SearchRecord) -> dict:
         """The prescreener's stop, else the agent's; an agent's stop may restart it instead (:class:`VerifyStop`)."""
         prescreener = self.prescreener
-        reason = prescreener.stop() or self.inner.stop()
-        if reason and not prescreener.over and self.verify.restart(self.inner, prescreener, info, record):
-            reason = prescreener.stop() or self.inner.stop()
+        reason = prescreener.stop() or self.agent.stop()
+        if reason and not prescreener.over and self.verify.restart(self.agent, prescreener, info, record):
+            reason = prescreener.stop() or self.agent.stop()
         return reason
 
 
