@@ -1,17 +1,21 @@
 """The template env: an episode is one search from a seed test case.
 
 Action: one value in [-1, 1] per mutator (``env.mutators``): the mutation of the SEED test, scaled to each
-mutator's range (``values_for(action)`` gives metres and degrees, ``action_for(values)`` the inverse). The adaptive
-greedy's move "param +/- step on one mutator around the best" is an action vector; CMA-ES and RL propose whole
-vectors. Reward: the fitness of the mutated test (maximised).
+mutator's range (``values_for(action)`` gives metres and degrees, ``action_for(values)`` the inverse); the seed is
+``env.seed_action`` (0 when every range is symmetric about the seed). The adaptive greedy's move "param +/- step on
+one mutator around the best" is an action vector; CMA-ES and RL propose whole vectors. Reward: the fitness of the
+mutated test (maximised).
 Observation: the action last evaluated (scaled to [-1, 1]), the last and best fitness (scaled by the seed's), and
-the share of the budget left. ``reset`` evaluates the seed (one evaluation). A test evaluated before in the
-episode comes from the memo and costs no budget (``info["memo"]``); one evaluated in an earlier episode, or by an
-interrupted search whose store is reused, is not simulated again but costs budget, so an episode does not depend
-on what came before it (and a resumed search retraces the interrupted one); ``info["simulations"]`` counts the
-runs the episode's evaluations stand for; an invalid test (overlap, non-positive size) is not simulated, costs no
-budget and scores a penalty. The episode is truncated when the budget is spent. A wrapper that changes what is
-charged (e.g. ``surrogates.racing.Racing``) is a :class:`~surrealist_gym.envs.wrapper.SurrealistWrapper`.
+the share of the budget left. Info: the fitness terms, the test, each run's status and distances, and the trajectory
+judged as a :class:`~surrealist_gym.trajectory.Trajectory` (a value, not a bare array: Gymnasium's vector envs
+stack array-valued info entries, which flights of different lengths cannot be). ``reset`` evaluates the seed (one
+evaluation). A test evaluated before in the episode comes from the memo and costs no budget (``info["memo"]``); one
+evaluated in an earlier episode, or by an interrupted search whose store is reused, is not simulated again but costs
+budget, so an episode does not depend on what came before it (and a resumed search retraces the interrupted one);
+``info["simulations"]`` counts the runs the episode's evaluations stand for; an invalid test (overlap, non-positive
+size) is not simulated, costs no budget and scores a penalty. The episode is truncated when the budget is spent. A
+wrapper that changes what is charged (e.g. ``surrogates.racing.Racing``) is a
+:class:`~surrealist_gym.envs.wrapper.SurrealistWrapper`.
 
 Subclasses override only the hooks ``_objective`` and, if needed, ``_terminated``, and hand the base class their
 seed test, mutators, budget and one :class:`EnvSetup` (how evaluations fly: runs, UAV, noise seed, where, store).
@@ -31,6 +35,7 @@ from ..evaluation import Evaluation, Evaluator
 from ..mutators import PropertyMutator, apply_action
 from ..store import EvaluationStore
 from ..testcase import TestCase
+from ..trajectory import Trajectory
 
 INVALID_STEPS_FACTOR = 4  # an episode also ends after this many steps per unit of budget (invalid actions)
 
@@ -47,8 +52,10 @@ class EnvSetup:
             ``{"common_noise": True}``); the UAV below is applied to it.
         uav: the UAV profile (preset name, YAML path or profile); None: the seed test's
             (:func:`~surrealist_gym.sim.profiles.resolve_uav`) unless ``sim_config`` is given.
-        executor: where the runs fly (:mod:`surrealist_gym.executors`); None: ``workers`` local processes, or this
-            process when ``workers`` is None too.
+        executor: where the runs fly (:mod:`surrealist_gym.executors`); None: a pool of ``workers`` local
+            processes (all cores when ``workers`` is None too), except in a daemonic process (a worker of
+            Gymnasium's async vector env or SB3's ``SubprocVecEnv``), which may not start processes of its own: there
+            the runs fly in that process (``"inline"``).
         workers: local processes when no executor is given.
         store: an :class:`~surrealist_gym.store.EvaluationStore` or its SQLite path, None for none.
     """
@@ -62,26 +69,54 @@ class EnvSetup:
     store: Any = None
 
 
-class SurrealistEnv(gym.Env):
-    """Base of Surrealist-Replicate-v0 and Surrealist-Generate-v0."""
+def in_daemon_process() -> bool:
+    """Whether this process is daemonic (a vector env's worker): it may not start child processes."""
+    import multiprocessing
 
-    metadata = {"render_modes": []}
+    return bool(multiprocessing.current_process().daemon)
+
+
+def _executor_for(setup: EnvSetup):
+    """The executor of ``setup`` (see :class:`EnvSetup`): inline in a daemonic process unless one is named."""
+    executor = setup.executor
+    if in_daemon_process() and executor in (None, "process"):
+        if setup.workers is not None or executor == "process":
+            raise ValueError(f"workers={setup.workers}, executor={executor!r}: a daemonic process (a vector env's "
+                             f"worker) cannot start worker processes; leave both unset to fly its runs inline")
+        return "inline"
+    if executor is None and setup.workers is not None:
+        from ..executors import LocalPoolExecutor
+        return LocalPoolExecutor(setup.workers)
+    return executor
+
+
+class SurrealistEnv(gym.Env):
+    """Base of Surrealist-Replicate-v0, Surrealist-Generate-v0 and Surrealist-CaseStudy-v0.
+
+    ``render_mode="rgb_array"``: ``render()`` returns the top view of the last test evaluated (its obstacles and its
+    runs' flights; a replication's real flight too) as an H x W x 3 uint8 array; None (default): no rendering.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
     steps_per_budget = INVALID_STEPS_FACTOR  # the episode also ends after this many steps per evaluation budgeted
 
-    def __init__(self, seed_test: TestCase, mutators: Sequence[PropertyMutator], budget: int, *, setup: EnvSetup):
+    def __init__(self, seed_test: TestCase, mutators: Sequence[PropertyMutator], budget: int, *, setup: EnvSetup,
+                 render_mode: str | None = None):
         if budget < 1:
             raise ValueError(f"budget must be >= 1, got {budget}")
         if not mutators:
             raise ValueError("at least one mutator is needed")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode: expected None or one of {self.metadata['render_modes']}, got "
+                             f"{render_mode!r}")
+        self.render_mode = render_mode
         self._seed_test = seed_test
         self._mutators = tuple(mutators)
         self._budget = int(budget)
         self.setup = setup
-        store, executor, sim_config, uav = setup.store, setup.executor, setup.sim_config, setup.uav
+        store, sim_config, uav = setup.store, setup.sim_config, setup.uav
+        executor = _executor_for(setup)
         store = EvaluationStore(store) if isinstance(store, (str, Path)) else store
-        if executor is None and setup.workers is not None:
-            from ..executors import LocalPoolExecutor
-            executor = LocalPoolExecutor(setup.workers)
         from ..sim.config import SimConfig
         from ..sim.profiles import resolve_uav, test_uav_settings, with_uav_settings
 
@@ -107,7 +142,11 @@ class SurrealistEnv(gym.Env):
         self._episode_keys: set[str] = set()
         self._best: Evaluation | None = None
         self._seed_evaluation: Evaluation | None = None
-        self._last_action = np.zeros(n)
+        self._shown: Evaluation | None = None  # what render() draws: the last test evaluated
+        self._refused: str | None = None  # why the last action was refused, if it was
+        self._seed_action = self.action_for([m.default_value for m in self._mutators])
+        self._seed_action.setflags(write=False)
+        self._last_action = self._seed_action.copy()
 
     # --- hooks ----------------------------------------------------------------------------------------------------
     def _objective(self):
@@ -152,6 +191,12 @@ class SurrealistEnv(gym.Env):
         return test.key() in self._episode_keys
 
     @property
+    def seed_action(self) -> np.ndarray:
+        """The action that stands for the seed test (read-only): 0 where a mutator's range is symmetric about the
+        seed, as in the paper's envs; elsewhere, e.g. the case study's rules box, the seed's place in the range."""
+        return self._seed_action
+
+    @property
     def seed_evaluation(self) -> Evaluation | None:
         """The evaluation of the seed test (made by reset)."""
         return self._seed_evaluation
@@ -189,7 +234,7 @@ class SurrealistEnv(gym.Env):
         self._simulations = 0
         self._steps = 0
         self._episode_keys: set[str] = set()
-        self._last_action = np.zeros(len(self._mutators))
+        self._last_action = self._seed_action.copy()
         evaluation, _ = self._evaluate(self._seed_test)
         if not np.isfinite(evaluation.fitness):
             from collections import Counter
@@ -201,6 +246,7 @@ class SurrealistEnv(gym.Env):
         self._seed_fitness = evaluation.fitness
         self._seed_evaluation = evaluation
         self._best = evaluation
+        self._shown, self._refused = evaluation, None
         return self._observation(evaluation.fitness), self._info(evaluation, None, False)
 
     def step(self, action):
@@ -215,13 +261,35 @@ class SurrealistEnv(gym.Env):
             evaluation, invalid, memo = None, str(err), False
         else:
             (evaluation, memo), invalid = self._evaluate(test), None
+            self._shown = evaluation
             if evaluation.fitness > self._best.fitness:
                 self._best = evaluation
+        self._refused = invalid
         fitness = self._penalty() if evaluation is None or not np.isfinite(evaluation.fitness) else evaluation.fitness
         truncated = self.budget_left <= 0 or self._steps >= self.steps_per_budget * self._budget
         terminated = evaluation is not None and self._terminated(evaluation)
         info = self._info(evaluation, invalid, memo)
         return self._observation(fitness), float(fitness), terminated, truncated, info
+
+    def render(self):
+        """``render_mode="rgb_array"``: the top view of the last test evaluated (an invalid action evaluates nothing,
+        so the one before stays) as an H x W x 3 uint8 array; None without a render mode or before ``reset``."""
+        if self.render_mode is None or self._shown is None:
+            return None
+        from ..cli.plots import top_view_image
+
+        shown = self._shown
+        flights = [Trajectory.from_array(r.trajectory) for r in shown.runs
+                   if r.trajectory is not None and len(r.trajectory) > 1]
+        title = f"evaluation {self._evaluations}/{self._budget}: fitness {shown.fitness:.3g}"
+        if self._refused is not None:
+            reason = self._refused if len(self._refused) <= 60 else self._refused[:57] + "..."
+            title += f"\nlast action refused: {reason}"
+        return top_view_image(flights, obstacles=shown.test.obstacles, title=title, reference=self._reference())
+
+    def _reference(self):
+        """The trajectory render() draws as the reference (a replication's real flight); None here."""
+        return None
 
     def close(self):
         """Close the evaluator (and its executor)."""
@@ -265,5 +333,5 @@ class SurrealistEnv(gym.Env):
                     min_distances_2d=tuple(r.min_distance_2d for r in runs),
                     competition_distances=tuple(r.competition_distance for r in runs),
                     terms=copy.deepcopy(evaluation.terms),
-                    trajectory=None if evaluation.trajectory is None else evaluation.trajectory.copy())
+                    trajectory=None if evaluation.trajectory is None else Trajectory.from_array(evaluation.trajectory))
         return info

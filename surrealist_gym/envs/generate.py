@@ -21,7 +21,7 @@ class GenerateEnv(SurrealistEnv):
 
     def __init__(self, seed_test=None, runs: int = 10, budget: int = 50, mutators=None,
                  aggregate: str = "riskiest", executor=None, store=None, random_seed: int = 0, sim_config=None,
-                 workers: int | None = None, uav=None, distance: str | None = None):
+                 workers: int | None = None, uav=None, distance: str | None = None, render_mode: str | None = None):
         from .. import data_path
 
         if seed_test is None:
@@ -33,7 +33,7 @@ class GenerateEnv(SurrealistEnv):
         mutators = mutators or default_mutators(seed_test, MOVE_KINDS, obstacles=[0])
         setup = EnvSetup(runs=runs, random_seed=random_seed, sim_config=sim_config, uav=uav, executor=executor,
                          workers=workers, store=store)
-        super().__init__(seed_test, mutators, budget, setup=setup)
+        super().__init__(seed_test, mutators, budget, setup=setup, render_mode=render_mode)
 
     def _objective(self):
         return GenerationObjective(self.aggregate, self.distance_measure.value)

@@ -27,7 +27,7 @@ class ReplicateEnv(SurrealistEnv):
     def __init__(self, reference_log=None, seed_test=None, runs: int = 5, budget: int = 100, mutators=None,
                  averaging: str = "dba", executor=None, store=None, random_seed: int = 0, sim_config=None,
                  workers: int | None = None, uav=None, reference_trajectory=None, allow_partial: bool = False,
-                 uav_mutators=None):
+                 uav_mutators=None, render_mode: str | None = None):
         """``reference_trajectory`` (a Trajectory) replaces the log's, e.g. a simulated flight with hidden
         obstacles that plays the real one; the seed test then must be given. A damaged log (truncated, or with
         corrupt data skipped) is refused unless ``allow_partial``: its flight may be cut short.
@@ -73,10 +73,13 @@ class ReplicateEnv(SurrealistEnv):
             mutators += tuple(uav_mutators)
         setup = EnvSetup(runs=runs, random_seed=random_seed, sim_config=sim_config, uav=uav, executor=executor,
                          workers=workers, store=store)
-        super().__init__(seed_test, mutators, budget, setup=setup)
+        super().__init__(seed_test, mutators, budget, setup=setup, render_mode=render_mode)
 
     def _objective(self):
         return ReplicationObjective(self.reference, self.averaging)
+
+    def _reference(self):
+        return self.reference
 
 
 SEEDS = ("tall", "paper", "detours")  # the seeds a log without a seed test can start from (seed_test="paper" etc.)

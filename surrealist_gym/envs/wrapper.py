@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import gymnasium as gym
 
-FORWARDED_PROPERTIES = ("mutators", "seed_test", "budget", "budget_left", "evaluations", "simulations", "evaluator",
-                        "seed_evaluation", "best")
+FORWARDED_PROPERTIES = ("mutators", "seed_test", "seed_action", "budget", "budget_left", "evaluations", "simulations",
+                        "evaluator", "seed_evaluation", "best")
 FORWARDED_METHODS = ("values_for", "action_for", "action_bounds", "test_for", "evaluated")
 
 
