@@ -1,7 +1,8 @@
 """The agent interface: ask/tell, and the one ``run`` built on them.
 
 An agent proposes actions for a Surrealist env: an action is a vector with one value per mutator of the env
-(``env.unwrapped.mutators``), the mutation of the env's seed test. The env owns the budget, the memo and the
+(``env.unwrapped.mutators``), the mutation of the env's seed test; the seed itself is ``env.seed_action`` (0 in the
+paper's envs, the seed's place in the rules' box in the case study's). The env owns the budget, the memo and the
 fitness, so every agent is measured the same way; an agent binds to the env's outermost Surrealist layer
 (:func:`~surrealist_gym.envs.wrapper.search_layer`), so a wrapper that changes what is charged applies to it.
 Subclasses implement ``_setup``, ``_ask`` and ``_tell`` (a wrapping agent may also override ``ask``, ``_step``,
@@ -54,8 +55,8 @@ class Agent(ABC):
 
         self._env = search_layer(env)
         self.rng = np.random.default_rng(self.seed)
-        zero = np.zeros(len(self._env.mutators))
-        self._best = (zero, float(info["fitness"]), info) if start is None else start
+        seed = np.array(self._env.seed_action, dtype=np.float64)
+        self._best = (seed, float(info["fitness"]), info) if start is None else start
         self._evaluations = int(info.get("evaluations", 1))
         self._evaluations_to_best = self._evaluations
         self._history = [float(self._best[1])]

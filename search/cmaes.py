@@ -1,4 +1,4 @@
-"""CMA-ES (pycma) over the action vector within ``env.action_bounds()``, started at the seed test (action 0).
+"""CMA-ES (pycma) over the action vector within ``env.action_bounds()``, started at the seed test (``env.seed_action``).
 
 ``ask`` is pycma's ``ask`` (a population of candidate actions within the bounds), ``tell`` is pycma's ``tell``
 on the negated fitness (pycma minimises). An invalid test comes back from the env with its penalty fitness. When
@@ -55,7 +55,7 @@ class CMAES(Agent):
     def _setup(self, info: dict) -> None:
         self.restarts = 0
         self._low, self._high = self._env.action_bounds()
-        self._es = self._new_es(np.zeros(len(self._env.mutators)))
+        self._es = self._new_es(np.array(self._env.seed_action, dtype=np.float64))
 
     def _new_es(self, x0: np.ndarray):
         try:

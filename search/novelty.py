@@ -36,13 +36,14 @@ class SuiteSearchConfig:
         explore: share of asks answered with a uniform sample once parents exist.
         near_m: a test whose closest run came within this distance [m] (or collided) can be a parent; the
             competition's soft-failure distance by default.
-        sigma: mutation step, in action units (1 = half a mutator's range).
+        sigma: mutation step, in action units (1 = half a mutator's range; on the case study's rules box, 0.2 is a
+            tenth of the rule's width, the step the suite search has always taken there: 7 m in x, 3 m in y).
         rate: probability that a mutator is moved in a child.
     """
 
     explore: float = 0.4
     near_m: float = UNSAFE_DISTANCE_M
-    sigma: float = 0.1
+    sigma: float = 0.2
     rate: float = 0.35
 
     def __post_init__(self):
@@ -64,7 +65,7 @@ class SuiteSearch(Agent):
     def _setup(self, info: dict) -> None:
         self._low, self._high = self._env.action_bounds()
         self._parents: list[list] = []  # [action, closest distance, children]
-        self._consider(np.zeros(len(self._low)), info)
+        self._consider(np.array(self._env.seed_action, dtype=np.float64), info)
 
     def _ask(self) -> list[np.ndarray]:
         c = self.config

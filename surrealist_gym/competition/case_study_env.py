@@ -1,13 +1,16 @@
 """Surrealist-CaseStudy-v0: generate tests for a UAV Testing Competition case study, under the competition's rules.
 
-The seed is the case study's mission with ``obstacles`` boxes (:func:`~surrealist_gym.competition.rules.seed_layout`);
-the action is one value in [-1, 1] per box and field (x, y, l, w, h, r), mapped linearly onto the competition's bounds
-(:func:`~surrealist_gym.competition.rules.layout_mutators`), so any agent of ``search/`` can search it. A test that
-breaks the rules (an overlap), that puts a box within the 1.5 m safety distance of the take-off or landing point (every
-run would fail before flying: :func:`~surrealist_gym.competition.rules.endpoint_failure`) or that the feasibility check
-finds walled off is not flown: it costs no budget and ``info["invalid"]`` gives the reason. The reward is the paper's
-eq. 2 on the competition's distance; the UAV is the PX4 SITL profile (``px4-v1.12-sitl-iris``) unless ``uav`` names
-another. ``wind=True`` adds the wind mutators.
+The seed is the case study's mission with ``obstacles`` boxes (:func:`~surrealist_gym.competition.rules.seed_layout`).
+The action space is the rules' box: one value in [-1, 1] per box and field (x, y, l, w, h, r), -1 the rule's low
+bound, +1 its high bound, linearly between (:func:`~surrealist_gym.competition.rules.layout_mutators`), so every action
+(``action_space.sample()`` too) gives boxes within the rules' ranges and any agent of ``search/`` can search it; the
+seed is the action ``env.seed_action``. What the ranges cannot rule out is refused: boxes that overlap, a box within the
+1.5 m safety distance of the take-off or landing point (every run would fail before flying:
+:func:`~surrealist_gym.competition.rules.endpoint_failure`) and a layout the feasibility check finds walled off. Such
+a test is not flown: it costs no budget, the reward is the env's penalty and ``info["invalid"]`` gives the reason
+(``overlap``, ``degenerate: ...``, ``infeasible: ...``). The reward is the paper's eq. 2 on the competition's
+distance; the UAV is the PX4 SITL profile (``px4-v1.12-sitl-iris``) unless ``uav`` names another. ``wind=True`` adds
+the wind mutators. ``render_mode="rgb_array"`` draws the last flight's top view.
 
 Example::
 
@@ -15,11 +18,26 @@ Example::
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
+import numpy as np
+
 from ..envs.base import EnvSetup, SurrealistEnv
 from ..errors import InvalidTestCase
 from ..evaluation import GenerationObjective
+from ..mutators import Mutator, apply_action
 from ..outcomes import Measure
-from .rules import RULES, check_rules, endpoint_failure, layout_mutators, load_case_study, seed_layout
+from ..testcase import Obstacle, TestCase
+from .rules import (
+    LAYOUT_FIELDS,
+    RULES,
+    Rules,
+    check_rules,
+    endpoint_failure,
+    layout_mutators,
+    load_case_study,
+    seed_layout,
+)
 
 DEFAULT_UAV = "px4-v1.12-sitl-iris"
 
@@ -27,14 +45,14 @@ DEFAULT_UAV = "px4-v1.12-sitl-iris"
 class CaseStudyEnv(SurrealistEnv):
     """Generate failing tests for one case study of the competition."""
 
-    # uniform layouts of three boxes overlap or wall the mission off most of the time; those steps cost no
-    # simulation, so an episode may take many of them
+    # three uniform boxes still overlap or wall the mission off often; those steps cost no simulation, so an
+    # episode may take many of them
     steps_per_budget = 50
 
     def __init__(self, case_study="mission1", obstacles: int = 3, runs: int = 1, budget: int = 200,
                  aggregate: str = "riskiest", executor=None, store=None, random_seed: int = 0, sim_config=None,
                  workers: int | None = None, uav=None, wind: bool = False, feasibility: bool = True,
-                 rules=RULES):
+                 rules=RULES, render_mode: str | None = None):
         self.case_study = load_case_study(case_study)
         self.rules = rules
         self.feasibility = feasibility
@@ -49,14 +67,32 @@ class CaseStudyEnv(SurrealistEnv):
             uav = DEFAULT_UAV
         setup = EnvSetup(runs=runs, random_seed=random_seed, sim_config=sim_config, uav=uav, executor=executor,
                          workers=workers, store=store)
-        super().__init__(seed, mutators, budget, setup=setup)
+        super().__init__(seed, mutators, budget, setup=setup, render_mode=render_mode)
 
     def _objective(self):
         return GenerationObjective(self.aggregate, Measure.COMPETITION.value)
 
-    def test_for(self, action):
-        """The test an action stands for; InvalidTestCase when it breaks the rules or cannot be flown through."""
-        test = super().test_for(action)
+    def boxes_for(self, action) -> tuple[Obstacle, ...]:
+        """The boxes an action stands for, nothing else checked or flown: each field is the rule's low bound at -1 and
+        its high bound at +1 (the value the layout mutators give, rounded to 1e-9, and put on a bound it is within 1e-9
+        of), so they are always within the rules' ranges; they may overlap."""
+        action = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
+        boxes = list(self.seed_test.obstacles)
+        for mutator, a in zip(self.mutators, action):
+            if isinstance(mutator, Mutator):
+                centre, half_range = (mutator.high + mutator.low) / 2, (mutator.high - mutator.low) / 2
+                value = float(np.round(centre + a * half_range, 9))  # as mutators.apply_action decodes it
+                boxes[mutator.obstacle] = mutator.mutate(boxes[mutator.obstacle], value)
+        return tuple(_on_bounds(box, self.rules) for box in boxes)
+
+    def test_for(self, action) -> TestCase:
+        """The test an action stands for; InvalidTestCase when its boxes overlap, when a box is within the safety
+        distance of the take-off or landing point, or when the mission cannot be flown through."""
+        action = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
+        test = self.seed_test.with_obstacles(self.boxes_for(action))  # overlapping boxes are refused here
+        others = [i for i, m in enumerate(self.mutators) if not isinstance(m, Mutator)]  # the wind's
+        if others:
+            test = apply_action(test, [self.mutators[i] for i in others], action[others])
         check_rules(test, self.rules)
         degenerate = endpoint_failure(test)
         if degenerate is not None:
@@ -68,3 +104,17 @@ class CaseStudyEnv(SurrealistEnv):
             if reason is not None:
                 raise InvalidTestCase(f"infeasible: {reason}")
         return test
+
+
+def _on_bounds(box: Obstacle, rules: Rules) -> Obstacle:
+    """``box`` with each field within 1e-9 of a rule's bound put on it (the mutators refuse anything past a bound by
+    more, so this only removes the rounding of the action's decoding: -1 and +1 give the bounds exactly)."""
+    changes = {}
+    for name in LAYOUT_FIELDS:
+        low, high = rules.bounds(name)
+        value = getattr(box, name)
+        if abs(value - low) < 1e-9 or abs(value - high) < 1e-9:
+            bound = low if abs(value - low) < 1e-9 else high
+            if value != bound:
+                changes[name] = bound
+    return replace(box, **changes) if changes else box

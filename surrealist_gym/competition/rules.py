@@ -146,8 +146,8 @@ def load_case_study(name) -> TestCase:
 
 
 def seed_layout(count: int = 3, rules: Rules = RULES) -> tuple[Obstacle, ...]:
-    """``count`` mid-sized boxes spread along the x bounds at mid y, side by side: a valid start (action 0) from
-    which the env's mutators reach every layout within the rules (:func:`layout_mutators`)."""
+    """``count`` mid-sized boxes spread along the x bounds at mid y, side by side: a valid start (the env's
+    ``seed_action``) from which the env's mutators reach every layout within the rules (:func:`layout_mutators`)."""
     if not 1 <= count <= rules.max_obstacles:
         raise InvalidTestCase(f"obstacles: {count}, the competition allows 1 to {rules.max_obstacles}")
     (x0, x1), y = rules.x, sum(rules.y) / 2
@@ -158,18 +158,22 @@ def seed_layout(count: int = 3, rules: Rules = RULES) -> tuple[Obstacle, ...]:
 
 
 def layout_mutators(seed: TestCase, rules: Rules = RULES):
-    """One mutator per box and field that moves it by up to the whole width of the rule's bounds either way, within
-    those bounds (``lowest``/``highest``): ``env.action_bounds()`` is exactly the rules, action 0 the seed."""
+    """One mutator per box and field whose range is exactly the rule's bounds: an action of -1 puts the field at the
+    rule's low bound, +1 at its high bound, linearly between (the mutators stay additive, relative to the seed, so
+    their values are ``bound - seed``). So every action in [-1, 1] gives boxes within the rules, ``env.action_bounds()``
+    is the whole box and the seed is the action ``env.seed_action`` (not 0); overlaps and feasibility are the env's
+    to refuse."""
     from ..mutators import Mutator, MutatorKind
 
     kinds = {"x": MutatorKind.MOVE_X, "y": MutatorKind.MOVE_Y, "r": MutatorKind.ROTATE,
              "l": MutatorKind.RESIZE_L, "w": MutatorKind.RESIZE_W, "h": MutatorKind.RESIZE_H}
     out = []
-    for i in range(len(seed.obstacles)):
+    for i, box in enumerate(seed.obstacles):
         for name in LAYOUT_FIELDS:
             low, high = rules.bounds(name)
+            now = getattr(box, name)
             rotation = name == "r"
             out.append(Mutator(i, kinds[name], default_step=15.0 if rotation else 4.0,
-                               min_step=0.5 if rotation else 0.1, low=low - high, high=high - low,
+                               min_step=0.5 if rotation else 0.1, low=low - now, high=high - now,
                                lowest=low, highest=high))
     return tuple(out)

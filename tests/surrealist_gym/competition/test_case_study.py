@@ -118,9 +118,8 @@ def test_invalid_and_infeasible_tests_are_not_flown():
     env = gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission1.yaml", budget=5,
                    executor="inline").unwrapped
     env.reset()
-    low, high = env.action_bounds()
-    on_top = np.zeros(18)
-    on_top[0] = env.action_for([28.0] + [0.0] * 17)[0]  # box 0 moved onto box 1
+    assert (env.test_for(env.seed_action).obstacles == env.seed_test.obstacles)  # the seed's action: not 0
+    on_top = env.action_for([28.0] + [0.0] * 17)  # box 0 moved onto box 1, the others where the seed has them
     _, reward, _, _, info = env.step(on_top)
     assert "overlap" in info["invalid"] and info["evaluations"] == 1
     # three large boxes turned 45 degrees, corner to corner across the track, wall the mission off
