@@ -1,11 +1,14 @@
-"""Reinforcement-learning agents on stable-baselines3: train a policy across procedurally generated problems, then
-roll it out as a search agent.
+"""Reinforcement-learning agents on stable-baselines3: train a policy across procedurally generated problems, or on
+a competition case study, then roll it out as a search agent.
 
-Training (:func:`train_policy`) uses :class:`ProceduralEnv`, a Gymnasium env that draws a new problem at every
-reset. A replication problem is the seed test (by default the paper's case0 seed 1) plus a HIDDEN obstacle layout:
-the seed mutated by a random action, so the answer is reachable; our simulator flies the hidden layout once and that
-flight plays the "real" one (``ReplicateEnv(reference_trajectory=...)``). A generation problem is the RQ2 seed with
-its first obstacle moved at random. Episodes are short searches (``budget`` evaluations of ``runs`` simulations).
+Training (:func:`train_policy`) on the paper's problems uses :class:`ProceduralEnv`, a Gymnasium env that draws a new
+problem at every reset. A replication problem is the seed test (by default the paper's case0 seed 1) plus a HIDDEN
+obstacle layout: the seed mutated by a random action, so the answer is reachable; our simulator flies the hidden layout
+once and that flight plays the "real" one (``ReplicateEnv(reference_trajectory=...)``). A generation problem is the RQ2
+seed with its first obstacle moved at random. A case-study problem is ``Surrealist-CaseStudy-v0`` itself: the action
+box is the rules' box, so every action is a layout within the rules (overlapping or walled-off ones are refused with a
+penalty). Episodes are short searches (``budget`` evaluations of ``runs`` simulations); ``envs`` > 1 steps that many
+envs in SB3's ``SubprocVecEnv``, whose workers fly their runs inline.
 
 Search (:class:`PPOAgent`): the trained policy acts deterministically on the env; an action the env answers from
 its memo (already evaluated) or rejects as invalid is followed by one sampled from the policy, so the rollout keeps
@@ -38,6 +41,7 @@ class Problem(str, Enum):
 
     REPLICATE = "replicate"
     GENERATE = "generate"
+    CASE_STUDY = "case-study"
 
 
 class Algorithm(str, Enum):
@@ -60,12 +64,15 @@ class ProblemConfig:
     """How training problems are drawn.
 
     Attributes:
-        problem: replicate (hidden obstacle layouts) or generate (random seed placements).
+        problem: replicate (hidden obstacle layouts), generate (random seed placements) or case-study (the
+            competition's case study ``case_study``, searched within its rules).
         budget: evaluations per episode (one problem).
         runs: simulations per evaluation.
         spread: hidden layouts are the seed mutated by an action uniform in ``[-spread, spread]`` per mutator
             (1 = each mutator's full range); a generation seed's obstacle moves by up to ``spread`` x 8 [m].
         seed_test: the seed test case (path or TestCase); None = case0 seed 1 (replicate) or the RQ2 seed.
+        case_study: the case study's name (``mission2``) or YAML; case-study problems only (and needed there).
+        obstacles: boxes of a case-study test (1 to 3).
     """
 
     problem: Problem = Problem.REPLICATE
@@ -73,9 +80,13 @@ class ProblemConfig:
     runs: int = 1
     spread: float = 0.3
     seed_test: object = None
+    case_study: object = None
+    obstacles: int = 3
 
     def __post_init__(self):
         object.__setattr__(self, "problem", Problem(self.problem))
+        if (self.problem is Problem.CASE_STUDY) != (self.case_study is not None):
+            raise ValueError("ProblemConfig: a case study is named for, and only for, the case-study problem")
         if self.budget < 2 or self.runs < 1 or not 0 < self.spread <= 1:
             raise ValueError(f"ProblemConfig: expected budget >= 2, runs >= 1, 0 < spread <= 1; got {self.budget}, "
                              f"{self.runs}, {self.spread}")
@@ -167,49 +178,133 @@ class ProceduralEnv(gym.Env):
             self.inner = None
 
 
+def training_env(config: ProblemConfig, sim_config=None, seed: int = 0, executor="inline") -> gym.Env:
+    """The env a policy trains on: :class:`ProceduralEnv` for the paper's problems, ``Surrealist-CaseStudy-v0`` (made
+    through Gymnasium's registry, whose noise seed is ``seed``) for a case study. Picklable by reference, so
+    ``functools.partial(training_env, ...)`` is what SB3's ``SubprocVecEnv`` starts in each worker."""
+    if config.problem is Problem.CASE_STUDY:
+        return gym.make("surrealist_gym:Surrealist-CaseStudy-v0", case_study=config.case_study,
+                        obstacles=config.obstacles, budget=config.budget, runs=config.runs, random_seed=seed,
+                        sim_config=sim_config, executor=executor)
+    return ProceduralEnv(config, sim_config=sim_config, executor=executor)
+
+
+class TrainingRecord:
+    """What a training run met, step by step (every env of a vector env): episodes, evaluations flown, actions
+    refused (``info["invalid"]``) or answered from the memo, and the soft failures among the runs flown (a collision,
+    or a competition distance below 1.5 m; case-study problems, whose distance is the competition's)."""
+
+    def __init__(self):
+        self.steps = self.episodes = self.flown = self.refused = self.memo = 0
+        self.simulations = self.soft_failures = 0
+
+    def add(self, info: dict, done: bool) -> None:
+        """Count one env step from its info (and whether its episode ended)."""
+        from surrealist_gym.outcomes import run_points
+
+        self.steps += 1
+        self.episodes += bool(done)
+        if info.get("invalid") is not None:
+            self.refused += 1
+        elif info.get("memo"):
+            self.memo += 1
+        else:
+            self.flown += 1
+            statuses, distances = info.get("statuses", ()), info.get("competition_distances", ())
+            self.simulations += len(statuses)
+            self.soft_failures += sum(run_points(s, d) > 0 for s, d in zip(statuses, distances))
+
+    def to_json(self) -> dict:
+        """The counts, and the soft failures per simulation (None before any flight)."""
+        out = dict(vars(self))
+        out["soft_failures_per_simulation"] = self.soft_failures / self.simulations if self.simulations else None
+        return out
+
+
 def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, algorithm: Algorithm | str = "ppo",
                  budget: int = 15, runs: int = 1, spread: float = 0.3, seed: int = 0, seed_test=None,
-                 sim_config=None, progress: Callable[[int], None] | None = None, **hyper) -> Path:
-    """Train a policy for ``steps`` env steps across procedurally drawn problems and save it (SB3 ``save``).
+                 sim_config=None, progress: Callable[[int], None] | None = None, case_study=None,
+                 obstacles: int = 3, envs: int = 1, init=None, **hyper) -> Path:
+    """Train a policy for ``steps`` env steps and save it (SB3 ``save``), with ``train.json`` beside it.
 
     Args:
-        steps: environment steps (each is one evaluation of ``runs`` simulations, ~0.3 s per simulation).
-        out: where to write the policy (``.zip``).
-        problem: replicate or generate.
+        steps: environment steps (each is one evaluation of ``runs`` simulations, ~0.3 s per simulation, or a
+            refused action, which flies nothing).
+        out: where to write the policy (``.zip``); its settings and :class:`TrainingRecord` go to the same name
+            with ``.json`` (``policy.zip`` -> ``policy.json``).
+        problem: replicate, generate or case-study.
         algorithm: ppo or sac.
-        budget, runs, spread, seed_test: the :class:`ProblemConfig` of the training problems.
-        seed: seeds the problems, the policy's initialisation and its sampling.
+        budget, runs, spread, seed_test, case_study, obstacles: the :class:`ProblemConfig` of the training problems.
+        seed: seeds the problems, the policy's initialisation and its sampling; env i of ``envs`` gets ``seed + i``.
         progress: called with the number of steps done, after each step.
+        envs: envs stepped together; more than 1 runs them in SB3's ``SubprocVecEnv`` (one process each).
+        init: a policy file of :func:`train_policy` whose weights the new policy starts from (its optimiser starts
+            afresh): training in parts, each saved, resumes after the last part saved.
         **hyper: keyword arguments of the SB3 algorithm; PPO defaults suit short runs
-            (``n_steps=64, batch_size=32, n_epochs=5``).
+            (``n_steps=64, batch_size=32, n_epochs=5``; fewer steps per rollout when ``steps`` is smaller).
 
     Returns:
         The path of the saved policy.
     """
+    import functools
+    import json
+    import time
+
     cls = _sb3(algorithm)
     from stable_baselines3.common.callbacks import BaseCallback
 
-    config = ProblemConfig(problem, budget, runs, spread, seed_test)
-    env = ProceduralEnv(config, sim_config=sim_config)
-    env.reset(seed=seed)
+    config = ProblemConfig(problem, budget, runs, spread, seed_test, case_study, obstacles)
+    if envs > 1:
+        from stable_baselines3.common.vec_env import SubprocVecEnv
+
+        env = SubprocVecEnv([functools.partial(training_env, config, sim_config, seed + i, None) for i in range(envs)])
+        env.seed(seed)
+    else:
+        env = training_env(config, sim_config, seed)
+        env.reset(seed=seed)
     if Algorithm(algorithm) is Algorithm.PPO:
-        hyper = {"n_steps": 64, "batch_size": 32, "n_epochs": 5, "gamma": 0.95, **hyper}
+        rollout = max(2, min(64, -(-int(steps) // envs)))  # a tiny run trains on what it collects
+        hyper = {"n_steps": rollout, "batch_size": min(32, rollout * envs), "n_epochs": 5, "gamma": 0.95, **hyper}
     else:
         hyper = {"learning_starts": min(100, steps // 4), "buffer_size": 50_000, **hyper}
     model = cls("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **hyper)
+    if init is not None:
+        try:
+            model.policy.load_state_dict(load_policy(init, algorithm).state_dict())
+        except RuntimeError as err:
+            raise SurrealistError(f"{init}: its weights do not fit this problem's policy "
+                                  f"({str(err).splitlines()[0]})") from None
+    record = TrainingRecord()
 
     class _Progress(BaseCallback):
         def _on_step(self) -> bool:
+            for info, done in zip(self.locals.get("infos", ()), self.locals.get("dones", ())):
+                record.add(info, bool(done))
             if progress is not None:
                 progress(self.num_timesteps)
             return True
 
-    model.learn(total_timesteps=int(steps), callback=_Progress())
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    model.save(out)
-    env.close()
-    return out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
+    start = time.perf_counter()
+    try:
+        model.learn(total_timesteps=int(steps), callback=_Progress())
+        out = Path(out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        model.save(out)
+    finally:
+        env.close()
+    path = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
+    settings = {"problem": config.problem.value, "algorithm": Algorithm(algorithm).value, "steps": int(steps),
+                "budget": budget, "runs": runs, "seed": seed, "envs": envs,
+                "init": None if init is None else str(init),
+                "hyper": {k: v for k, v in hyper.items() if isinstance(v, (int, float, str, bool))}}
+    if config.problem is Problem.CASE_STUDY:
+        settings.update(case_study=str(case_study), obstacles=obstacles)
+    else:
+        settings.update(spread=spread, seed_test=None if seed_test is None else str(seed_test))
+    summary = {**settings, "policy": path.name, "wall_seconds": round(time.perf_counter() - start, 1),
+               "record": record.to_json()}
+    path.with_suffix(".json").write_text(json.dumps(summary, indent=2) + "\n")
+    return path
 
 
 def load_policy(path, algorithm: Algorithm | str = "ppo"):

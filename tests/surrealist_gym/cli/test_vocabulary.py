@@ -181,6 +181,16 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
     (["surrogate", "train", "{store}", "--kind", "knn", "--members", "3"], "--members: applies only to --kind"),
     (["surrogate", "train", "{store}", "--problem", "generate", "--log", "x.ulg"],
      "--log: applies only to --problem replicate"),
+    (["train", "--problem", "generate", "--case-study", "mission2"],
+     "--case-study: applies only to --problem case-study"),
+    (["train", "--obstacles", "2"], "--obstacles: applies only to --problem case-study"),
+    (["train", "--problem", "case-study", "--case-study", "mission2", "--spread", "0.5"],
+     "--spread: not with --problem case-study"),
+    (["train", "--problem", "case-study", "--case-study", "mission2", "--seed", RQ2],
+     "--seed: not with --problem case-study"),
+    (["train", "--problem", "case-study"], "--problem case-study: name the case study with --case-study"),
+    (["train", "--problem", "case-study", "--case-study", "mission2", "--obstacles", "4"],
+     "--obstacles: the competition allows 1 to 3 boxes, got 4"),
 ], ids=lambda v: " ".join(map(str, v)) if isinstance(v, list) else None)
 def test_an_option_that_does_not_apply_is_refused_in_one_line(tmp_path, capsys, argv, message):
     store = tmp_path / "s.sqlite"
@@ -226,6 +236,35 @@ def test_train_with_sac_runs_a_few_steps_and_its_policy_searches(tmp_path, capsy
     assert out.is_file() and "trained sac for 4 steps on generate problems" in printed
     assert f"sac:{out}" in printed
     make_agent(f"sac:{out}", seed=0)  # a SAC policy, loadable as an agent
+
+
+def test_train_on_a_case_study_runs_a_few_steps_and_writes_its_results_folder(tmp_path, capsys, monkeypatch):
+    """``train --problem case-study``: PPO on Surrealist-CaseStudy-v0 for 8 steps; the folder holds the policy and
+    its record (policy.json), and the policy searches the case study as an agent."""
+    pytest.importorskip("stable_baselines3")
+    import gymnasium as gym
+
+    from search.registry import make_agent
+
+    monkeypatch.chdir(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["train", "--problem", "case-study", "--case-study", str(CASE_STUDIES / "mission2.yaml"),
+                     "--obstacles", "1", "--steps", "8", "--episode-budget", "3"]) == 0
+    printed = capsys.readouterr().out
+    folders = list((tmp_path / "results").iterdir())
+    assert len(folders) == 1 and re.fullmatch(r"train-\d{8}-\d{6}", folders[0].name)  # as the other problems
+    policy, record = folders[0] / "policy.zip", json.loads((folders[0] / "policy.json").read_text())
+    assert policy.is_file() and "trained ppo for 8 steps on case study mission2" in printed
+    assert record["problem"] == "case-study" and record["obstacles"] == 1 and record["record"]["steps"] == 8
+    assert record["record"]["flown"] + record["record"]["refused"] + record["record"]["memo"] == 8
+    env = gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission2.yaml", obstacles=1, budget=2,
+                   executor="inline")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = make_agent(f"ppo:{policy}", seed=0).run(env)
+    assert result.evaluations == 2 and result.best_action.shape == (6,)
+    env.close()
 
 
 # --- compare --case-study ---------------------------------------------------------------------------------------------
