@@ -1,0 +1,247 @@
+"""Reinforcement learning on a competition case study: how much of the action space is a legal test, and whether a
+PPO policy trained on ``Surrealist-CaseStudy-v0`` finds more soft failures per simulation than random search.
+
+Part 1 (always, no flight): ``--samples`` actions drawn by ``action_space.sample()`` (seeded) are decoded into boxes;
+it prints the share within the rules' ranges (x, y, l, w, h, r; must be 1.0: the action box is the rules' box), the
+share also valid (no overlap, clear of the take-off and landing points, feasible: what the env flies) with the reasons
+of the refusals, and, as a baseline in the same run, the share the former encoding put within the rules (each field
+moved from the seed layout by up to the rule's width either way, ``seed + a x width``).
+
+Part 2 (the study, unless ``--sample-only``): PPO trained for ``--steps`` env steps on the case study
+(``search.rl.train_policy``, noise seed 0, episodes of ``--episode-budget`` evaluations), then every agent of
+``--agents`` (``ppo`` is the trained policy, rolled out by ``search.PPOAgent``; any other name goes to
+``search.make_agent``) searches the case study with ``--budget`` single-run evaluations on each held-out noise seed
+(``--first-seed``, ... ; training never flew with them), the agent seeded with the same number. Per search: the soft
+failures among the runs flown (a collision, or a competition distance below 1.5 m; the seed's flight, the same for
+every agent, not counted), per simulation, and the distinct failures a ``RecordSuite`` keeps (the seed's, when it
+fails, not counted either). The table gives each agent's mean and standard deviation, and the paper's test
+(Shapiro-Wilk, then ANOVA or Mann-Whitney U; ``search.statistics.compare``) with the Vargha-Delaney A12 of ``ppo``
+against each other agent on soft failures per simulation.
+
+Everything is kept in ``--out``: the policy, trained in parts of ``--part`` steps (``ppo-STEPS-partKofN.zip``, each
+with its record ``.json``; ``ppo-STEPS.zip`` when one part), each search's evaluations (``searches/AGENT-seedN.sqlite``)
+and figures (``.json``), and ``summary.md``/``summary.json``. A rerun with the same ``--out`` reads back the parts
+trained with the same settings and trains on from the last (its weights; the optimiser starts afresh), reads finished
+searches back and resumes an interrupted one from its store (answered without simulating).
+
+Usage::
+
+    python benchmarks/bench_rl.py --sample-only                     # part 1 only (~5 s)
+    python benchmarks/bench_rl.py                                   # short study: 256 steps, 3 seeds, budget 20
+    python benchmarks/bench_rl.py --steps 50000 --seeds 5 --budget 100 --envs 2 --out results/bench-rl-50k
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+CASE_STUDIES = ROOT.parent / "shared" / "data" / "competition" / "case_studies"
+
+
+def case_study(name: str) -> str:
+    """A case study's YAML: the shared data's when it holds it, else the name (looked up by the rules)."""
+    path = CASE_STUDIES / f"{name}.yaml"
+    return str(path) if path.is_file() else name
+
+
+def action_space_figures(mission: str, samples: int, seed: int = 0) -> dict:
+    """Part 1: shares of sampled actions within the rules, and valid; the former encoding's share within the rules."""
+    import gymnasium as gym
+
+    import surrealist_gym  # noqa: F401  (registers the envs)
+    from surrealist_gym.competition.rules import LAYOUT_FIELDS, RULES
+    from surrealist_gym.errors import InvalidTestCase
+
+    env = gym.make("Surrealist-CaseStudy-v0", case_study=case_study(mission), executor="inline").unwrapped
+    env.action_space.seed(seed)
+    actions = [env.action_space.sample() for _ in range(samples)]
+
+    def within(values) -> bool:
+        return all(RULES.bounds(f)[0] <= v <= RULES.bounds(f)[1] for f, v in zip(LAYOUT_FIELDS, values))
+
+    start = time.perf_counter()
+    inside = sum(all(within([getattr(b, f) for f in LAYOUT_FIELDS]) for b in env.boxes_for(a)) for a in actions)
+    valid, refused = 0, {}
+    for a in actions:
+        try:
+            env.test_for(a)
+            valid += 1
+        except InvalidTestCase as err:
+            kind = "overlap" if "overlap" in str(err) else str(err).split(":")[0]
+            refused[kind] = refused.get(kind, 0) + 1
+    seconds = time.perf_counter() - start
+    widths = np.array([RULES.bounds(f)[1] - RULES.bounds(f)[0] for f in LAYOUT_FIELDS])
+    seeds = [np.array([getattr(b, f) for f in LAYOUT_FIELDS]) for b in env.seed_test.obstacles]
+    former = sum(all(within(s + a[6 * i:6 * i + 6] * widths) for i, s in enumerate(seeds)) for a in actions)
+    env.close()
+    return {"mission": mission, "samples": samples, "within_rules": inside / samples, "valid": valid / samples,
+            "refused": refused, "former_within_rules": former / samples, "decode_ms": 1e3 * seconds / samples}
+
+
+def train(args, out: Path) -> Path:
+    """The PPO policy of the study, trained in parts of ``--part`` steps, each saved (``ppo-STEPS-partKofN.zip`` and
+    its ``.json``) and started from the weights of the one before (``train_policy(init=...)``): a rerun reads back
+    the parts trained with the same settings and goes on after the last. Part k flies with noise seed k - 1, which
+    stays below the held-out seeds."""
+    from search.rl import train_policy
+
+    parts = -(-args.steps // args.part)
+    if parts > args.first_seed:
+        raise SystemExit(f"--steps {args.steps} in parts of {args.part}: part seeds would reach the held-out seeds "
+                         f"from --first-seed {args.first_seed}; raise --part or --first-seed")
+    previous, total = None, 0.0
+    for k in range(parts):
+        steps = min(args.part, args.steps - k * args.part)
+        policy = out / (f"ppo-{args.steps}.zip" if parts == 1 else f"ppo-{args.steps}-part{k + 1}of{parts}.zip")
+        settings = {"case_study": case_study(args.mission), "steps": steps, "budget": args.episode_budget,
+                    "envs": args.envs, "seed": k, "init": None if previous is None else str(previous)}
+        record = policy.with_suffix(".json")
+        if policy.is_file() and record.is_file():
+            saved = json.loads(record.read_text())
+            if {key: saved.get(key) for key in settings} == settings:
+                previous, total = policy, total + saved["wall_seconds"]
+                print(f"policy part {k + 1}/{parts}: {policy} (read back)")
+                continue
+        train_policy(steps, policy, problem="case-study", case_study=settings["case_study"],
+                     budget=args.episode_budget, envs=args.envs, seed=k, init=previous,
+                     progress=lambda n, k=k: print(f"\rtraining part {k + 1}/{parts}: {n}/{steps} steps", end="",
+                                                   file=sys.stderr))
+        print(file=sys.stderr)
+        saved = json.loads(record.read_text())
+        previous, total = policy, total + saved["wall_seconds"]
+        print(f"policy part {k + 1}/{parts}: {policy} ({saved['wall_seconds']:.0f} s; "
+              f"{saved['record']['soft_failures']} soft failures in {saved['record']['simulations']} simulations)")
+    print(f"policy: {previous} (trained for {args.steps} steps in {total:.0f} s)")
+    return previous
+
+
+def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
+    """One search on a held-out noise seed, cached in ``out/searches/AGENT-seedN.json`` (its store beside it)."""
+    from search.registry import make_agent
+    from surrealist_gym.competition.case_study_env import CaseStudyEnv
+    from surrealist_gym.competition.suite_env import RecordSuite
+    from surrealist_gym.outcomes import run_points
+
+    stem = out / "searches" / f"{agent}-seed{seed}"
+    cached = stem.with_suffix(".json")
+    if cached.is_file():
+        return json.loads(cached.read_text())
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    env = RecordSuite(CaseStudyEnv(case_study(args.mission), budget=args.budget, runs=1, random_seed=seed,
+                                   executor="inline", store=stem.with_suffix(".sqlite")))
+    counts = {"steps": 0, "refused": 0, "memo": 0, "simulations": 0, "soft_failures": 0}
+
+    def step(info: dict) -> None:
+        counts["steps"] += 1
+        if info.get("invalid") is not None:
+            counts["refused"] += 1
+        elif info.get("memo"):
+            counts["memo"] += 1
+        else:
+            statuses, distances = info.get("statuses", ()), info.get("competition_distances", ())
+            counts["simulations"] += len(statuses)
+            counts["soft_failures"] += sum(run_points(s, d) > 0 for s, d in zip(statuses, distances))
+
+    start = time.perf_counter()
+    name = f"ppo:{policy}" if agent == "ppo" else agent
+    try:
+        result = make_agent(name, seed=seed).run(env, seed=seed, callback=step)
+    finally:
+        env.close()
+    record = {"agent": agent, "seed": seed, **counts, "evaluations": result.evaluations,
+              "per_simulation": counts["soft_failures"] / counts["simulations"] if counts["simulations"] else 0.0,
+              "distinct_failures": sum(m.evaluation > 1 for m in env.suite.members),  # not the seed's own
+              "best_fitness": result.best_fitness,
+              "wall_s": round(time.perf_counter() - start + env.unwrapped.evaluator.replayed_seconds, 1)}
+    cached.write_text(json.dumps(record, indent=1) + "\n")
+    return record
+
+
+def summarise(records: list[dict], agents: list[str]) -> str:
+    """The study's table (markdown): per agent mean ± sd, and ppo against each other agent."""
+    from search.statistics import compare, vargha_delaney_a12
+
+    lines = ["| agent | searches | simulations | soft failures | soft failures per simulation | distinct failures | "
+             "refused steps | p-value, ppo vs agent | A12 (ppo more) |", "|---|---|---|---|---|---|---|---|---|"]
+    ours = [r["per_simulation"] for r in records if r["agent"] == "ppo"]
+    for agent in agents:
+        rows = [r for r in records if r["agent"] == agent]
+        if not rows:
+            continue
+        per = [r["per_simulation"] for r in rows]
+
+        def mean_sd(key: str, digits: int = 1) -> str:
+            values = [r[key] for r in rows]
+            return f"{np.mean(values):.{digits}f} ± {np.std(values, ddof=1) if len(values) > 1 else 0:.{digits}f}"
+
+        test = a12 = "-"
+        if agent != "ppo" and len(ours) >= 3 and len(per) >= 3:
+            p, name = compare(ours, per)
+            test, a12 = f"{p:.3g} ({name})", f"{vargha_delaney_a12(ours, per):.2f}"
+        elif agent != "ppo" and ours:
+            test = "needs 3 seeds"
+        lines.append(f"| {agent} | {len(rows)} | {mean_sd('simulations')} | {mean_sd('soft_failures')} | "
+                     f"{np.mean(per):.3f} ± {np.std(per, ddof=1) if len(per) > 1 else 0:.3f} | "
+                     f"{mean_sd('distinct_failures')} | {mean_sd('refused')} | {test} | {a12} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--mission", default="mission2", help="case study (default mission2)")
+    parser.add_argument("--samples", type=int, default=2000, help="actions sampled in part 1 (default 2000)")
+    parser.add_argument("--sample-only", action="store_true", help="part 1 only: no training, no flight")
+    parser.add_argument("--steps", type=int, default=256, help="PPO training steps (default 256; the study: 50000)")
+    parser.add_argument("--episode-budget", type=int, default=15, help="evaluations per training episode (15)")
+    parser.add_argument("--envs", type=int, default=1, help="training envs in SubprocVecEnv (default 1)")
+    parser.add_argument("--part", type=int, default=5000, help="training steps per saved part (default 5000)")
+    parser.add_argument("--agents", default="ppo,random", help="agents compared (default ppo,random)")
+    parser.add_argument("--seeds", type=int, default=3, help="held-out noise seeds (default 3; the study: 5)")
+    parser.add_argument("--first-seed", type=int, default=100, help="the first held-out seed (default 100)")
+    parser.add_argument("--budget", type=int, default=20, help="evaluations per search (default 20; the study: 100)")
+    parser.add_argument("--out", type=Path, default=Path("results/bench-rl"), help="results folder (resumable)")
+    args = parser.parse_args(argv)
+    warnings.simplefilter("ignore")
+
+    figures = action_space_figures(args.mission, args.samples)
+    print(f"{args.mission}: {args.samples} sampled actions, decoded without flying ({figures['decode_ms']:.2f} ms "
+          f"each)")
+    print(f"  within the rules' ranges:              {figures['within_rules']:.4f}")
+    print(f"  also valid (no overlap, feasible):     {figures['valid']:.4f}   refused: {figures['refused']}")
+    print(f"  former encoding, within the rules:     {figures['former_within_rules']:.4f}")
+    if args.sample_only:
+        return 0 if figures["within_rules"] == 1.0 else 1
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    policy = train(args, args.out)
+    agents = [a.strip() for a in args.agents.split(",") if a.strip()]
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    records = []
+    for seed in seeds:
+        for agent in agents:
+            record = one_search(agent, seed, policy, args, args.out)
+            records.append(record)
+            print(f"  {agent} seed {seed}: {record['soft_failures']} soft failures in {record['simulations']} "
+                  f"simulations, {record['distinct_failures']} distinct ({record['wall_s']:.0f} s)")
+    table = summarise(records, agents)
+    head = (f"{args.mission}: PPO trained for {args.steps} steps against {', '.join(a for a in agents if a != 'ppo')}"
+            f"; {args.seeds} held-out seeds from {args.first_seed}, budget {args.budget} single-run evaluations")
+    print(head)
+    print(table)
+    (args.out / "summary.md").write_text(f"{head}\n\n{table}\n")
+    (args.out / "summary.json").write_text(json.dumps({"action_space": figures, "searches": records,
+                                                       "settings": {k: str(v) for k, v in vars(args).items()}},
+                                                      indent=1) + "\n")
+    return 0 if figures["within_rules"] == 1.0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
