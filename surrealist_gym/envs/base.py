@@ -51,7 +51,8 @@ class EnvSetup:
         sim_config: a :class:`~surrealist_gym.sim.config.SimConfig` (or a mapping of its fields, e.g.
             ``{"common_noise": True}``); the UAV below is applied to it.
         uav: the UAV profile (preset name, YAML path or profile); None: the seed test's
-            (:func:`~surrealist_gym.sim.profiles.resolve_uav`) unless ``sim_config`` is given.
+            (:func:`~surrealist_gym.sim.profiles.resolve_uav`), with a mapping ``sim_config`` applied to it, unless
+            ``sim_config`` is a full :class:`~surrealist_gym.sim.config.SimConfig`, which is then the UAV as given.
         executor: where the runs fly (:mod:`surrealist_gym.executors`); None: a pool of ``workers`` local
             processes (all cores when ``workers`` is None too), except in a daemonic process (a worker of
             Gymnasium's async vector env or SB3's ``SubprocVecEnv``), which may not start processes of its own: there
@@ -121,7 +122,7 @@ class SurrealistEnv(gym.Env):
         from ..sim.profiles import resolve_uav, test_uav_settings, with_uav_settings
 
         self.uav_profile = None  # the UavProfile flown, None for a bare SimConfig
-        if uav is not None or sim_config is None:  # the UAV chosen (applied to sim_config), else the seed's default
+        if uav is not None or not isinstance(sim_config, SimConfig):  # the UAV chosen, else the seed's default
             self.uav_profile = resolve_uav(uav, test=seed_test)
             sim_config = self.uav_profile.sim_config(SimConfig.coerce(sim_config))
 

@@ -168,14 +168,17 @@ def test_a_partial_evaluation_is_scored_from_the_runs_a_store_keeps(tmp_path):
 
 def test_envs_take_a_uav_profile():
     from surrealist_gym.envs.generate import GenerateEnv
-    from surrealist_gym.sim.config import AvoidanceModel
+    from surrealist_gym.sim.config import AvoidanceModel, SimConfig
 
     env = GenerateEnv(runs=1, budget=2, uav="px4-v1.12-sitl-iris", sim_config={"common_noise": True})
     cfg = env.evaluator.sim_config
     assert cfg.profile == "px4-v1.12-sitl-iris" and cfg.avoidance_model == AvoidanceModel.PX4 and cfg.common_noise
     # without one: the paper's seed names a real flight (the PX4 Vision), a competition test flies the SITL Iris
     assert GenerateEnv(runs=1, budget=2).evaluator.sim_config.profile == "px4-vision-case0"
-    assert GenerateEnv(runs=1, budget=2, sim_config={}).evaluator.sim_config.profile is None
+    # a mapping changes fields of that UAV; a full SimConfig is the UAV as given
+    crn = GenerateEnv(runs=1, budget=2, sim_config={"common_noise": True}).evaluator.sim_config
+    assert crn.profile == "px4-vision-case0" and crn.common_noise
+    assert GenerateEnv(runs=1, budget=2, sim_config=SimConfig()).evaluator.sim_config.profile is None
 
 
 def test_a_competition_seed_flies_the_sitl_iris_by_default(shared_data):

@@ -10,6 +10,7 @@ import pytest
 import surrealist_gym  # noqa: F401 - registers the envs
 from search import AdaptiveGreedy, Agent
 from surrealist_gym.errors import SurrealistError
+from surrealist_gym.sim.config import SimConfig
 from surrogates.config import MEASURED_PRESCREEN, PrescreenConfig, SkipAccounting, measured_prescreen
 from surrogates.dataset import Featurizer, load_dataset
 from surrogates.models import SurrogateModel, train_model
@@ -381,7 +382,8 @@ def test_a_search_in_the_measured_shape_keeps_its_figures(model):
             told.extend((f, bool(i.get("skipped"))) for f, i in zip(fitnesses, infos))
             return super().tell(actions, fitnesses, infos)
 
-    env = gym.make("Surrealist-Generate-v0", budget=5, runs=3, executor="inline", sim_config={"common_noise": True})
+    env = gym.make("Surrealist-Generate-v0", budget=5, runs=3, executor="inline",
+                   sim_config=SimConfig(common_noise=True))  # the bare UAV these figures were first measured on
     config = PrescreenConfig.of(threshold=0.3, first_runs=(1, 2), race_margin=0.5, skips="budget", verify_stop=True,
                                 retrain_every=2)
     agent = Prescreened(Recording("paper"), model, config, seed=0)
