@@ -5,9 +5,9 @@ An agent proposes actions for a Surrealist env: an action is a vector with one v
 paper's envs, the seed's place in the rules' box in the case study's). The env owns the budget, the memo and the
 fitness, so every agent is measured the same way; an agent binds to the env's outermost Surrealist layer
 (:func:`~surrealist_gym.envs.wrapper.search_layer`), so a wrapper that changes what is charged applies to it.
-Subclasses implement ``_setup``, ``_ask`` and ``_tell`` (a wrapping agent may also override ``ask``, ``_step``,
-``tell`` and ``stop``); RL agents, whose libraries are run-style, override ``run`` and return the same
-:class:`SearchResult`.
+Subclasses implement ``_setup``, ``_ask`` and ``_tell``; RL agents, whose libraries are run-style, override ``run``
+and return the same :class:`SearchResult`. What sits between ask and tell without being an agent (pre-screening:
+:class:`surrogates.prescreen.Prescreener`) drives the public verbs and leaves them as they are.
 """
 from __future__ import annotations
 

@@ -121,7 +121,6 @@ class ProceduralEnv(gym.Env):
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(n + 3,), dtype=np.float32)
         self.inner = None
-        self.problems = 0
 
     def _mutated(self, action: np.ndarray):
         """The seed mutated by an action in [-1, 1] (raises InvalidTestCase)."""
@@ -164,7 +163,6 @@ class ProceduralEnv(gym.Env):
         if self.inner is not None:
             self.inner.close()
         self.inner = self._draw(int(self.np_random.integers(0, 2**31 - 1)))
-        self.problems += 1
         return self.inner.reset(seed=int(self.np_random.integers(0, 2**31 - 1)))
 
     def step(self, action):
