@@ -1,5 +1,5 @@
 """Reinforcement learning on a competition case study: how much of the action space is a legal test, and whether a
-PPO policy trained on ``Surrealist-CaseStudy-v0`` finds more soft failures per simulation than random search.
+PPO policy trained on ``Surrealist-CaseStudy-v1`` finds more soft failures per simulation than random search.
 
 Part 1 (always, no flight): ``--samples`` actions drawn by ``action_space.sample()`` (seeded) are decoded into boxes;
 it prints the share within the rules' ranges (x, y, l, w, h, r; must be 1.0: the action box is the rules' box), the
@@ -60,7 +60,7 @@ def action_space_figures(mission: str, samples: int, seed: int = 0) -> dict:
     from surrealist_gym.competition.rules import LAYOUT_FIELDS, RULES
     from surrealist_gym.errors import InvalidTestCase
 
-    env = gym.make("Surrealist-CaseStudy-v0", case_study=case_study(mission), executor="inline").unwrapped
+    env = gym.make("Surrealist-CaseStudy-v1", case_study=case_study(mission), executor="inline").unwrapped
     env.action_space.seed(seed)
     actions = [env.action_space.sample() for _ in range(samples)]
 

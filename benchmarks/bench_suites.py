@@ -1,7 +1,7 @@
 """Suites of distinct failures on the competition's case studies: the suite search against random search, the paper's
 greedy and CMA-ES under the same budget.
 
-Each search flies ``--budget`` single-run evaluations of ``Surrealist-CaseStudy-v0`` (PX4 SITL profile, the
+Each search flies ``--budget`` single-run evaluations of ``Surrealist-CaseStudy-v1`` (PX4 SITL profile, the
 competition's rules and distance, the feasibility check) behind
 :class:`~surrealist_gym.competition.suite_env.RecordSuite`; then every member of its suite is re-flown ``--confirm``
 times with fresh noise (base seed + 1). A member is *confirmed* when it fails in at least 60% of the re-runs. A suite

@@ -11,7 +11,7 @@ import argparse
 
 import gymnasium as gym
 
-import surrealist_gym  # noqa: F401  (registers Surrealist-CaseStudy-v0)
+import surrealist_gym  # noqa: F401  (registers Surrealist-CaseStudy-v1)
 from search.novelty import SuiteSearch
 from surrealist_gym.competition.reevaluation import evaluate, load_tests
 from surrealist_gym.competition.suite import diversity
@@ -26,7 +26,7 @@ parser.add_argument("--out", default="suite")
 parser.add_argument("--inline", action="store_true", help="simulate in this process")
 args = parser.parse_args()
 
-env = RecordSuite(gym.make("Surrealist-CaseStudy-v0", case_study=args.case_study, budget=args.budget,
+env = RecordSuite(gym.make("Surrealist-CaseStudy-v1", case_study=args.case_study, budget=args.budget,
                            executor="inline" if args.inline else None))
 result = SuiteSearch(seed=0).run(env, seed=0)
 suite = env.suite

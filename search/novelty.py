@@ -13,7 +13,7 @@ Only failures are parents (``near_m``): near misses made no better parents than 
 
 Example:
     >>> import gymnasium as gym, surrealist_gym                                # doctest: +SKIP
-    >>> env = gym.make("Surrealist-CaseStudy-v0", case_study="mission2")    # doctest: +SKIP
+    >>> env = gym.make("Surrealist-CaseStudy-v1", case_study="mission2")    # doctest: +SKIP
     >>> SuiteSearch(seed=0).run(env).best_fitness                            # doctest: +SKIP
 """
 from __future__ import annotations

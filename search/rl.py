@@ -5,7 +5,7 @@ Training (:func:`train_policy`) on the paper's problems uses :class:`ProceduralE
 problem at every reset. A replication problem is the seed test (by default the paper's case0 seed 1) plus a HIDDEN
 obstacle layout: the seed mutated by a random action, so the answer is reachable; our simulator flies the hidden layout
 once and that flight plays the "real" one (``ReplicateEnv(reference_trajectory=...)``). A generation problem is the RQ2
-seed with its first obstacle moved at random. A case-study problem is ``Surrealist-CaseStudy-v0`` itself: the action
+seed with its first obstacle moved at random. A case-study problem is ``Surrealist-CaseStudy-v1`` itself: the action
 box is the rules' box, so every action is a layout within the rules (overlapping or walled-off ones are refused with a
 penalty). Episodes are short searches (``budget`` evaluations of ``runs`` simulations); ``envs`` > 1 steps that many
 envs in SB3's ``SubprocVecEnv``, whose workers fly their runs inline.
@@ -177,11 +177,11 @@ class ProceduralEnv(gym.Env):
 
 
 def training_env(config: ProblemConfig, sim_config=None, seed: int = 0, executor="inline") -> gym.Env:
-    """The env a policy trains on: :class:`ProceduralEnv` for the paper's problems, ``Surrealist-CaseStudy-v0`` (made
+    """The env a policy trains on: :class:`ProceduralEnv` for the paper's problems, ``Surrealist-CaseStudy-v1`` (made
     through Gymnasium's registry, whose noise seed is ``seed``) for a case study. Picklable by reference, so
     ``functools.partial(training_env, ...)`` is what SB3's ``SubprocVecEnv`` starts in each worker."""
     if config.problem is Problem.CASE_STUDY:
-        return gym.make("surrealist_gym:Surrealist-CaseStudy-v0", case_study=config.case_study,
+        return gym.make("surrealist_gym:Surrealist-CaseStudy-v1", case_study=config.case_study,
                         obstacles=config.obstacles, budget=config.budget, runs=config.runs, random_seed=seed,
                         sim_config=sim_config, executor=executor)
     return ProceduralEnv(config, sim_config=sim_config, executor=executor)

@@ -35,7 +35,7 @@ def _register_envs() -> None:
 
     for env_id, entry_point in (("Surrealist-Replicate-v0", "surrealist_gym.envs.replicate:ReplicateEnv"),
                                 ("Surrealist-Generate-v0", "surrealist_gym.envs.generate:GenerateEnv"),
-                                ("Surrealist-CaseStudy-v0", "surrealist_gym.competition.case_study_env:CaseStudyEnv")):
+                                ("Surrealist-CaseStudy-v1", "surrealist_gym.competition.case_study_env:CaseStudyEnv")):
         if env_id not in registry:
             register(id=env_id, entry_point=entry_point)
 

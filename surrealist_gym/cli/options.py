@@ -39,7 +39,7 @@ def _opt(default, help: str, **argparse_kwargs):
 
 #: The defaults that differ by problem, stated once: replicate's and generate's options take theirs from here,
 #: ``generate --case-study`` the third row (where the command line leaves them), ``compare --runs`` its help; the envs
-#: (Surrealist-Replicate-v0, -Generate-v0, -CaseStudy-v0) take the same (tests/surrealist_gym/cli/test_vocabulary.py).
+#: (Surrealist-Replicate-v0, -Generate-v0, -CaseStudy-v1) take the same (tests/surrealist_gym/cli/test_vocabulary.py).
 PROBLEM_DEFAULTS = {
     "replicate": {"budget": 100, "runs": 5, "agent": "greedy"},
     "generate": {"budget": 50, "runs": 10, "agent": "greedy"},
@@ -49,7 +49,7 @@ PROBLEM_DEFAULTS = {
 CASE_STUDY_DEFAULTS = PROBLEM_DEFAULTS["case study"]
 #: the env of each problem (``compare --env``)
 PROBLEM_ENVS = {"replicate": "Surrealist-Replicate-v0", "generate": "Surrealist-Generate-v0",
-                "case study": "Surrealist-CaseStudy-v0"}
+                "case study": "Surrealist-CaseStudy-v1"}
 
 #: Where every command that writes a folder writes it unless ``--out`` says otherwise (:func:`default_out`).
 OUT_PATTERN = "results/{command}-YYYYmmdd-HHMMSS"

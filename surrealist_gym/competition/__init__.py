@@ -2,7 +2,7 @@
 
 - :mod:`~surrealist_gym.competition.rules`: case studies, the rules on boxes, a run's points, the layout mutators;
 - :mod:`~surrealist_gym.competition.feasibility`: whether a free corridor joins each leg's start and goal;
-- :mod:`~surrealist_gym.competition.case_study_env`: ``Surrealist-CaseStudy-v0``, a case study as a search problem;
+- :mod:`~surrealist_gym.competition.case_study_env`: ``Surrealist-CaseStudy-v1``, a case study as a search problem;
 - :mod:`~surrealist_gym.competition.suite`, :mod:`~surrealist_gym.competition.suite_env`,
   :mod:`~surrealist_gym.competition.suite_export`: suites of distinct failures, the wrapper that keeps one from any
   search, and a suite as Aerialist files;

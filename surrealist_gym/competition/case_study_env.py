@@ -1,4 +1,4 @@
-"""Surrealist-CaseStudy-v0: generate tests for a UAV Testing Competition case study, under the competition's rules.
+"""Surrealist-CaseStudy-v1: generate tests for a UAV Testing Competition case study, under the competition's rules.
 
 The seed is the case study's mission with ``obstacles`` boxes (:func:`~surrealist_gym.competition.rules.seed_layout`).
 The action space is the rules' box: one value in [-1, 1] per box and field (x, y, l, w, h, r), -1 the rule's low
@@ -14,7 +14,7 @@ the wind mutators. ``render_mode="rgb_array"`` draws the last flight's top view.
 
 Example::
 
-    env = gym.make("Surrealist-CaseStudy-v0", case_study="mission2", budget=200)
+    env = gym.make("Surrealist-CaseStudy-v1", case_study="mission2", budget=200)
 """
 from __future__ import annotations
 

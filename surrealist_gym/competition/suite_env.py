@@ -7,7 +7,7 @@ evaluated test (not memo answers) to its :class:`~surrealist_gym.competition.sui
 
 Example::
 
-    env = RecordSuite(gym.make("Surrealist-CaseStudy-v0", case_study="mission2"))
+    env = RecordSuite(gym.make("Surrealist-CaseStudy-v1", case_study="mission2"))
     AdaptiveGreedy().run(env)
     env.suite.members        # the distinct failures found
 """

@@ -92,7 +92,7 @@ def _executor_for(setup: EnvSetup):
 
 
 class SurrealistEnv(gym.Env):
-    """Base of Surrealist-Replicate-v0, Surrealist-Generate-v0 and Surrealist-CaseStudy-v0.
+    """Base of Surrealist-Replicate-v0, Surrealist-Generate-v0 and Surrealist-CaseStudy-v1.
 
     ``render_mode="rgb_array"``: ``render()`` returns the top view of the last test evaluated (its obstacles and its
     runs' flights; a replication's real flight too) as an H x W x 3 uint8 array; None (default): no rendering.

@@ -4,7 +4,7 @@ import gymnasium as gym, surrealist_gym
 from surrealist_gym.competition.suite_env import RecordSuite
 from search.novelty import SuiteSearch
 mission, seed, sigma, rate, explore = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
-env = RecordSuite(gym.make("Surrealist-CaseStudy-v0", case_study=mission, budget=200, random_seed=seed, executor="inline"))
+env = RecordSuite(gym.make("Surrealist-CaseStudy-v1", case_study=mission, budget=200, random_seed=seed, executor="inline"))
 class Logged(SuiteSearch):
     def _ask(self):
         self._last_parent = None

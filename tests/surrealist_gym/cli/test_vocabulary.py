@@ -151,7 +151,7 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
     assert "the log's vehicle" in rep and "the log's vehicle" not in gen  # each says only its own UAV default
     assert "seed test with a reference log" in gen and "seed test with a reference log" not in rep
     assert "case-study" not in rep and "generate" not in rep.split("options:", 1)[1]
-    assert ("default: the env's: Surrealist-Replicate-v0 5, Surrealist-Generate-v0 10, Surrealist-CaseStudy-v0 1"
+    assert ("default: the env's: Surrealist-Replicate-v0 5, Surrealist-Generate-v0 10, Surrealist-CaseStudy-v1 1"
             in _help("compare"))
     assert "(default 5; with --competition the edition's: 2024 5, 2025 3)" in _help("evaluate")
 
@@ -168,7 +168,7 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
     (["replicate", "--agent", "cmaes", "--preset", "authors"], "--preset: applies only to --agent greedy"),
     (["simulate", RQ2, "--reference", "x.ulg", "--no-reference"], "--no-reference: not allowed with"),
     (["compare", "--env", "Surrealist-Generate-v0", "--case-study", "mission1"],
-     "--case-study: applies only to Surrealist-CaseStudy-v0"),
+     "--case-study: applies only to Surrealist-CaseStudy-v1"),
     (["compare", "--case-study", "mission1", "--seed", RQ2], "--seed: not with a case study"),
     (["compare", "--env", "Surrealist-Generate-v0", "--log", "x.ulg"],
      "--log: applies only to Surrealist-Replicate-v0"),
@@ -239,7 +239,7 @@ def test_train_with_sac_runs_a_few_steps_and_its_policy_searches(tmp_path, capsy
 
 
 def test_train_on_a_case_study_runs_a_few_steps_and_writes_its_results_folder(tmp_path, capsys, monkeypatch):
-    """``train --problem case-study``: PPO on Surrealist-CaseStudy-v0 for 8 steps; the folder holds the policy and
+    """``train --problem case-study``: PPO on Surrealist-CaseStudy-v1 for 8 steps; the folder holds the policy and
     its record (policy.json), and the policy searches the case study as an agent."""
     pytest.importorskip("stable_baselines3")
     import gymnasium as gym
@@ -258,7 +258,7 @@ def test_train_on_a_case_study_runs_a_few_steps_and_writes_its_results_folder(tm
     assert policy.is_file() and "trained ppo for 8 steps on case study mission2" in printed
     assert record["problem"] == "case-study" and record["obstacles"] == 1 and record["record"]["steps"] == 8
     assert record["record"]["flown"] + record["record"]["refused"] + record["record"]["memo"] == 8
-    env = gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission2.yaml", obstacles=1, budget=2,
+    env = gym.make("Surrealist-CaseStudy-v1", case_study=CASE_STUDIES / "mission2.yaml", obstacles=1, budget=2,
                    executor="inline")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -274,7 +274,7 @@ def test_compare_runs_on_a_case_study(tmp_path, capsys):
     assert main(["compare", "--case-study", str(case_study), "--agents", "random", "--repetitions", "1",
                  "--budget", "1", "--runs", "1", "--inline", "--out", str(out)]) == 0
     settings = json.loads((out / "compare.json").read_text())
-    assert settings["env_id"] == "Surrealist-CaseStudy-v0"
+    assert settings["env_id"] == "Surrealist-CaseStudy-v1"
     assert settings["env_kwargs"] == {"case_study": str(case_study.resolve()), "uav": "px4-v1.12-sitl-iris"}
     assert "| random | 1 |" in capsys.readouterr().out
 

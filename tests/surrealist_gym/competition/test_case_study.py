@@ -1,4 +1,4 @@
-"""The competition's rules and points, suites of distinct failures, and Surrealist-CaseStudy-v0 on real PyBullet."""
+"""The competition's rules and points, suites of distinct failures, and Surrealist-CaseStudy-v1 on real PyBullet."""
 import math
 import warnings
 
@@ -108,14 +108,14 @@ def test_suite_keeps_distinct_failures_and_the_closest_of_alike_ones():
 
 
 def test_case_study_env_passes_gymnasiums_checker():
-    env = gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission2.yaml", budget=4,
+    env = gym.make("Surrealist-CaseStudy-v1", case_study=CASE_STUDIES / "mission2.yaml", budget=4,
                    executor="inline", obstacles=1)
     check_env(env.unwrapped)
     env.close()
 
 
 def test_invalid_and_infeasible_tests_are_not_flown():
-    env = gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission1.yaml", budget=5,
+    env = gym.make("Surrealist-CaseStudy-v1", case_study=CASE_STUDIES / "mission1.yaml", budget=5,
                    executor="inline").unwrapped
     env.reset()
     assert (env.test_for(env.seed_action).obstacles == env.seed_test.obstacles)  # the seed's action: not 0
@@ -148,7 +148,7 @@ def test_a_search_keeps_a_suite_of_real_failures():
     distance, members are pairwise distinct, and the suite only grows from tests the env flew."""
     from search.random import RandomSearch
 
-    env = RecordSuite(gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission1.yaml", budget=12,
+    env = RecordSuite(gym.make("Surrealist-CaseStudy-v1", case_study=CASE_STUDIES / "mission1.yaml", budget=12,
                                executor="inline", obstacles=2))
     said = []
     RandomSearch(seed=3).run(env, callback=lambda info: said.append(info.get("suite")))
@@ -162,7 +162,7 @@ def test_a_search_keeps_a_suite_of_real_failures():
 
 
 def test_wind_mutators_join_the_layout():
-    env = gym.make("Surrealist-CaseStudy-v0", case_study=CASE_STUDIES / "mission1.yaml", budget=3, wind=True,
+    env = gym.make("Surrealist-CaseStudy-v1", case_study=CASE_STUDIES / "mission1.yaml", budget=3, wind=True,
                    obstacles=1, executor="inline").unwrapped
     assert [m.name for m in env.mutators][-2:] == ["wind.speed", "wind.direction"]
     values = np.zeros(len(env.mutators))

@@ -1,4 +1,4 @@
-"""Surrealist-CaseStudy-v0 ready for reinforcement learning: its action space is the rules' box, it renders the last
+"""Surrealist-CaseStudy-v1 ready for reinforcement learning: its action space is the rules' box, it renders the last
 flight's top view, and it runs in Gymnasium's async vector env and SB3's SubprocVecEnv (flying inline there)."""
 import functools
 import warnings
@@ -25,7 +25,7 @@ def _quiet():
 
 
 def case_study(**kwargs):
-    return gym.make("Surrealist-CaseStudy-v0", case_study=MISSION2, executor="inline", **kwargs).unwrapped
+    return gym.make("Surrealist-CaseStudy-v1", case_study=MISSION2, executor="inline", **kwargs).unwrapped
 
 
 def within_rules(boxes) -> bool:
@@ -62,6 +62,12 @@ def test_every_sampled_action_is_within_the_rules(capsys):
     assert [getattr(low, f) for f in LAYOUT_FIELDS] == [RULES.bounds(f)[0] for f in LAYOUT_FIELDS]
     assert [getattr(high, f) for f in LAYOUT_FIELDS] == [RULES.bounds(f)[1] for f in LAYOUT_FIELDS]
     env.close()
+
+
+def test_the_former_version_is_refused_naming_the_current_one():
+    """v0's action meant an offset from the seed; a search written for it must not run on v1's meaning unnoticed."""
+    with pytest.raises(gym.error.DeprecatedEnv, match="Surrealist-CaseStudy-v1"):
+        gym.make("Surrealist-CaseStudy-v0")
 
 
 def test_the_seed_has_its_own_action_and_the_paper_envs_keep_zero():
@@ -105,7 +111,7 @@ def test_render_rgb_array_draws_the_last_flight(make):
 
 
 def test_async_vector_env_flies_inline_in_its_workers():
-    venv = gym.make_vec("Surrealist-CaseStudy-v0", num_envs=2, vectorization_mode="async", case_study=MISSION2,
+    venv = gym.make_vec("Surrealist-CaseStudy-v1", num_envs=2, vectorization_mode="async", case_study=MISSION2,
                         obstacles=1, budget=3)
     try:
         obs, info = venv.reset(seed=0)
@@ -123,7 +129,7 @@ def test_sb3_subproc_vec_env_flies_inline_in_its_workers():
     pytest.importorskip("stable_baselines3")
     from stable_baselines3.common.vec_env import SubprocVecEnv
 
-    make = functools.partial(gym.make, "surrealist_gym:Surrealist-CaseStudy-v0", case_study=MISSION2, obstacles=1,
+    make = functools.partial(gym.make, "surrealist_gym:Surrealist-CaseStudy-v1", case_study=MISSION2, obstacles=1,
                              budget=3)
     venv = SubprocVecEnv([make, make])
     try:
@@ -143,7 +149,7 @@ def test_a_daemonic_process_refuses_worker_processes_in_one_line(monkeypatch):
     monkeypatch.setattr(multiprocessing.current_process(), "_config",
                         {**multiprocessing.current_process()._config, "daemon": True})
     with pytest.raises(ValueError, match="a daemonic process .* cannot start worker processes"):
-        gym.make("Surrealist-CaseStudy-v0", case_study=MISSION2, obstacles=1, workers=2)
-    env = gym.make("Surrealist-CaseStudy-v0", case_study=MISSION2, obstacles=1).unwrapped
+        gym.make("Surrealist-CaseStudy-v1", case_study=MISSION2, obstacles=1, workers=2)
+    env = gym.make("Surrealist-CaseStudy-v1", case_study=MISSION2, obstacles=1).unwrapped
     assert type(env.evaluator.executor).__name__ == "InlineExecutor"
     env.close()
