@@ -29,7 +29,7 @@ from pathlib import Path
 
 from ..competition.scoring import EDITIONS, Draw
 from ..errors import SurrealistError
-from .options import RUN_FILE, default_out, out_help
+from .options import RUN_FILE, default_out
 
 STORE_FILE = "evaluations.sqlite"
 DEFAULT_RUNS = 5  # runs per test without --competition
@@ -98,7 +98,7 @@ def _uav_option(uav: str | None) -> str | None:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist evaluate``."""
-    from .options import add_buffer_argument, add_dask_argument
+    from .options import add_buffer_argument, add_dask_argument, add_out_argument
 
     parser.add_argument("tests", metavar="TESTS", nargs="*", help="Aerialist test YAMLs, or folders of them")
     parser.add_argument("--runs", type=int, default=None,
@@ -118,7 +118,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_buffer_argument(parser)
     parser.add_argument("--any-layout", action="store_true",
                         help="accept tests outside the competition's rules on obstacles (count, bounds, boxes only)")
-    parser.add_argument("--out", metavar="DIR", default=None, help=out_help("evaluate", "output folder, new or empty"))
+    add_out_argument(parser, "evaluate", "output folder, new or empty")
     parser.add_argument("--resume", metavar="DIR", default=None,
                         help="finish an interrupted evaluation in DIR: fly its missing runs and write its report "
                              "(same options; only --workers changes)")
