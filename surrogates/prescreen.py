@@ -71,13 +71,13 @@ class Batch:
             dropped (``info["skipped"]``).
         stepped: the candidates stepped on the env (simulated, or answered by its memo) as (action, fitness, info),
             in the order stepped; some may lie beyond what the agent is told.
-        over: the episode is over (its budget is spent).
+
+    Whether the episode is over is :attr:`Prescreener.over` (and :meth:`Prescreener.stop`).
     """
 
     fitnesses: tuple[float, ...]
     infos: tuple[dict, ...]
     stepped: tuple[tuple[np.ndarray, float, dict], ...]
-    over: bool
 
 
 @dataclass(frozen=True, slots=True)
@@ -271,7 +271,7 @@ class Prescreener:
                 break
         self._learn([info for _, _, info in stepped])
         told = list(itertools.takewhile(lambda r: r is not None, results))
-        return Batch(tuple(f for f, _ in told), tuple(i for _, i in told), tuple(stepped), self.over)
+        return Batch(tuple(f for f, _ in told), tuple(i for _, i in told), tuple(stepped))
 
     def stop(self) -> dict:
         """A non-empty dict (with the reason) once the episode is over, or (``SkipAccounting.BUDGET``, while
