@@ -129,11 +129,12 @@ class Prescreened:
         return record.result(reason["reason"])
 
     def _stop(self, info: dict, record: SearchRecord) -> dict:
-        """The prescreener's stop, else the agent's; an agent's stop may restart it instead (:class:`VerifyStop`)."""
+        """The prescreener's stop, else the agent's; an agent's stop may restart it instead (:class:`VerifyStop`:
+        a restart goes on only when the agent does, with screening off, so neither stop holds then)."""
         prescreener = self.prescreener
         reason = prescreener.stop() or self.agent.stop()
         if reason and not prescreener.over and self.verify.restart(self.agent, prescreener, info, record):
-            reason = prescreener.stop() or self.agent.stop()
+            return {}
         return reason
 
 
