@@ -232,6 +232,7 @@ class Px4LocalPlanner(Planner):
         dt = 0.1 if self._t is None else min(max(t - self._t, 1e-3), 1.0)
         self._t = t
         px, py, pz = float(position[0]), float(position[1]), float(position[2])
+        vel = (float(velocity[0]), float(velocity[1]), float(velocity[2]))
         gx, gy, gz = float(goal[0]), float(goal[1]), float(goal[2])
         new = np.ascontiguousarray(hits, dtype=np.float64).reshape(-1, 3)
         n_max = new.shape[0] + self._cloud.shape[0]
@@ -245,8 +246,7 @@ class Px4LocalPlanner(Planner):
         built = False
         if n > 0:
             path = np.empty((MAX_NODES, 3))
-            v = (float(velocity[0]), float(velocity[1]), float(velocity[2]))
-            k = _build_tree(self._cloud, (px, py, pz), v, (gx, gy, gz), cpt, self._settings, path)
+            k = _build_tree(self._cloud, (px, py, pz), vel, (gx, gy, gz), cpt, self._settings, path)
             if k > 0:
                 self._path, self._path_t, built = path[:k][::-1].copy(), t, True
         # waypoint generator
@@ -283,12 +283,12 @@ class Px4LocalPlanner(Planner):
         # smoothWaypoint: critically damped filter toward the adapted point; reference: the vehicle's velocity
         # (0 when the adapted point is the goal)
         if self._sp is None:
-            self._sp, self._sp_v = (px, py, pz), (float(velocity[0]), float(velocity[1]), float(velocity[2]))
+            self._sp, self._sp_v = (px, py, pz), vel
         at_goal = math.dist(adapted, (gx, gy, gz)) < 0.1
         kp = (c.smoothing_speed_xy, c.smoothing_speed_xy, c.smoothing_speed_z)
         sp, sv = list(self._sp), list(self._sp_v)
         for i in range(3):
-            ref = 0.0 if at_goal else float(velocity[i])
+            ref = 0.0 if at_goal else vel[i]
             acc = kp[i] * (adapted[i] - sp[i]) + 2.0 * math.sqrt(kp[i]) * (ref - sv[i])
             sv[i] += acc * dt
             sp[i] += sv[i] * dt
