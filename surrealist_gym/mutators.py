@@ -142,6 +142,12 @@ class Mutator(PropertyMutator):
         if not self.lowest - 1e-9 <= new_value <= self.highest + 1e-9:
             raise InvalidTestCase(f"mutator {self.name} by {value:+g}: obstacles[{self.obstacle}].{attr} "
                                   f"{new_value:g} is outside [{self.lowest:g}, {self.highest:g}]")
+        # within 1e-9 of a bound is on it: only the rounding of ``bound - now`` (an action of -1 or +1 over a range
+        # of ``lowest - now`` to ``highest - now``) puts a value there, so those actions give the bounds exactly
+        if abs(new_value - self.lowest) < 1e-9:
+            new_value = self.lowest
+        elif abs(new_value - self.highest) < 1e-9:
+            new_value = self.highest
         try:
             return replace(obstacle, **{attr: new_value})
         except InvalidTestCase as err:
@@ -323,23 +329,44 @@ def default_mutators(test: TestCase, kinds=AUTHORS_ORDER, obstacles=None) -> tup
     return tuple(Mutator(i, k) for i in indices for k in kinds)
 
 
-def apply_action(test: TestCase, mutators: Sequence[PropertyMutator], action) -> TestCase:
-    """The test that an action stands for: one value in [-1, 1] per mutator, scaled to the mutator's range
-    (centre + value x half range; values rounded to 1e-9, so equal actions give equal keys). The obstacle mutators
-    change their obstacles first and the layout is checked once, as a whole (a box may pass through another on the
-    way); then the others (UAV settings, wind) apply in order. Raises InvalidTestCase for an invalid result."""
-    obstacles, rest = list(test.obstacles), []
+def action_values(mutators: Sequence[PropertyMutator], action) -> list[float]:
+    """The mutator values an action stands for: one value in [-1, 1] per mutator (clipped), scaled to the mutator's
+    range (centre + value x half range), rounded to 1e-9 so that equal actions give equal keys."""
+    values = []
     for mutator, a in zip(mutators, np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)):
         centre, half_range = (mutator.high + mutator.low) / 2, (mutator.high - mutator.low) / 2
-        value = float(np.round(centre + a * half_range, 9))
+        values.append(float(np.round(centre + a * half_range, 9)))
+    return values
+
+
+def mutated_obstacles(test: TestCase, mutators: Sequence[PropertyMutator], action) -> tuple:
+    """The obstacles of ``test`` changed by the obstacle mutators of an action (:func:`action_values`), each checked
+    on its own but not against the others (they may overlap); the other mutators are left out."""
+    return _mutated_obstacles(test, zip(mutators, action_values(mutators, action)))
+
+
+def _mutated_obstacles(test: TestCase, pairs) -> tuple:
+    obstacles = list(test.obstacles)
+    for mutator, value in pairs:
         if not isinstance(mutator, Mutator):
-            rest.append((mutator, value))
-        elif not 0 <= mutator.obstacle < len(obstacles):
+            continue
+        if not 0 <= mutator.obstacle < len(obstacles):
             raise InvalidTestCase(f"mutator {mutator.name}: the test has {len(obstacles)} obstacle(s)")
-        elif value != mutator.default_value:
+        if value != mutator.default_value:
             obstacles[mutator.obstacle] = mutator.mutate(obstacles[mutator.obstacle], value)
-    if obstacles != list(test.obstacles):
+    return tuple(obstacles)
+
+
+def apply_action(test: TestCase, mutators: Sequence[PropertyMutator], action) -> TestCase:
+    """The test that an action stands for (:func:`action_values`). The obstacle mutators change their obstacles
+    first and the layout is checked once, as a whole (a box may pass through another on the way:
+    :func:`mutated_obstacles`); then the others (UAV settings, wind) apply in order. Raises InvalidTestCase for an
+    invalid result."""
+    pairs = list(zip(mutators, action_values(mutators, action)))
+    obstacles = _mutated_obstacles(test, pairs)
+    if obstacles != tuple(test.obstacles):
         test = test.with_obstacles(obstacles)
-    for mutator, value in rest:
-        test = mutator.apply(test, value)
+    for mutator, value in pairs:
+        if not isinstance(mutator, Mutator):
+            test = mutator.apply(test, value)
     return test

@@ -18,26 +18,15 @@ Example::
 """
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..envs.base import EnvSetup, SurrealistEnv
 from ..errors import InvalidTestCase
 from ..evaluation import GenerationObjective
-from ..mutators import Mutator, apply_action
+from ..mutators import mutated_obstacles
 from ..outcomes import Measure
 from ..testcase import Obstacle, TestCase
-from .rules import (
-    LAYOUT_FIELDS,
-    RULES,
-    Rules,
-    check_rules,
-    endpoint_failure,
-    layout_mutators,
-    load_case_study,
-    seed_layout,
-)
+from .rules import RULES, check_rules, endpoint_failure, layout_mutators, load_case_study, seed_layout
 
 DEFAULT_UAV = "px4-v1.12-sitl-iris"
 
@@ -74,25 +63,14 @@ class CaseStudyEnv(SurrealistEnv):
 
     def boxes_for(self, action) -> tuple[Obstacle, ...]:
         """The boxes an action stands for, nothing else checked or flown: each field is the rule's low bound at -1 and
-        its high bound at +1 (the value the layout mutators give, rounded to 1e-9, and put on a bound it is within 1e-9
-        of), so they are always within the rules' ranges; they may overlap."""
-        action = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
-        boxes = list(self.seed_test.obstacles)
-        for mutator, a in zip(self.mutators, action):
-            if isinstance(mutator, Mutator):
-                centre, half_range = (mutator.high + mutator.low) / 2, (mutator.high - mutator.low) / 2
-                value = float(np.round(centre + a * half_range, 9))  # as mutators.apply_action decodes it
-                boxes[mutator.obstacle] = mutator.mutate(boxes[mutator.obstacle], value)
-        return tuple(_on_bounds(box, self.rules) for box in boxes)
+        its high bound at +1 (the layout mutators' decoding, :func:`~surrealist_gym.mutators.mutated_obstacles`), so
+        they are always within the rules' ranges; they may overlap."""
+        return mutated_obstacles(self.seed_test, self.mutators, np.asarray(action, dtype=np.float64).reshape(-1))
 
     def test_for(self, action) -> TestCase:
         """The test an action stands for; InvalidTestCase when its boxes overlap, when a box is within the safety
         distance of the take-off or landing point, or when the mission cannot be flown through."""
-        action = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), -1.0, 1.0)
-        test = self.seed_test.with_obstacles(self.boxes_for(action))  # overlapping boxes are refused here
-        others = [i for i, m in enumerate(self.mutators) if not isinstance(m, Mutator)]  # the wind's
-        if others:
-            test = apply_action(test, [self.mutators[i] for i in others], action[others])
+        test = super().test_for(action)  # overlapping boxes are refused here
         check_rules(test, self.rules)
         degenerate = endpoint_failure(test)
         if degenerate is not None:
@@ -105,16 +83,3 @@ class CaseStudyEnv(SurrealistEnv):
                 raise InvalidTestCase(f"infeasible: {reason}")
         return test
 
-
-def _on_bounds(box: Obstacle, rules: Rules) -> Obstacle:
-    """``box`` with each field within 1e-9 of a rule's bound put on it (the mutators refuse anything past a bound by
-    more, so this only removes the rounding of the action's decoding: -1 and +1 give the bounds exactly)."""
-    changes = {}
-    for name in LAYOUT_FIELDS:
-        low, high = rules.bounds(name)
-        value = getattr(box, name)
-        if abs(value - low) < 1e-9 or abs(value - high) < 1e-9:
-            bound = low if abs(value - low) < 1e-9 else high
-            if value != bound:
-                changes[name] = bound
-    return replace(box, **changes) if changes else box
