@@ -126,9 +126,9 @@ def train(args, out: Path) -> Path:
 def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     """One search on a held-out noise seed, cached in ``out/searches/AGENT-seedN.json`` (its store beside it)."""
     from search.registry import make_agent
+    from search.rl import TrainingRecord
     from surrealist_gym.competition.case_study_env import CaseStudyEnv
     from surrealist_gym.competition.suite_env import RecordSuite
-    from surrealist_gym.outcomes import run_points
 
     stem = out / "searches" / f"{agent}-seed{seed}"
     cached = stem.with_suffix(".json")
@@ -137,27 +137,17 @@ def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     stem.parent.mkdir(parents=True, exist_ok=True)
     env = RecordSuite(CaseStudyEnv(case_study(args.mission), budget=args.budget, runs=1, random_seed=seed,
                                    executor="inline", store=stem.with_suffix(".sqlite")))
-    counts = {"steps": 0, "refused": 0, "memo": 0, "simulations": 0, "soft_failures": 0}
-
-    def step(info: dict) -> None:
-        counts["steps"] += 1
-        if info.get("invalid") is not None:
-            counts["refused"] += 1
-        elif info.get("memo"):
-            counts["memo"] += 1
-        else:
-            statuses, distances = info.get("statuses", ()), info.get("competition_distances", ())
-            counts["simulations"] += len(statuses)
-            counts["soft_failures"] += sum(run_points(s, d) > 0 for s, d in zip(statuses, distances))
-
+    counts = TrainingRecord()  # counts a search's steps as it counts a training's
     start = time.perf_counter()
     name = f"ppo:{policy}" if agent == "ppo" else agent
     try:
-        result = make_agent(name, seed=seed).run(env, seed=seed, callback=step)
+        result = make_agent(name, seed=seed).run(env, seed=seed, callback=lambda info: counts.add(info, False))
     finally:
         env.close()
-    record = {"agent": agent, "seed": seed, **counts, "evaluations": result.evaluations,
-              "per_simulation": counts["soft_failures"] / counts["simulations"] if counts["simulations"] else 0.0,
+    kept = ("steps", "refused", "memo", "simulations", "soft_failures")
+    record = {"agent": agent, "seed": seed, **{key: getattr(counts, key) for key in kept},
+              "evaluations": result.evaluations,
+              "per_simulation": counts.soft_failures / counts.simulations if counts.simulations else 0.0,
               "distinct_failures": sum(m.evaluation > 1 for m in env.suite.members),  # not the seed's own
               "best_fitness": result.best_fitness,
               "wall_s": round(time.perf_counter() - start + env.unwrapped.evaluator.replayed_seconds, 1)}
