@@ -243,7 +243,12 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
 
     Returns:
         The path of the saved policy.
+
+    Raises:
+        KeyboardInterrupt: after saving the policy trained so far (Ctrl-C during training); its ``.json`` gives
+            ``interrupted_after_steps``, and ``init`` trains on from it.
     """
+    import contextlib
     import functools
     import json
     import time
@@ -283,13 +288,18 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
             return True
 
     start = time.perf_counter()
+    interrupted = False
     try:
-        model.learn(total_timesteps=int(steps), callback=_Progress())
+        try:
+            model.learn(total_timesteps=int(steps), callback=_Progress())
+        except KeyboardInterrupt:  # the policy so far is saved, and --init trains on from it
+            interrupted = True
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
         model.save(out)
     finally:
-        env.close()
+        with contextlib.suppress(*(() if not interrupted else (EOFError, OSError))):  # workers Ctrl-C ended
+            env.close()
     path = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
     settings = {"problem": config.problem.value, "algorithm": Algorithm(algorithm).value, "steps": int(steps),
                 "budget": budget, "runs": runs, "seed": seed, "envs": envs,
@@ -301,7 +311,11 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
         settings.update(spread=spread, seed_test=None if seed_test is None else str(seed_test))
     summary = {**settings, "policy": path.name, "wall_seconds": round(time.perf_counter() - start, 1),
                "record": record.to_json()}
+    if interrupted:
+        summary["interrupted_after_steps"] = int(model.num_timesteps)
     path.with_suffix(".json").write_text(json.dumps(summary, indent=2) + "\n")
+    if interrupted:
+        raise KeyboardInterrupt(f"{path}: trained {model.num_timesteps} of {steps} steps")
     return path
 
 

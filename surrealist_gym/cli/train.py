@@ -37,10 +37,14 @@ def add_arguments(parser) -> None:
                         help="seed of the problems (their noise and hidden layouts), the policy and its sampling "
                              "(default 0)")
     parser.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    parser.add_argument("--init", default=None, metavar="POLICY.zip",
+                        help="start from this policy's weights (its optimiser afresh): train on after an "
+                             "interrupted training, which saves the policy so far")
 
 
 def run(args) -> int:
     """Train the policy across generated problems and save it; returns the exit code."""
+    import json
     import math
     from pathlib import Path
 
@@ -69,6 +73,9 @@ def run(args) -> int:
         raise SurrealistError(f"--spread: expected a number in (0, 1] (action units), got {args.spread:g}")
     out = Path(args.out)  # stable-baselines3 saves to the path with .zip added unless it ends in .zip
     check_writable(out if out.suffix == ".zip" else out.with_name(out.name + ".zip"), "--out", "file")
+    if args.init:
+        from ..errors import regular_file
+        regular_file(args.init, "--init policy file")
     if args.seed:  # the problems' seed test, read before anything is trained or flown
         from ..aerialist import load_test
         load_test(args.seed)
@@ -96,14 +103,20 @@ def run(args) -> int:
             spread=args.spread, seed_test=args.seed)
         path = train_policy(args.steps, args.out, problem=args.problem, algorithm=args.algorithm,
                             budget=args.episode_budget, runs=args.runs, seed=args.random_seed, progress=progress,
-                            envs=args.envs, **extra)
+                            envs=args.envs, init=args.init, **extra)
     except KeyboardInterrupt:
         bar.close()
-        print("interrupted: no policy saved", file=sys.stderr)
+        saved = Path(args.out) if Path(args.out).suffix == ".zip" else Path(args.out + ".zip")
+        record = saved.with_suffix(".json")
+        done = json.loads(record.read_text()).get("interrupted_after_steps") if record.is_file() else None
+        if done is None:
+            print("interrupted: no policy saved", file=sys.stderr)
+        else:
+            print(f"interrupted after {done} of {args.steps} steps: the policy so far is in {saved} (record in "
+                  f"{record}); train on with the same options and --init {saved} --steps {args.steps - done} "
+                  f"--out NEW.zip", file=sys.stderr)
         return 130
     bar.close()
-    import json
-
     record = json.loads(path.with_suffix(".json").read_text())["record"]
     what = f"case study {Path(args.case_study).stem}" if case_study else f"{args.problem} problems"
     print(f"trained {args.algorithm} for {args.steps} steps on {what} in {time.perf_counter() - start:.0f} s; "

@@ -142,3 +142,30 @@ def test_a_policy_file_runs_no_code_from_its_data(policy, tmp_path):
     assert not marker.exists()
     result = agent.run(_env(3), seed=0)
     assert result.evaluations >= 1 and not marker.exists()
+
+
+def test_interrupted_training_saves_the_policy_so_far_and_trains_on_from_it(tmp_path):
+    """Ctrl-C during training (a KeyboardInterrupt from inside SB3's loop) keeps the policy trained so far, with the
+    steps done in its record; ``init`` then trains on from those weights."""
+    pytest.importorskip("stable_baselines3")
+    import json
+
+    from search.rl import load_policy, train_policy
+
+    def ctrl_c_at_6(steps: int) -> None:
+        if steps >= 6:
+            raise KeyboardInterrupt
+
+    out = tmp_path / "ppo.zip"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(KeyboardInterrupt):
+            train_policy(16, out, problem="generate", budget=3, n_steps=4, batch_size=4, n_epochs=1,
+                         progress=ctrl_c_at_6)
+        assert json.loads(out.with_suffix(".json").read_text())["interrupted_after_steps"] == 6
+        saved = load_policy(out).state_dict()
+        more = train_policy(4, tmp_path / "more.zip", problem="generate", budget=3, n_steps=4, batch_size=4,
+                            n_epochs=1, init=out, learning_rate=0.0)
+    after = load_policy(more).state_dict()  # no learning: the weights it started from
+    assert all((saved[k] == after[k]).all() for k in saved)
+    assert "interrupted_after_steps" not in json.loads(more.with_suffix(".json").read_text())
