@@ -9,12 +9,14 @@
    each ``confirm`` times and ranks them by expected test score (``suite/suite.csv``).
 2. **Spend the real budget**: the ranked failures, best first, each executed once through
    ``TestCase(case_study, obstacles).execute()`` (the Aerialist agent chosen by ``AGENT``); then, while budget is
-   left, the search's other failing evaluations (``evaluations.csv``), those nearest to a test that failed in its
-   execution first; then its near misses, closest first. At most BUDGET executions; one that raises still counts.
+   left, the search's other failing evaluations (``evaluations.csv``) in :func:`diverse_order` of their expected test
+   score in the simulator, against the ground the tests that failed in their execution already cover; then its near
+   misses, closest first. At most BUDGET executions; one that raises still counts.
 3. **Write** the executed tests whose real flight came closer than 1.5 m to a box (the competition's soft failure, by
-   Aerialist's own distance), ordered by the points of that flight (5, 2, 1), then in the order executed, as
-   ``test_i.yaml``, ``.ulg`` and ``.png`` in a new folder under ``generated_tests/``, and print
-   ``output folder: PATH``.
+   Aerialist's own distance), in :func:`diverse_order` of the test score of that flight (its points over boxes
+   squared and minutes flown, as the competition scores a test), as ``test_i.yaml``, ``.ulg`` and ``.png`` in a new
+   folder under ``generated_tests/``, and print ``output folder: PATH``. The 2025 edition scores the first 20 a tool
+   wrote, on failures and on the area diversity of their boxes.
 
 The settings are in ``surrealist-tool.json`` beside this file; the search's results folder and a record of every
 execution (``executions.csv``) are in ``results/surrealist-<time>/``.
@@ -34,6 +36,8 @@ from pathlib import Path
 import yaml
 from aerialist.px4.aerialist_test import AerialistTest
 from aerialist.px4.obstacle import Obstacle
+from pyulog import ULog
+from shapely.ops import unary_union
 from testcase import TestCase
 
 HERE = Path(__file__).resolve().parent
@@ -43,6 +47,7 @@ TESTS_FOLDER = Path("generated_tests")
 RESULTS_FOLDER = Path("results")
 POINTS = ((0.25, 5), (1.0, 2), (1.5, 1))  # the competition's points of a run closer than each distance [m]
 MAX_BOXES = 3
+SCORED = 20  # the tests the 2025 edition scores: the first 20 written
 
 logger = logging.getLogger("surrealist-tool")
 
@@ -50,6 +55,36 @@ logger = logging.getLogger("surrealist-tool")
 def points(distance):
     """The competition's points of one run at ``distance`` [m] from the obstacles (0 at 1.5 m or more)."""
     return next((p for limit, p in POINTS if distance < limit), 0)
+
+
+def test_score(points_, minutes, boxes):
+    """The competition's score of a test from one flight: ``points x 10 / (boxes^2 x minutes)``."""
+    return points_ * 10.0 / (boxes ** 2 * minutes) if minutes > 0 and boxes else 0.0
+
+
+def footprint(obstacles):
+    """The ground the obstacles cover (Aerialist's rotated box geometry, united)."""
+    return unary_union([box(o).geometry for o in obstacles])
+
+
+def similarity(a, b):
+    """The 2025 similarity of two tests: the area of the intersection of their footprints over that of the union."""
+    union = a.union(b).area
+    return a.intersection(b).area / union if union > 0 else 1.0
+
+
+def diverse_order(items, first, covered=()):
+    """Items ``(score, footprint, value)`` in the order to use them: the first ``first`` one at a time, each the
+    greatest ``score x (1 - its largest similarity to the footprints already chosen or in covered)`` (a duplicate
+    of one of them comes last); the rest by score."""
+    rest = sorted(items, key=lambda item: -item[0])
+    chosen = []
+    while rest and len(chosen) < first:
+        taken = list(covered) + [item[1] for item in chosen]
+        best = max(range(len(rest)), key=lambda k: rest[k][0] * (
+            1.0 - max((similarity(rest[k][1], other) for other in taken), default=0.0)))
+        chosen.append(rest.pop(best))
+    return [item[2] for item in chosen + rest]
 
 
 def search(case_study, budget, settings, out):
@@ -80,11 +115,10 @@ def ranked_suite(out):
               ["simulation"]["obstacles"]) for row in rows], {row["evaluation"] for row in rows})
 
 
-def neighbours(out, members, executed, failed):
+def neighbours(out, members, executed, failed, count):
     """The search's other evaluations (``evaluations.csv``: not suite members, not executed), as (name, obstacles):
-    those that failed in the simulator first, the nearest to a layout that failed in its execution first (the
-    farthest of its boxes from the nearest box of that layout), then the closest in the simulator; then the near
-    misses, closest first."""
+    those that failed in the simulator, in :func:`diverse_order` of their expected test score there against the
+    ground ``failed`` covers (the first ``count``); then the near misses, closest first."""
     with open(out / "evaluations.csv", newline="", encoding="utf-8") as f:
         rows = [row for row in csv.DictReader(f) if row["evaluation"] not in members and row.get("o0_l")
                 and math.isfinite(float(row["min_distance"] or "nan"))]  # flown, not refused
@@ -95,28 +129,18 @@ def neighbours(out, members, executed, failed):
                      for i in range(MAX_BOXES) if row.get(f"o{i}_l")]
         if layout(obstacles) not in executed:
             found.setdefault(layout(obstacles), (f"evaluation-{row['evaluation']}", obstacles,
-                                                 float(row["min_distance"]),
-                                                 int(row["unsafe"]) + int(row["collisions"]) > 0))
-
-    def gap(obstacles, other):
-        return max(min(math.dist(centre(a), centre(b)) for b in other) for a in obstacles)
-
-    def nearest(item):
-        _, obstacles, distance, failing = item
-        return (not failing, min((gap(obstacles, f) for f in failed), default=0.0) if failing else 0.0, distance)
-
-    return [(name, obstacles) for name, obstacles, _, _ in sorted(found.values(), key=nearest)]
+                                                 float(row["min_distance"]), float(row.get("flight_s") or 0.0)))
+    failing = [(test_score(points(distance), seconds / 60.0, len(obstacles)), footprint(obstacles), (name, obstacles))
+               for name, obstacles, distance, seconds in found.values() if points(distance)]
+    misses = sorted((item for item in found.values() if not points(item[2])), key=lambda item: item[2])
+    return (diverse_order(failing, count, [footprint(obstacles) for obstacles in failed])
+            + [(name, obstacles) for name, obstacles, _, _ in misses])
 
 
 def layout(obstacles):
     """A hashable key of the obstacles: each one's (x, y, r, l, w, h)."""
     return tuple((o["position"]["x"], o["position"]["y"], o["position"]["r"], o["size"]["l"], o["size"]["w"],
                   o["size"]["h"]) for o in obstacles)
-
-
-def centre(obstacle):
-    """The obstacle's (x, y) position [m]."""
-    return obstacle["position"]["x"], obstacle["position"]["y"]
 
 
 def box(found):
@@ -127,42 +151,51 @@ def box(found):
                                       r=float(position["r"])))
 
 
+def minutes_flown(log_file):
+    """The span of a flight's ULog [min]."""
+    log = ULog(str(log_file))
+    return (log.last_timestamp - log.start_timestamp) / 60e6
+
+
 def execute(case, name, obstacles, writer, phase):
-    """Execute one test (one simulation of the budget); its TestCase and distance [m], None when it failed."""
+    """Execute one test (one simulation of the budget); its TestCase, distance [m] and minutes flown, (None, None)
+    when it failed."""
     test = TestCase(case, [box(o) for o in obstacles])
     try:
         test.execute()
         distance = min(test.get_distances())
+        minutes = minutes_flown(test.log_file)
     except Exception as err:  # a simulation that gives no flight: skipped, as the competition asks
         logger.warning("%s: execution failed, skipped: %s", name, err)
-        writer.writerow([phase, name, "", "", " ".join(str(err).split())])
-        return test, None
-    logger.info("%s (%s): %.2f m, %d points", name, phase, distance, points(distance))
-    writer.writerow([phase, name, f"{distance:.3f}", points(distance), ""])
-    return test, distance
+        writer.writerow([phase, name, "", "", "", "", " ".join(str(err).split())])
+        return test, None, None
+    score = test_score(points(distance), minutes, len(obstacles))
+    logger.info("%s (%s): %.2f m, %d points, %.2f min", name, phase, distance, points(distance), minutes)
+    writer.writerow([phase, name, f"{distance:.3f}", points(distance), f"{minutes:.3f}", f"{score:.4f}", ""])
+    return test, distance, minutes
 
 
 def spend(case_study, out, budget):
-    """At most ``budget`` executions: the ranked suite, best first, then the search's other failures nearest to
-    those that failed in their execution. The tests that failed in their execution, by their points, then in the
-    order executed."""
+    """At most ``budget`` executions: the ranked suite, best first, then the search's other failures (see
+    :func:`neighbours`). The tests that failed in their execution, in :func:`diverse_order` of their test score."""
     case = AerialistTest.from_yaml(str(case_study))
     ranked, members = ranked_suite(out)
     logger.info("%d distinct failures in the simulator; budget %d", len(ranked), budget)
-    flown = []  # (obstacles, test, distance) in the order executed
+    flown = []  # (obstacles, test, distance, minutes) in the order executed
     with open(out / "executions.csv", "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
-        writer.writerow(["phase", "test", "distance_m", "points", "error"])
+        writer.writerow(["phase", "test", "distance_m", "points", "minutes", "test_score", "error"])
         for name, obstacles in ranked[:budget]:
             flown.append((obstacles, *execute(case, name, obstacles, writer, "suite")))
         if len(flown) < budget:
-            failed = [obstacles for obstacles, _, distance in flown if distance is not None and points(distance)]
-            executed = {layout(obstacles) for obstacles, _, _ in flown}
-            for name, obstacles in neighbours(out, members, executed, failed)[:budget - len(flown)]:
+            failed = [obstacles for obstacles, _, distance, _ in flown if distance is not None and points(distance)]
+            executed = {layout(obstacles) for obstacles, _, _, _ in flown}
+            left = budget - len(flown)
+            for name, obstacles in neighbours(out, members, executed, failed, left)[:left]:
                 flown.append((obstacles, *execute(case, name, obstacles, writer, "neighbour")))
-    failures = [(-points(distance), k, test) for k, (_, test, distance) in enumerate(flown)
-                if distance is not None and points(distance)]
-    return len(flown), [test for _, _, test in sorted(failures, key=lambda item: item[:2])]
+    failures = [(test_score(points(distance), minutes, len(obstacles)), footprint(obstacles), test)
+                for obstacles, test, distance, minutes in flown if distance is not None and points(distance)]
+    return len(flown), diverse_order(failures, SCORED)
 
 
 def write(tests, folder):
