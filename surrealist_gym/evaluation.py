@@ -263,8 +263,12 @@ def search_identity(objective, runs: int, seed: int, sim_config) -> dict:
             xyz = getattr(value, "xyz", value)
             problem[f.name] = (digest(np.round(np.asarray(xyz, dtype=np.float64), 6).tobytes())
                                if isinstance(xyz, np.ndarray) else getattr(value, "value", value))
-    return {"problem": problem, "runs": int(runs), "seed": int(seed), "uav": sim_config.profile,
-            "common_noise": bool(sim_config.common_noise), "sim": digest(sim_config), "version": __version__}
+    identity = {"problem": problem, "runs": int(runs), "seed": int(seed), "uav": sim_config.profile,
+                "common_noise": bool(sim_config.common_noise), "sim": digest(sim_config), "version": __version__}
+    physics = getattr(sim_config, "physics", None)
+    if physics is not None and physics.value != "pybullet":  # named only when not the default, as stores before it
+        identity["physics"] = physics.value
+    return identity
 
 
 def flown_with_common_noise(stored: StoredEvaluation) -> bool:

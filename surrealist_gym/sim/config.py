@@ -62,6 +62,13 @@ class AvoidanceModel(str, Enum):
     SIMPLE = "simple"  #: a reactive histogram planner tuned to the real PX4 Vision flight case0 (sim/avoidance.py)
 
 
+class Physics(str, Enum):
+    """What integrates the vehicles and finds their contacts."""
+
+    PYBULLET = "pybullet"  #: PyBullet (sim/world.py): the reference
+    COMPILED = "compiled"  #: numba kernels: Bullet's integration, closed-form contacts (sim/compiled_physics.py)
+
+
 @dataclass(frozen=True, slots=True)
 class NoiseConfig:
     """Sources of run-to-run variation; all drawn from the run's seed.
@@ -127,6 +134,9 @@ class SimConfig:
             model's defaults: :class:`~surrealist_gym.sim.px4_avoidance.Px4AvoidanceConfig` and the SITL Iris depth
             camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.AvoidanceConfig` and the PX4 Vision's camera
             for ``simple``).
+        physics: what integrates the vehicles and finds their contacts (:class:`Physics`): PyBullet (default, the
+            reference) or the compiled kernels, which fly the same runs within the tolerances of
+            tests/surrealist_gym/sim/test_compiled_physics.py.
         competition_buffer_m: half width added to the flight's polyline in each run's competition distance [m]
             (``--buffer``): 0.125 is Aerialist's since Oct 2024, whose figures read that much lower; 0 (default) is
             Aerialist's before then, as the labelled PX4 flights were measured.
@@ -155,6 +165,7 @@ class SimConfig:
     avoidance_config: PlannerConfig | None = None
     sensor_config: DepthSensorConfig | None = None
     competition_buffer_m: float = 0.0
+    physics: Physics = field(default=Physics.PYBULLET, repr=False)  # out of the repr: stores' digests stay as they were
 
     def __post_init__(self):
         if not (isinstance(self.competition_buffer_m, (int, float)) and 0 <= self.competition_buffer_m < math.inf):
@@ -162,6 +173,7 @@ class SimConfig:
                              f"{self.competition_buffer_m!r}")
         object.__setattr__(self, "vehicle", VehicleModel(self.vehicle))
         object.__setattr__(self, "avoidance_model", AvoidanceModel(self.avoidance_model))
+        object.__setattr__(self, "physics", Physics(self.physics))
         object.__setattr__(self, "params", FrozenDict(dict(self.params)))
         object.__setattr__(self, "airframe_params", FrozenDict(dict(self.airframe_params)))
         if not 0.0 < self.obstacle_collision_scale <= 1.0:

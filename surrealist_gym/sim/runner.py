@@ -19,7 +19,8 @@ from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
 from ..outcomes import RunStatus
 from ..trajectory import Trajectory
-from .config import SimConfig, auto_timeout, resolve_params
+from .compiled_physics import CompiledWorld, fly
+from .config import Physics, SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
@@ -167,8 +168,9 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
     # modelled as converged: the controller's hover thrust is the vehicle's physical one.
     ctl_params = dict(params, MPC_THR_HOVER=vehicle.hover_command) if params.get("MPC_USE_HTE", 1) else params
-    with World(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz,
-               cfg.obstacle_collision_scale) as world:
+    world_type = World if cfg.physics == Physics.PYBULLET else CompiledWorld
+    with world_type(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz,
+                    cfg.obstacle_collision_scale) as world:
         sensor = None
         if avoidance:
             sensor, make_planner = _avoidance(test, cfg, params)
@@ -192,7 +194,10 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             r.ground, r.active, r.armed, r.integ = True, True, True, False
             world.set_yaw(body, yaw0)
             runs.append(r)
-        _loop(world, runs, cfg, params, vehicle, sensor, timeout)
+        if world_type is World:
+            _loop(world, runs, cfg, params, vehicle, sensor, timeout)
+        else:
+            _fly_compiled(world, runs, cfg, sensor, timeout)
     return [_result(r, test, cfg, params, seed) for r in runs]
 
 
@@ -290,6 +295,20 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
                     rest_z, k)
             world.remove(r.body)
             active.remove(r)
+
+
+def _fly_compiled(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float) -> None:
+    outer_dt = int(round(cfg.control_hz / cfg.outer_hz)) * (1.0 / cfg.control_hz)  # as _loop's
+    plan_div, log_div = int(round(cfg.outer_hz / cfg.planner_hz)), int(round(cfg.outer_hz / cfg.log_hz))
+    rest_z, stuck_w, stuck_d = world.rest_z, cfg.stuck_window_s, cfg.stuck_distance_m
+
+    def outer(r, k, t, pos, lin, orn):
+        return _outer(r, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d)
+
+    def record(r, t, pos, orn, lin, ang, k):
+        _record(r, t, pos, orn, lin, ang, rest_z, k)
+
+    fly(world, runs, cfg, timeout, outer, record)
 
 
 def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d) -> bool:
