@@ -1,0 +1,95 @@
+"""The compiled flight loop's parts against PyBullet (docs/compiled-loop.md).
+
+    python benchmarks/bench_compiled.py
+
+Prints: the depth sensor's ray batch (the SITL Iris camera, 30 x 23 rays) by the closed-form kernel and by PyBullet's
+rayTestBatch; one vehicle contact query; one control step of the rigid body by the kernel and by PyBullet (state
+read, force, step); one px4-v1.12-sitl-iris flight of mission1 + rilast random_run3_194 with each physics, and the
+bare PyBullet loop over the same simulated time. Best of several repetitions after a warm-up.
+"""
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+
+import numpy as np
+from bench_sim import ROOT, _best, plain_pybullet
+
+
+def _per_call(fn, n: int, repeat: int = 5) -> float:
+    return _best(lambda: [fn() for _ in range(n)], repeat) / n
+
+
+def main() -> None:
+    import surrealist_gym as sg
+    from surrealist_gym.sim import geometry_kernels as gk, rigid_body as rb, simulate
+    from surrealist_gym.sim.profiles import load_profile
+    from surrealist_gym.sim.pybullet_quiet import pb
+    from surrealist_gym.sim.sensor import DepthSensor
+    from surrealist_gym.sim.vehicle import IRIS
+    from surrealist_gym.sim.world import World
+
+    competition = ROOT.parent / "shared" / "data" / "competition"
+    with open(competition / "rilast-mission1" / "tests.csv", newline="") as f:
+        row = next(r for r in csv.DictReader(f) if r["test_id"] == "random_run3_194")
+    obstacles = [sg.Obstacle(**o) for o in json.loads(row["obstacles"])]
+    test = sg.load_test(competition / "case_studies" / "mission1.yaml").with_obstacles(obstacles)
+    profile = load_profile("px4-v1.12-sitl-iris")
+
+    sensor, scene = DepthSensor(obstacles, profile.sensor_config()), gk.scene_array(obstacles)
+    p, yaw, r = np.array([2.0, 24.0, 10.0]), math.radians(80.0), sensor._rays  # facing both boxes
+    c, s = math.cos(yaw), math.sin(yaw)
+    d = np.stack([r[:, 0] * c - r[:, 1] * s, r[:, 0] * s + r[:, 1] * c, r[:, 2]], axis=1) * 18.0
+    a = np.tile(p, (len(d), 1))
+    t, what = np.empty(len(d)), np.empty(len(d), dtype=np.int64)
+    gk.cast_rays(a, d, 1.0, scene, True, t, what)
+    kernel = _per_call(lambda: gk.cast_rays(a, d, 1.0, scene, True, t, what), 200)
+    flip = np.array([1.0, 1.0, -1.0])
+    with World(obstacles, IRIS, 1, 200.0, 100.0) as world:
+        froms, tos = (a * flip).tolist(), ((a + d) * flip).tolist()
+        bullet = _per_call(lambda: pb.rayTestBatch(froms, tos, physicsClientId=world.cid), 20)
+        body, cid = world.vehicles[0], world.cid
+        pb.resetBasePositionAndOrientation(body, [0, 0, -10], [0, 0, 0, 1], physicsClientId=cid)
+
+        def pb_step():
+            pos, _ = pb.getBasePositionAndOrientation(body, physicsClientId=cid)
+            pb.getBaseVelocity(body, physicsClientId=cid)
+            pb.applyExternalForce(body, -1, (0.0, 0.0, -14.7), pos, pb.WORLD_FRAME, physicsClientId=cid)
+            pb.stepSimulation(physicsClientId=cid)
+            pb.getContactPoints(physicsClientId=cid)
+
+        pb_one = _per_call(pb_step, 2000)
+    print(f"ray batch, {len(d)} rays ({int((what >= 0).sum())} hit a box): kernel {kernel * 1e6:.1f} us, PyBullet "
+          f"rayTestBatch {bullet * 1e6:.0f} us ({bullet / kernel:.0f}x)")
+    half = np.array([x / 2 for x in IRIS.size])
+    axes, centre, thr = gk.vehicle_axes_ned(0.0, 0.0, 0.3, math.sqrt(1 - 0.09)), np.array([-7.0, 11.0, 10.0]), \
+        gk.contact_threshold(half)
+    contact = _per_call(lambda: gk.vehicle_contact(centre, axes, half, thr, scene), 5000)
+    state, body_p = rb.initial_state((0.0, 0.0, -10.0)), rb.body_params(IRIS)
+    kstep = _per_call(lambda: rb.step(state, (0.0, 0.0, -14.7), (0.0, 0.0, 0.0), 0.01, 2, body_p, half), 5000)
+    from surrealist_gym.sim.compiled_physics import advance
+    from surrealist_gym.sim.config import PX4_DEFAULTS
+    from surrealist_gym.sim.control import kernel_params
+
+    kp, ks = kernel_params(dict(PX4_DEFAULTS), IRIS, 0.01, (IRIS.drag_xy, IRIS.drag_z, IRIS.drag_quad)), np.zeros(10)
+    state = rb.initial_state((0.0, 0.0, -10.0))
+    hover = (1.0, 0.0, 0.0, 0.0), IRIS.hover_command, (0.0, 0.0, 0.0)
+    n = 1000
+    loop = _per_call(lambda: advance(state, *hover, 0.01, True, True, kp, ks, n, 2, body_p, half, scene, thr), 5) / n
+    print(f"vehicle contact query: {contact * 1e6:.2f} us; one control step (2 sub-steps): rigid body alone "
+          f"{kstep * 1e6:.2f} us called from Python, inner loop + rigid body + contacts {loop * 1e6:.2f} us in the "
+          f"compiled loop; PyBullet read + force + step + contacts {pb_one * 1e6:.1f} us")
+    for physics in ("pybullet", "compiled"):
+        cfg = dataclasses.replace(profile.sim_config(), physics=physics)
+        (run,) = simulate(test, runs=1, config=cfg)
+        one = _best(lambda: simulate(test, runs=1, config=cfg), 5)
+        print(f"flight, physics={physics} ({run.status.value}): {run.duration:.1f} s simulated in {one * 1e3:.0f} ms "
+              f"-> {run.duration / one:.0f}x real time")
+    bare = _best(lambda: plain_pybullet(run.duration, 200.0), 5)
+    print(f"bare PyBullet loop, {run.duration:.1f} s at 200 Hz: {bare * 1e3:.0f} ms -> {run.duration / bare:.0f}x")
+
+
+if __name__ == "__main__":
+    main()
