@@ -67,27 +67,36 @@ class CompiledWorld:
 
 @njit(cache=True)
 def advance(s, q_sp, thrust, wind, dt, armed, integrate, kp, ks, n_steps, n_sub, body, half, scene,
-            threshold):  # pragma: no cover - compiled
+            threshold, held, rest):  # pragma: no cover - compiled
     """Up to ``n_steps`` control steps of one vehicle (state ``s``, in place): :func:`inner_step` with the held
     setpoints (``kp``/``ks`` its parameters and state), :func:`rigid_body.step` with ``n_sub`` sub-steps, then the
-    contacts, as the PyBullet loop reads them after each ``stepSimulation``.
+    contacts, as the PyBullet loop reads them after each ``stepSimulation``. While ``held`` (resting on the ground
+    before the thrust first exceeds the weight) the vehicle is put back at its pose ``rest`` (the state's first 7
+    values), still, after each step, as the PyBullet loop does.
 
     Returns:
-        (what, steps): ``what`` the obstacle's row touched at step ``steps`` (the run ends there), else GROUND when
-        the ground was touched after any step, else MISS; ``steps`` the control steps taken.
+        (what, steps, held): ``what`` the obstacle's row touched at step ``steps`` (the run ends there), else GROUND
+        when the ground was touched after any step, else MISS; ``steps`` the control steps taken; ``held`` whether
+        the vehicle is still held.
     """
     ground = False
+    weight = body[0] * body[6]
     for k in range(n_steps):
         f = inner_step((s[3], s[4], s[5], s[6]), (s[7], s[8], s[9]), (s[10], s[11], s[12]), q_sp, thrust, wind, dt,
                        armed, integrate, kp, ks)
+        if held and -f[2] > weight:
+            held = False
         rb.step(s, (f[0], f[1], f[2]), (f[3], f[4], f[5]), dt, n_sub, body, half)
         axes = vehicle_axes_ned(s[3], s[4], s[5], s[6])
         what = vehicle_contact(np.array((s[0], s[1], -s[2])), axes, half, threshold, scene)
         if what >= 0:
-            return what, k + 1
+            return what, k + 1, held
         if what == GROUND:
             ground = True
-    return (GROUND if ground else MISS), n_steps
+        if held:
+            s[:7] = rest
+            s[7:] = 0.0
+    return (GROUND if ground else MISS), n_steps, held
 
 
 def fly(world: CompiledWorld, runs: list, cfg, timeout: float, outer: Callable, record: Callable) -> None:
@@ -99,6 +108,7 @@ def fly(world: CompiledWorld, runs: list, cfg, timeout: float, outer: Callable, 
     max_steps = int(math.ceil(timeout * cfg.control_hz))
     states, scene, half, body, thr, n_sub = world.states, world.scene, world.half, world.body, world.threshold, \
         world.n_sub
+    rest = {r.body: states[r.body, :7].copy() for r in runs}  # each vehicle's pose on the ground
     active = list(runs)
     step = 0
     while active:
@@ -113,8 +123,8 @@ def fly(world: CompiledWorld, runs: list, cfg, timeout: float, outer: Callable, 
                 rb.step(s, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), dt, n_sub, body, half)
                 ended.append((r, r.end_t))
                 continue
-            what, taken = advance(s, r.q_sp, r.thrust, r.wind, dt, r.armed, r.integ, r.kp, r.ks, n, n_sub, body,
-                                  half, scene, thr)
+            what, taken, r.held = advance(s, r.q_sp, r.thrust, r.wind, dt, r.armed, r.integ, r.kp, r.ks, n, n_sub,
+                                          body, half, scene, thr, r.held, rest[r.body])
             if what >= 0:
                 r.status, r.end_t = RunStatus.COLLISION, (step + taken) * dt
                 r.message = f"collision with obstacle {what} at t={(step + taken) * dt:.2f} s"

@@ -26,7 +26,7 @@ from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
 from .pybullet_quiet import pb
 from .ranges import FrozenDict
-from .vehicle import preset
+from .vehicle import GRAVITY, preset
 from .world import World
 
 if TYPE_CHECKING:
@@ -116,7 +116,7 @@ class _Run:
 
     __slots__ = ("body", "pp", "ps", "kp", "ks", "wind", "armed", "integ", "nav", "planner", "noise", "q_sp", "thrust",
                  "status", "message", "end_t", "log", "true", "plan_out", "anchor", "anchor_t", "anchor_phase",
-                 "ground", "active", "index")
+                 "ground", "active", "index", "held")
 
 
 def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
@@ -191,7 +191,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             r.status, r.message, r.end_t = None, "", 0.0
             r.log, r.true, r.plan_out = [], [], None
             r.anchor, r.anchor_t, r.anchor_phase = None, 0.0, None
-            r.ground, r.active, r.armed, r.integ = True, True, True, False
+            r.ground, r.active, r.armed, r.integ, r.held = True, True, True, False, True
             world.set_yaw(body, yaw0)
             runs.append(r)
         if world_type is World:
@@ -245,6 +245,9 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
     apply_force, apply_torque, frame = pb.applyExternalForce, pb.applyExternalTorque, pb.WORLD_FRAME
     step_sim, contacts = pb.stepSimulation, pb.getContactPoints
     stuck_w, stuck_d = cfg.stuck_window_s, cfg.stuck_distance_m
+    weight = vehicle.mass * GRAVITY
+    rest = {r.body: get_pose(r.body, physicsClientId=cid) for r in runs}  # each vehicle's pose on the ground
+    reset_pose, reset_vel, still = pb.resetBasePositionAndOrientation, pb.resetBaseVelocity, (0.0, 0.0, 0.0)
     active = list(runs)
     step = 0
     max_steps = int(math.ceil(timeout * cfg.control_hz))
@@ -263,6 +266,8 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
                 continue
             fx, fy, fz, tx, ty, tz = inner(orn, lin, ang, r.q_sp, r.thrust, r.wind, dt, r.armed, r.integ, r.kp,
                                            r.ks)
+            if r.held and -fz > weight:
+                r.held = False  # the thrust lifts it: from here the physics flies it
             apply_force(body, -1, (fx, fy, fz), pos, frame, physicsClientId=cid)
             apply_torque(body, -1, (tx, ty, tz), frame, physicsClientId=cid)
         step_sim(physicsClientId=cid)
@@ -280,6 +285,10 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
                 r.message = f"collision with obstacle {obstacle_index[other]} at t={step * dt:.2f} s"
             else:
                 r.ground = True
+        for r in active:
+            if r.held:  # resting on the ground until the thrust first lifts it: held at its starting pose
+                reset_pose(r.body, *rest[r.body], physicsClientId=cid)
+                reset_vel(r.body, still, still, physicsClientId=cid)
         if step >= max_steps:
             done = True
             for r in active:
