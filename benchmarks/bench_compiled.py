@@ -4,8 +4,10 @@
 
 Prints: the depth sensor's ray batch (the SITL Iris camera, 30 x 23 rays) by the closed-form kernel and by PyBullet's
 rayTestBatch; one vehicle contact query; one control step of the rigid body by the kernel and by PyBullet (state
-read, force, step); one px4-v1.12-sitl-iris flight of mission1 + rilast random_run3_194 with each physics, and the
-bare PyBullet loop over the same simulated time. Best of several repetitions after a warm-up.
+read, force, step); the navigator and flight task (every ``Navigator.update`` call of the flight below replayed
+through the class, through the kernel called from Python and through the kernel in a compiled loop); one
+px4-v1.12-sitl-iris flight of mission1 + rilast random_run3_194 with each physics, and the bare PyBullet loop over
+the same simulated time. Best of several repetitions after a warm-up.
 """
 from __future__ import annotations
 
@@ -16,10 +18,82 @@ import math
 
 import numpy as np
 from bench_sim import ROOT, _best, plain_pybullet
+from numba import njit
+
+from surrealist_gym.sim import navigator_kernels as nk
 
 
 def _per_call(fn, n: int, repeat: int = 5) -> float:
     return _best(lambda: [fn() for _ in range(n)], repeat) / n
+
+
+def _navigator_calls(test, config) -> tuple[tuple, list[tuple]]:
+    """One flight's Navigator: its constructor's arguments and the arguments of every ``update`` call."""
+    from surrealist_gym.sim import simulate
+    from surrealist_gym.sim.navigator import Navigator
+
+    made, calls = [], []
+    init, update = Navigator.__init__, Navigator.update
+
+    def recording_init(self, *args):
+        init(self, *args)
+        made.append(args)
+
+    def recording_update(self, *args):
+        calls.append(args)
+        return update(self, *args)
+
+    Navigator.__init__, Navigator.update = recording_init, recording_update
+    try:
+        simulate(test, runs=1, config=config)
+    finally:
+        Navigator.__init__, Navigator.update = init, update
+    return made[0], calls
+
+
+@njit(cache=True)
+def _replay_navigator(state, mission, params, table):  # pragma: no cover - compiled
+    """``nav_update`` over a table of recorded calls (t, pos, vel, yaw, dt, ground, plan kind, plan vector, plan
+    yaw), as the compiled outer loop will call it."""
+    total = 0.0
+    for k in range(table.shape[0]):
+        r = table[k]
+        out = nk.nav_update(state, mission, params, r[0], (r[1], r[2], r[3]), (r[4], r[5], r[6]), r[7], r[8],
+                            r[9] > 0.5, int(r[10]), (r[11], r[12], r[13]), r[14])
+        total += out[3]
+    return total
+
+
+def navigator_per_call(test, config) -> None:
+    """Print the navigator + flight task's cost per update: the class, the kernel from Python, the kernel in a
+    compiled loop, on every update call of one flight."""
+    from surrealist_gym.sim.navigator import Navigator
+
+    made, calls = _navigator_calls(test, config)
+    mission, params = nk.mission_array(made[0]), nk.param_vector(made[1], *made[2:])
+    inputs = [(*args[:6], *nk.plan_inputs(args[6])) for args in calls]
+    table = np.array([(t, *pos, *vel, yaw, dt, float(ground), kind, *vector, plan_yaw)
+                      for t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw in inputs], dtype=np.float64)
+
+    def run_class():
+        nav = Navigator(*made)
+        for args in calls:
+            nav.update(*args)
+
+    def run_kernel():
+        state = nk.initial_state(params)
+        for t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw in inputs:
+            nk.nav_update(state, mission, params, t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw)
+
+    def run_compiled():
+        _replay_navigator(nk.initial_state(params), mission, params, table)
+
+    run_kernel(), run_compiled()  # compile
+    n = len(calls)
+    ref, kernel, compiled = (_best(fn, 5) / n for fn in (run_class, run_kernel, run_compiled))
+    print(f"navigator + flight task, the flight's {n} updates: class {ref * 1e6:.1f} us per call, kernel "
+          f"{kernel * 1e6:.2f} us called from Python ({ref / kernel:.0f}x), {compiled * 1e6:.3f} us in a compiled "
+          f"loop ({ref / compiled:.0f}x)")
 
 
 def main() -> None:
@@ -81,6 +155,7 @@ def main() -> None:
     print(f"vehicle contact query: {contact * 1e6:.2f} us; one control step (2 sub-steps): rigid body alone "
           f"{kstep * 1e6:.2f} us called from Python, inner loop + rigid body + contacts {loop * 1e6:.2f} us in the "
           f"compiled loop; PyBullet read + force + step + contacts {pb_one * 1e6:.1f} us")
+    navigator_per_call(test, profile.sim_config())
     for physics in ("pybullet", "compiled"):
         cfg = dataclasses.replace(profile.sim_config(), physics=physics)
         (run,) = simulate(test, runs=1, config=cfg)
