@@ -38,7 +38,7 @@ import numpy as np
 from numba import njit
 
 from ..mission import Command, Mission
-from .flight_task import stopping_speed
+from .flight_task import _COS_TURN, _TURN_MIN_SPEED, stopping_speed
 from .navigator import Phase
 
 __all__ = ["PHASES", "N_STATE", "PLAN_NONE", "PLAN_VELOCITY", "PLAN_POSITION", "initial_state", "mission_array",
@@ -134,9 +134,6 @@ S_TASK_MAX_SPEED_PREV = 35  # the horizontal speed when last not turning
 S_TASK_TURNING = 36     # 1 while turning (the speed lock holds)
 S_TASK_CRUISE = 37      # the task's cruise speed
 N_STATE = 38
-
-_COS_TURN = 0.98        # flight_task._COS_TURN
-_TURN_MIN_SPEED = 0.2   # flight_task._TURN_MIN_SPEED
 
 _stopping_speed = njit(cache=True)(stopping_speed)  # the flight task's own function, compiled
 
@@ -385,11 +382,9 @@ def _next_item(state, mission, params, t, pos):  # pragma: no cover - compiled
         if index >= n:
             state[S_PHASE] = PH_HOLD
             state[S_FINISHED_IN_AIR] = 1.0
-            if index > 0:
-                state[S_TARGET + 3] = state[S_TARGET + 4] = 0.0
-            else:
+            if index <= 0:  # no item at all: hold where the vehicle is
                 state[S_TARGET], state[S_TARGET + 1], state[S_TARGET + 2] = pos[0], pos[1], pos[2]
-                state[S_TARGET + 3] = state[S_TARGET + 4] = 0.0
+            state[S_TARGET + 3] = state[S_TARGET + 4] = 0.0  # the class keeps target[:3]
             state[S_HOLD_UNTIL] = t + 2.0
             return
         cmd = int(mission[index, M_COMMAND])
