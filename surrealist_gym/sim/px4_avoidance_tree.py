@@ -471,8 +471,9 @@ class TreeWork(NamedTuple):
     dist: np.ndarray
     count: np.ndarray
     cells: np.ndarray
+    mean: np.ndarray
+    cell_cost: np.ndarray
     col: np.ndarray
-    used: np.ndarray
     cols: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
@@ -508,9 +509,11 @@ def _tree_work(radius, children):  # pragma: no cover - compiled
                     np.zeros(MAX_NODES, dtype=np.bool_), np.zeros(MAX_NODES, dtype=np.bool_),
                     np.empty(MAX_NODES, dtype=np.int64),
                     np.zeros(N_E * N_Z), np.zeros(N_E * N_Z), np.empty(N_E * N_Z, dtype=np.int64),
-                    np.zeros((n_cols, n_rows)), np.zeros(n_cols, dtype=np.bool_), np.empty(n_cols, dtype=np.int64),
-                    np.empty(n_cols, dtype=np.int64), np.empty(n_cols, dtype=np.int64), np.empty((n_cols, N_E)),
-                    np.zeros(n_cols), np.empty(max(N_E, N_Z) + 2 * radius), np.empty(N_Z),
+                    np.empty(N_E * N_Z), np.empty(N_E * N_Z),
+                    np.zeros((n_cols, n_rows)), np.empty(n_cols, dtype=np.int64),
+                    np.full(n_cols, n_rows, dtype=np.int64), np.full(n_cols, -1, dtype=np.int64),
+                    np.empty((n_cols, N_E)),
+                    np.zeros((1, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius), np.empty((1, N_Z)),
                     np.empty(N_Z), np.empty(N_E), np.zeros(N_E, dtype=np.bool_),
                     cos_a, sin_a, cos_e, sin_e,
                     np.empty(children, dtype=np.int64), np.empty(children, dtype=np.int64), np.empty(children))
@@ -523,15 +526,15 @@ def tree_work(settings: KernelSettings) -> TreeWork:
 
 @njit(cache=True, inline="always")
 def _mod360(x):  # pragma: no cover - compiled
-    """``x % 360.0`` (Python's), without fmod where one shift is exact: (0, 360) as is, [360, 720) minus 360 (exact,
-    Sterbenz), (-360, 0) plus 360 (the correction Python applies after fmod); elsewhere ``%`` itself."""
-    if 0.0 < x < 360.0:
-        return x
-    if 360.0 <= x < 720.0:
-        return x - 360.0
-    if -360.0 < x < 0.0:
+    """``x % 360.0`` for x in (-360, 720) or NaN, the operations Python's modulo does there: x + 360 below 0, x - 360
+    (exact: Sterbenz) from 360 on, x itself between (where Python gives -0.0 as 0.0; subtracting 180 then gives
+    the same). :func:`_expand` calls it with ``az - az_goal + 180`` in [-177, 537] (``az_goal`` from atan2).
+    Without the ``%`` (fmod), which the vectorized loop would compute for every cell."""
+    if x < 0.0:
         return x + 360.0
-    return x % 360.0
+    if x >= 360.0:
+        return x - 360.0
+    return x
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -567,15 +570,15 @@ def _cell_index(dx, dy, dz):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _conic_line(p, lo, hi, r, n, box, out):  # pragma: no cover - compiled
-    """The conic kernel of radius ``r`` along one padded line ``p`` (n + 2r values, zero outside ``[lo, hi]``) into
-    ``out[:n]``: the two running box sums of :func:`_smooth_columns` / :func:`_smooth_row`, the same additions in
-    the same order, computed only where they can change. Before the first nonzero value enters the window a
-    running sum adds zeros and stays 0.0; after the last one leaves it adds ``c - c`` and keeps its value; those
-    stretches are written, not summed. ``box`` (>= n + r) is a work buffer."""
+def _conic_line(src, si, lo, hi, r, n, box, out, oi):  # pragma: no cover - compiled
+    """The conic kernel of radius ``r`` along one padded line ``src[si]`` (n + 2r values, zero outside ``[lo, hi]``)
+    into ``out[oi, :n]``: the two running box sums of :func:`_smooth_columns` / :func:`_smooth_row`, the same
+    additions in the same order, computed only where they can change. Before the first nonzero value enters the
+    window a running sum adds zeros and stays 0.0; after the last one leaves it adds ``c - c`` and keeps its value;
+    those stretches are written, not summed. ``box`` (>= n + r) is a work buffer."""
     length = r + 1
     m = n + r
-    j0 = max(0, lo - r)  # box[j] sums p[j:j + length]: 0.0 while j + r < lo
+    j0 = max(0, lo - r)  # box[j] sums src[si, j:j + length]: 0.0 while j + r < lo
     j1 = min(m - 1, hi + 1)  # and box[hi + 1] from then on
     for j in range(j0):
         box[j] = 0.0
@@ -583,30 +586,30 @@ def _conic_line(p, lo, hi, r, n, box, out):  # pragma: no cover - compiled
     start = j0
     if j0 == 0:
         for j in range(length):
-            s += p[j]
+            s += src[si, j]
         box[0] = s
         start = 1
     for j in range(start, j1 + 1):
-        s += p[j + length - 1] - p[j - 1]
+        s += src[si, j + length - 1] - src[si, j - 1]
         box[j] = s
     for j in range(j1 + 1, m):
         box[j] = s
     i0 = max(0, j0 - r)  # the second pass over box: 0.0 before j0 and constant after j1, likewise
     i1 = min(n - 1, j1 + 1)
     for i in range(i0):
-        out[i] = 0.0
+        out[oi, i] = 0.0
     s = 0.0
     start = i0
     if i0 == 0:
         for j in range(length):
             s += box[j]
-        out[0] = s / length
+        out[oi, 0] = s / length
         start = 1
     for i in range(start, i1 + 1):
         s += box[i + length - 1] - box[i - 1]
-        out[i] = s / length
+        out[oi, i] = s / length
     for i in range(i1 + 1, n):
-        out[i] = s / length
+        out[oi, i] = s / length
 
 
 @njit(cache=True, error_model="numpy")
@@ -627,7 +630,6 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
     r = settings.smoothing_radius
     n_best = settings.children
     dist, count, cells, col, cols, lo, hi = work.dist, work.count, work.cells, work.col, work.cols, work.lo, work.hi
-    used = work.used
     cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
     # the histogram (_histogram): each point's cell and distance (a loop that vectorizes), then the sums in point
     # order, the touched cells listed
@@ -639,24 +641,36 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
     n_cells = 0
     for i in range(n_points):
         c = pcell[i]
-        if count[c] == 0.0:
-            cells[n_cells] = c
-            n_cells += 1
+        cells[n_cells] = c  # kept when the cell was empty (without a branch)
+        n_cells += count[c] == 0.0
         dist[c] += pdist[i]
         count[c] += 1.0
-    # mean distances and obstacle costs, put in the padded matrix (rows beyond the poles: the opposite azimuth,
-    # mirrored in elevation)
+    # mean distances and obstacle costs (a loop that vectorizes), then the costs put in the padded matrix (rows
+    # beyond the poles: the opposite azimuth, mirrored in elevation)
+    mean, cell_cost = work.mean, work.cell_cost
+    for k in range(n_cells):
+        c = cells[k]
+        d = dist[c] / count[c]
+        x = obst_param - d
+        mean[k] = d
+        cell_cost[k] = 5000.0 * (1.0 + x / math.sqrt(1.0 + x * x))
     n_cols = 0
     occupied = False
     for k in range(n_cells):
         c = cells[k]
-        dist[c] /= count[c]
-        d = dist[c]
+        d = mean[k]
+        dist[c] = d
         if d > 0.0:
-            x = obst_param - d
-            cost = 5000.0 * (1.0 + x / math.sqrt(1.0 + x * x))
+            cost = cell_cost[k]
             occupied = True
             e, z = c // N_Z, c % N_Z
+            if r <= e < N_E - r and r <= z < N_Z - r:  # one place: the cell's own
+                cc, row = r + z, r + e
+                col[cc, row] = cost
+                cols[n_cols] = cc  # listed when new (hi < 0: lo and hi rest at n_rows and -1)
+                n_cols += hi[cc] < 0
+                lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+                continue
             # the cell's places in the padded matrix: its own and, within r rows of a pole, its mirror beyond the
             # pole (the opposite azimuth); each with its azimuth-wrapped copy within r cells of the wrap
             for place in range(3):
@@ -678,20 +692,16 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
                     else:
                         continue
                     col[cc, row] = cost
-                    if not used[cc]:
-                        used[cc] = True
-                        cols[n_cols] = cc
-                        lo[cc], hi[cc] = row, row
-                        n_cols += 1
-                    else:
-                        lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+                    cols[n_cols] = cc
+                    n_cols += hi[cc] < 0
+                    lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
     smooth = occupied and r > 0
     first, last = N_Z + 2 * r, -1  # the first and last listed columns
     for k in range(n_cols):
         c = cols[k]
         first, last = min(first, c), max(last, c)
         if smooth:
-            _conic_line(col[c], lo[c], hi[c], r, N_E, work.box, work.colsm[c])
+            _conic_line(col, c, lo[c], hi[c], r, N_E, work.box, work.colsm, c)
     # goal and line directions from the origin
     dgx, dgy, dgz = gx - ox, gy - oy, gz - oz
     dist_goal = math.sqrt(dgx * dgx + dgy * dgy + dgz * dgz)
@@ -742,17 +752,17 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
             break
         if smooth:  # the row of the column-smoothed matrix, then smoothed along azimuth (_smooth_row)
             for k in range(n_cols):
-                padded_row[cols[k]] = work.colsm[cols[k], e]
-            _conic_line(padded_row, first, last, r, N_Z, work.box, obst_row)
+                padded_row[0, cols[k]] = work.colsm[cols[k], e]
+            _conic_line(padded_row, 0, first, last, r, N_Z, work.box, obst_row, 0)
             for k in range(n_cols):
-                padded_row[cols[k]] = 0.0
+                padded_row[0, cols[k]] = 0.0
         else:
             for z in range(N_Z):
-                obst_row[z] = col[r + z, r + e]
+                obst_row[0, z] = col[r + z, r + e]
         ce, se = cos_e[e], sin_e[e]
         for z in range(N_Z):
             dot = ce * (cos_a[z] * vx + sin_a[z] * vy) + se * vz
-            cost = obst_row[z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
+            cost = obst_row[0, z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
             # keep the n_best cheapest, sorted ascending
             if n < n_best:
                 j = n
@@ -773,7 +783,7 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         c = cols[k]
         for i in range(lo[c], hi[c] + 1):
             col[c, i] = 0.0
-        used[c] = False
+        lo[c], hi[c] = col.shape[1], -1
     return n, occupied
 
 
@@ -817,7 +827,8 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None)
             return 0
         n_near = 0
         for i in range(size):
-            if (pos[i, 0] - ox) ** 2 + (pos[i, 1] - oy) ** 2 + (pos[i, 2] - oz) ** 2 < near2:
+            dx, dy, dz = pos[i, 0] - ox, pos[i, 1] - oy, pos[i, 2] - oz
+            if dx * dx + dy * dy + dz * dz < near2:
                 near[n_near] = i
                 n_near += 1
         for j in range(k):
@@ -830,14 +841,16 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None)
             close = False
             for q in range(n_near):
                 i = near[q]
-                if (pos[i, 0] - nx) ** 2 + (pos[i, 1] - ny) ** 2 + (pos[i, 2] - nz) ** 2 < 0.04:
+                dx, dy, dz = pos[i, 0] - nx, pos[i, 1] - ny, pos[i, 2] - nz
+                if dx * dx + dy * dy + dz * dz < 0.04:
                     close = True
                     break
             if close:
                 continue
             pos[size, 0], pos[size, 1], pos[size, 2] = nx, ny, nz
             parent[size], depth[size], closed[size] = origin, depth[origin] + 1, False
-            reach[size] = (nx - px) ** 2 + (ny - py) ** 2 + (nz - pz) ** 2 < rmax * rmax
+            dx, dy, dz = nx - px, ny - py, nz - pz
+            reach[size] = dx * dx + dy * dy + dz * dz < rmax * rmax
             h = w_h * math.sqrt((gx - nx) ** 2 + (gy - ny) ** 2 + (gz - nz) ** 2)
             heur[size] = h
             total[size] = total[origin] - heur[origin] + cand_c[j] + h
