@@ -794,7 +794,7 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None)
     (0 when the vehicle's histogram is empty). ``work``: the planner's :func:`tree_work` (allocated here when
     None). The same result as :func:`_build_tree_reference`, bit for bit: each expansion is :func:`_expand`, and a
     child is checked against the nodes near its parent only (a node within 0.2 m of the child lies within
-    ``node_distance`` + 0.2 m of the parent; the list takes ``node_distance`` + 0.7 m)."""
+    ``node_distance`` + 0.2 m of the parent; the list takes 1 mm more, far above the rounding of coordinates)."""
     if work is None:
         work = _tree_work(settings.smoothing_radius, settings.children)
     points = np.ascontiguousarray(cloud.T)
@@ -807,7 +807,7 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None)
     closed, reach, near = work.closed, work.reach, work.near
     cos_a, sin_a, cos_e, sin_e = work.cos_a, work.sin_a, work.cos_e, work.sin_e
     cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
-    near2 = (step + 0.7) ** 2
+    near2 = (step + 0.201) ** 2
     pos[0, 0], pos[0, 1], pos[0, 2] = px, py, pz
     parent[0], depth[0], closed[0] = -1, 0, False
     reach[0] = 0.0 < rmax * rmax  # the root's distance to the vehicle, 0
