@@ -5,9 +5,11 @@
 Prints: the depth sensor's ray batch (the SITL Iris camera, 30 x 23 rays) by the closed-form kernel and by PyBullet's
 rayTestBatch; one vehicle contact query; one control step of the rigid body by the kernel and by PyBullet (state
 read, force, step); the navigator and flight task (every ``Navigator.update`` call of the flight below replayed
-through the class, through the kernel called from Python and through the kernel in a compiled loop); one
-px4-v1.12-sitl-iris flight of mission1 + rilast random_run3_194 with each physics, and the bare PyBullet loop over
-the same simulated time. Best of several repetitions after a warm-up.
+through the class, through the kernel called from Python and through the kernel in a compiled loop); the
+PX4-Avoidance look-ahead tree (every build of the flight below replayed through the dense reference and through
+``_build_tree``, and the whole flight with each); one px4-v1.12-sitl-iris flight of mission1 + rilast
+random_run3_194 with each physics, and the bare PyBullet loop over the same simulated time. Best of several
+repetitions after a warm-up, except where two versions alternate (medians).
 """
 from __future__ import annotations
 
@@ -96,6 +98,74 @@ def navigator_per_call(test, config) -> None:
           f"loop ({ref / compiled:.0f}x)")
 
 
+def _tree_calls(test, config) -> list[tuple]:
+    """The arguments of every look-ahead tree build of one flight (``_build_tree`` as ``Px4LocalPlanner.update``
+    calls it), without the output buffer."""
+    from surrealist_gym.sim import px4_avoidance, simulate
+
+    calls, build = [], px4_avoidance._build_tree
+
+    def recording(cloud, *args):
+        calls.append((cloud.copy(), *args[:-1]))
+        return build(cloud, *args)
+
+    px4_avoidance._build_tree = recording
+    try:
+        simulate(test, runs=1, config=config)
+    finally:
+        px4_avoidance._build_tree = build
+    return calls
+
+
+def tree_per_build(test, config, repeat: int = 9) -> None:
+    """Print the look-ahead tree's cost per build on every build of one flight, the dense reference
+    (``_build_tree_reference``) against ``_build_tree`` (checked equal first), and the whole flight with each; the
+    two alternate, medians."""
+    import time
+
+    from surrealist_gym.sim import px4_avoidance, simulate
+    from surrealist_gym.sim.px4_avoidance_tree import MAX_NODES, _build_tree, _build_tree_reference, tree_work
+
+    calls = _tree_calls(test, config)
+    path, other = np.empty((MAX_NODES, 3)), np.empty((MAX_NODES, 3))
+    work = tree_work(calls[0][5])
+    for args in calls:
+        k = _build_tree_reference(*args, path)
+        assert _build_tree(*args, other, work) == k and np.array_equal(path[:k], other[:k])
+
+    def replay(build, *extra):
+        t0 = time.perf_counter()
+        for args in calls:
+            build(*args, path, *extra)
+        return (time.perf_counter() - t0) / len(calls)
+
+    ref, new = [], []
+    for _ in range(repeat):
+        ref.append(replay(_build_tree_reference))
+        new.append(replay(_build_tree, work))
+    ref, new = float(np.median(ref)), float(np.median(new))
+    print(f"look-ahead tree, the flight's {len(calls)} builds (same paths): dense reference {ref * 1e6:.0f} us, "
+          f"_build_tree {new * 1e6:.0f} us per build ({ref / new:.2f}x)")
+
+    def flight(build):
+        px4_avoidance._build_tree = build
+        try:
+            t0 = time.perf_counter()
+            (run,) = simulate(test, runs=1, config=config)
+            return time.perf_counter() - t0, run
+        finally:
+            px4_avoidance._build_tree = _build_tree
+
+    flights = {build: [] for build in (_build_tree_reference, _build_tree)}
+    for _ in range(max(repeat // 2, 3)):
+        for build, times in flights.items():
+            times.append(flight(build))
+    (before, a), (after, b) = ((float(np.median([t for t, _ in v])), v[0][1]) for v in flights.values())
+    same = np.array_equal(a.true_xyz, b.true_xyz)
+    print(f"flight with the dense reference tree {before * 1e3:.0f} ms, with _build_tree {after * 1e3:.0f} ms "
+          f"({before / after:.2f}x; {a.duration:.1f} s simulated, same trajectory: {same})")
+
+
 def main() -> None:
     import surrealist_gym as sg
     from surrealist_gym.sim import geometry_kernels as gk, rigid_body as rb, simulate
@@ -156,6 +226,7 @@ def main() -> None:
           f"{kstep * 1e6:.2f} us called from Python, inner loop + rigid body + contacts {loop * 1e6:.2f} us in the "
           f"compiled loop; PyBullet read + force + step + contacts {pb_one * 1e6:.1f} us")
     navigator_per_call(test, profile.sim_config())
+    tree_per_build(test, profile.sim_config())
     for physics in ("pybullet", "compiled"):
         cfg = dataclasses.replace(profile.sim_config(), physics=physics)
         (run,) = simulate(test, runs=1, config=cfg)

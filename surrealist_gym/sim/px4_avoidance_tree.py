@@ -6,7 +6,12 @@ names; the planner class there calls them once per cycle.
 
 The kernels take the planner's constant settings as one :class:`KernelSettings` (a named tuple, which numba passes
 as a tuple of its fields), the per-cycle state (vehicle position, velocity, goal, the mission line's point) as
-3-tuples, and the cost search's work buffers as one :class:`_Work`.
+3-tuples, and the cost search's work buffers as one :class:`_Work` (the dense reference) or :class:`TreeWork`.
+
+Two versions of the tree search: :func:`_build_tree_reference` is PX4-Avoidance's as written, each expansion a
+dense 30 x 60 histogram, cost matrix and smoothing (:func:`_best_cells`); :func:`_build_tree`, which the planner
+calls, gives the same paths bit for bit (the same operations in the same order, no fastmath) on sparse buffers:
+each expansion (:func:`_expand`) touches only the cells its points fall in and smooths only where a sum can change.
 """
 from __future__ import annotations
 
