@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from .avoidance import YawMode, _plan
-from .navigator_kernels import py_hypot, py_remainder
+from .cpython_math import py_hypot, py_remainder
 
 S_T_PREV, S_HEADING, S_YAW = 0, 1, 2
 STATE_SIZE = 3

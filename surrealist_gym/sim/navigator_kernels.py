@@ -23,9 +23,7 @@ Arrays, built once per run or per test:
 a kind (:data:`PLAN_NONE`, :data:`PLAN_VELOCITY` for the simple planner's ``velocity``, :data:`PLAN_POSITION` for
 PX4-Avoidance's ``position``), that 3-vector, and the yaw.
 
-Bit equality with CPython needs three helpers where numba's operation differs from CPython's:
-:func:`py_hypot` (CPython's ``math.hypot`` is its own compensated algorithm; libm's ``hypot``, which numba calls,
-differs in the last bit for ~0.2 % of arguments), :func:`py_remainder` (numba has no ``math.remainder``) and
+Bit equality with CPython needs :mod:`~surrealist_gym.sim.cpython_math`'s ``py_hypot`` and ``py_remainder``, and
 :func:`py_square` (CPython's ``x ** 2`` is libm's ``pow``, which rounds ~0.08 % of squares differently from
 ``x * x``; LLVM rewrites ``pow(x, 2.0)`` with a constant exponent to ``x * x``, so the exponent is read from the
 params vector at run time).
@@ -38,6 +36,7 @@ import numpy as np
 from numba import njit
 
 from ..mission import Command, Mission
+from .cpython_math import py_hypot, py_remainder
 from .flight_task import _COS_TURN, _TURN_MIN_SPEED, stopping_speed
 from .navigator import Phase
 
@@ -192,72 +191,6 @@ def phase_of(state: np.ndarray) -> Phase:
 
 
 # --- CPython's arithmetic -------------------------------------------------------------------------------------------
-@njit(cache=True, inline="always")
-def _two_product(x, y):  # pragma: no cover - compiled
-    """x * y as hi + lo exactly (Dekker's product with Veltkamp's split; CPython's ``dl_mul`` gets the same pair
-    from an fma)."""
-    z = x * y
-    t = x * 134217729.0
-    xh = t - (t - x)
-    xl = x - xh
-    t = y * 134217729.0
-    yh = t - (t - y)
-    yl = y - yh
-    return z, ((xh * yh - z) + xh * yl + xl * yh) + xl * yl
-
-
-@njit(cache=True)
-def py_hypot(x, y):  # pragma: no cover - compiled
-    """CPython's ``math.hypot(x, y)`` bit for bit (``vector_norm`` in Modules/mathmodule.c: power-of-two scaling,
-    exact squares, compensated sum, square root with a differential correction)."""
-    x, y = abs(x), abs(y)
-    if math.isinf(x) or math.isinf(y):
-        return math.inf
-    if x != x or y != y:
-        return NAN
-    top = x if x > y else y
-    if top == 0.0:
-        return top
-    exponent = math.frexp(top)[1]
-    if exponent < -1023:  # subnormal: CPython rescales by DBL_MIN first
-        tiny = 2.2250738585072014e-308
-        return tiny * py_hypot(x / tiny, y / tiny)
-    scale = math.ldexp(1.0, -exponent)
-    csum, frac1, frac2 = 1.0, 0.0, 0.0
-    for v in (x, y):
-        hi, lo = _two_product(v * scale, v * scale)
-        s = csum + hi
-        frac2 += (csum - s) + hi
-        csum = s
-        frac1 += lo
-    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
-    hi, lo = _two_product(-h, h)
-    s = csum + hi
-    frac2 += (csum - s) + hi
-    csum = s
-    frac1 += lo
-    h += (csum - 1.0 + (frac1 + frac2)) / (2.0 * h)
-    return h / scale
-
-
-@njit(cache=True)
-def py_remainder(x, y):  # pragma: no cover - compiled
-    """CPython's ``math.remainder(x, y)`` (IEEE remainder, ``m_remainder``) for finite x and y != 0, NaN in,
-    NaN out."""
-    if x != x or y != y:
-        return NAN
-    absx, absy = abs(x), abs(y)
-    m = np.fmod(absx, absy)
-    c = absy - m
-    if m < c:
-        r = m
-    elif m > c:
-        r = -c
-    else:  # halfway: the even multiple
-        r = m - 2.0 * np.fmod(0.5 * (absx - m), absy)
-    return math.copysign(1.0, x) * r
-
-
 @njit(cache=True, inline="always")
 def py_square(x, params):  # pragma: no cover - compiled
     """CPython's ``x ** 2``: libm's ``pow(x, 2.0)``, which is not always ``x * x``; the exponent comes from the

@@ -250,7 +250,8 @@ class Px4LocalPlanner(Planner):
             if k > 0:
                 self._path, self._path_t, built = path[:k][::-1].copy(), t, True
         # waypoint generator
-        dist_goal = math.sqrt((gx - px) ** 2 + (gy - py) ** 2 + (gz - pz) ** 2)
+        dx, dy, dz = gx - px, gy - py, gz - pz
+        dist_goal = math.sqrt(dx * dx + dy * dy + dz * dz)
         state = "direct"
         aim = None
         if self._path.shape[0] >= 2:

@@ -3,7 +3,8 @@
 setpoint and yaw smoothing) over plain arrays, for the compiled flight loop.
 
 The class stays the readable reference (behaviour and sources: :mod:`surrealist_gym.sim.px4_avoidance`); the kernel
-does the same arithmetic in the same order, so both give the same bits (tests/surrealist_gym/sim/
+does the same arithmetic in the same order (CPython's ``math.remainder`` and ``math.hypot`` reproduced by
+:mod:`~surrealist_gym.sim.cpython_math`), so both give the same bits (tests/surrealist_gym/sim/
 test_px4_avoidance_cycle.py replays recorded flights through both).
 
 State of one planner (:func:`initial_state`):
@@ -20,6 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .cpython_math import py_hypot, py_remainder
 from .px4_avoidance_tree import MAX_NODES, _build_tree, _process_cloud
 
 # state vector
@@ -48,12 +50,6 @@ def constants(planner) -> np.ndarray:
                      c.smoothing_speed_z, c.speed_filter_tau_s], dtype=np.float64)
 
 
-@njit(cache=True, inline="always")
-def remainder(x, y):  # pragma: no cover - compiled
-    """IEEE ``math.remainder(x, y)``: x minus the nearest multiple of y (ties to even)."""
-    return x - round(x / y) * y
-
-
 @njit(cache=True)
 def point_on_path(path, n, length):  # pragma: no cover - compiled
     """The point ``length`` metres along the polyline ``path[:n]`` (vehicle first) as (found, x, y, z); found False
@@ -78,7 +74,7 @@ def closest_on_line(px, py, ax, ay, bx, by, near):  # pragma: no cover - compile
         return False, 0.0, 0.0
     s = ((px - ax) * dx + (py - ay) * dy) / length2
     fx, fy = ax + s * dx, ay + s * dy
-    if math.hypot(px - fx, py - fy) < near:
+    if py_hypot(px - fx, py - fy) < near:
         return False, 0.0, 0.0
     return True, fx, fy
 
@@ -113,7 +109,8 @@ def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw,
             state[PATH_LEN], state[PATH_T], built = k, t, True
     # waypoint generator
     cruise = consts[C_CRUISE]
-    dist_goal = math.sqrt((gx - px) ** 2 + (gy - py) ** 2 + (gz - pz) ** 2)
+    dx, dy, dz = gx - px, gy - py, gz - pz
+    dist_goal = math.sqrt(dx * dx + dy * dy + dz * dz)
     code = DIRECT
     aimed = False
     aim_x, aim_y, aim_z = gx, gy, gz
@@ -140,7 +137,7 @@ def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw,
     else:
         # scaleToFOV with one camera: a linear ramp over the whole field of view, 0 outside
         heading = math.atan2(uy, ux) if abs(ux) + abs(uy) > 1e-9 else yaw
-        off = abs(math.degrees(remainder(heading - yaw, _TWO_PI)))
+        off = abs(math.degrees(py_remainder(heading - yaw, _TWO_PI)))
         target = cruise * max(0.0, 1.0 - 2.0 * off / settings.fov_h)
         state[YAW_AT_GOAL] = math.nan
     alpha = dt / (consts[C_SPEED_TAU] + dt)
@@ -166,13 +163,13 @@ def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw,
         state[YAW], state[YAW_RATE] = yaw, 0.0
     if not math.isnan(state[YAW_AT_GOAL]):
         want = state[YAW_AT_GOAL]
-    elif math.hypot(ax, ay) > 0.1:
+    elif py_hypot(ax, ay) > 0.1:
         want = math.atan2(ay, ax)
     else:
         want = yaw
-    err = remainder(want - state[YAW], _TWO_PI)
+    err = py_remainder(want - state[YAW], _TWO_PI)
     kyaw = consts[C_SMOOTH_XY]
     state[YAW_RATE] += (kyaw * err - 2.0 * math.sqrt(kyaw) * state[YAW_RATE]) * dt
-    state[YAW] = remainder(state[YAW] + state[YAW_RATE] * dt, _TWO_PI)
-    yaw_sp = remainder(state[YAW] + consts[C_HEADING_OFFSET], _TWO_PI)
+    state[YAW] = py_remainder(state[YAW] + state[YAW_RATE] * dt, _TWO_PI)
+    yaw_sp = py_remainder(state[YAW] + consts[C_HEADING_OFFSET], _TWO_PI)
     return (cloud, age, state[SP], state[SP + 1], state[SP + 2], yaw_sp, code, speed, built, n)

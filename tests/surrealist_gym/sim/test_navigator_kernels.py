@@ -22,7 +22,7 @@ import pytest
 from surrealist_gym import Mission, MissionItem, Obstacle, TestCase, load_test
 from surrealist_gym.geometry import line_projection
 from surrealist_gym.mission import Command, read_mission
-from surrealist_gym.sim import SimConfig, navigator_kernels as nk, runner, simulate
+from surrealist_gym.sim import SimConfig, cpython_math as cm, navigator_kernels as nk, runner, simulate
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask
 from surrealist_gym.sim.navigator import Navigator, Phase
@@ -256,21 +256,21 @@ def _random_floats(n, seed):
 
 def test_py_hypot_is_cpythons():
     xs, ys = _random_floats(100_000, 1), _random_floats(100_000, 2)
-    assert all(nk.py_hypot(x, y) == math.hypot(x, y) for x, y in zip(xs, ys))
+    assert all(cm.py_hypot(x, y) == math.hypot(x, y) for x, y in zip(xs, ys))
     small = np.random.default_rng(3).normal(size=(50_000, 2)) * [1.0, 1e-3]  # the navigator's typical arguments
-    assert all(nk.py_hypot(x, y) == math.hypot(x, y) for x, y in small.tolist())
+    assert all(cm.py_hypot(x, y) == math.hypot(x, y) for x, y in small.tolist())
     specials = [(0.0, 0.0), (-0.0, 3.0), (3.0, 4.0), (5e-324, 5e-324), (1e308, 1e308), (math.inf, math.nan),
                 (math.nan, 1.0), (-math.inf, 2.0)]
-    assert _same([nk.py_hypot(x, y) for x, y in specials], [math.hypot(x, y) for x, y in specials])
+    assert _same([cm.py_hypot(x, y) for x, y in specials], [math.hypot(x, y) for x, y in specials])
 
 
 def test_py_remainder_is_cpythons():
     xs = _random_floats(50_000, 4)
     two_pi = 2 * math.pi
-    assert all(nk.py_remainder(x, two_pi) == math.remainder(x, two_pi) for x in xs)
+    assert all(cm.py_remainder(x, two_pi) == math.remainder(x, two_pi) for x in xs)
     halfway = [(3.0, 2.0), (5.0, 2.0), (-3.0, 2.0), (math.pi, two_pi), (-math.pi, two_pi), (0.0, two_pi),
                (-0.0, two_pi), (7.5, 1.0)]
-    got = [nk.py_remainder(x, y) for x, y in halfway]
+    got = [cm.py_remainder(x, y) for x, y in halfway]
     assert _same(got, [math.remainder(x, y) for x, y in halfway])
     assert [math.copysign(1.0, g) for g in got] == [math.copysign(1.0, math.remainder(x, y)) for x, y in halfway]
 

@@ -76,10 +76,3 @@ def test_point_on_path_and_line_projection():
     assert kc.closest_on_line(1.0, 5.0, 0.0, 0.0, 10.0, 0.0, 2.0) == (True, 1.0, 0.0)
     assert not kc.closest_on_line(1.0, 1.0, 0.0, 0.0, 10.0, 0.0, 2.0)[0]  # within the band
     assert not kc.closest_on_line(1.0, 5.0, 0.0, 0.0, 0.0, 0.0, 2.0)[0]  # no line
-
-
-def test_remainder_is_ieee():
-    import math
-
-    for x in np.random.default_rng(0).uniform(-20, 20, 2000):
-        assert kc.remainder(x, 2 * math.pi) == math.remainder(x, 2 * math.pi)
