@@ -19,6 +19,7 @@ from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
 from ..outcomes import RunStatus
 from ..trajectory import Trajectory
+from .compiled_loop import fly_kernel
 from .compiled_physics import CompiledWorld, fly
 from .config import Physics, SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
@@ -197,7 +198,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
         if world_type is World:
             _loop(world, runs, cfg, params, vehicle, sensor, timeout)
         else:
-            _fly_compiled(world, runs, cfg, sensor, timeout)
+            _fly_compiled(world, runs, cfg, sensor, timeout, mission, params)
     return [_result(r, test, cfg, params, seed) for r in runs]
 
 
@@ -306,7 +307,16 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
             active.remove(r)
 
 
-def _fly_compiled(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float) -> None:
+def _fly_compiled(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float, mission,
+                  params) -> None:
+    """The compiled loop (:func:`~surrealist_gym.sim.compiled_loop.fly_kernel`): everything in kernels."""
+    fly_kernel(world, runs, cfg, sensor, timeout, mission, params)
+
+
+def _fly_compiled_outer(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float, mission,
+                        params) -> None:
+    """The reference of :func:`_fly_compiled` (the same results bit for bit, tests/.../test_compiled_loop): the
+    Python :func:`_outer` per outer period, :func:`~surrealist_gym.sim.compiled_physics.advance` for the rest."""
     outer_dt = int(round(cfg.control_hz / cfg.outer_hz)) * (1.0 / cfg.control_hz)  # as _loop's
     plan_div, log_div = int(round(cfg.outer_hz / cfg.planner_hz)), int(round(cfg.outer_hz / cfg.log_hz))
     rest_z, stuck_w, stuck_d = world.rest_z, cfg.stuck_window_s, cfg.stuck_distance_m
