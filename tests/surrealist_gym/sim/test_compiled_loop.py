@@ -1,7 +1,8 @@
 """The compiled run loop (``sim/compiled_loop.py``, what ``SimConfig(physics="compiled")`` flies) against its
 reference, the Python ``_outer`` per outer period with the compiled physics (``runner._fly_compiled_outer``): the
 same RunResults bit for bit (statuses, messages, durations, true trajectories, logged estimates, competition
-distances), with both planners, without avoidance, and for successes, collisions, time-outs and stuck runs."""
+distances), with both planners, without avoidance, without noise, and for successes, collisions, time-outs and stuck
+runs."""
 from __future__ import annotations
 
 import dataclasses
@@ -21,9 +22,16 @@ from tests.surrealist_gym.sim.test_compiled_physics import _rilast, _scenarios
 def _fly_both(test, runs, config, monkeypatch):
     config = dataclasses.replace(config, physics=Physics.COMPILED)
     new = simulate(test, runs=runs, seed=0, config=config)
+    calls = []
+
+    def reference(*args):
+        calls.append(1)
+        runner._fly_compiled_outer(*args)
+
     with monkeypatch.context() as m:
-        m.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)
+        m.setattr(runner, "_fly_compiled", reference)
         old = simulate(test, runs=runs, seed=0, config=config)
+    assert calls == [1]
     return old, new
 
 
@@ -89,3 +97,16 @@ def test_compiled_loop_collision_timeout_and_stuck(monkeypatch):
     old, new = _fly_both(test, 1, cfg, monkeypatch)
     assert new[0].status == RunStatus.STUCK
     _assert_same(old, new, "stuck")
+
+
+@pytest.mark.filterwarnings("ignore:.*is not supported")
+def test_compiled_loop_without_noise(monkeypatch):
+    """Both planners with every noise off (the scan without range noise) and with the depth sensor's own noise off:
+    the same results bit for bit."""
+    scenarios = _scenarios()
+    for name in ("rq1-seed1", "rilast 2 boxes"):
+        test = scenarios[name]
+        base = resolve_uav(test=test).sim_config()
+        for noise in (NoiseConfig.off(), dataclasses.replace(base.noise, sensor=False)):
+            old, new = _fly_both(test, 1, dataclasses.replace(base, noise=noise), monkeypatch)
+            _assert_same(old, new, name)
