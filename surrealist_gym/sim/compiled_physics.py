@@ -9,7 +9,9 @@ counterpart of ``runner._loop``: the estimator, navigator, planner and position 
 physics sub-steps and the contact test for a whole outer period. The order of work per control step is the
 PyBullet loop's, so both paths fly the same runs up to the physics' differences (tests/.../test_compiled_physics).
 
-This is the first stage of the compiled flight loop (docs/compiled-loop.md); the outer loop moves into kernels next.
+This was the first stage of the compiled flight loop (docs/compiled-loop.md): ``SimConfig(physics="compiled")`` now
+flies :mod:`~surrealist_gym.sim.compiled_loop`, which calls :func:`advance` from its kernel; :func:`fly` with the
+runner's ``_outer`` stays as its reference (``runner._fly_compiled_outer``).
 """
 from __future__ import annotations
 
