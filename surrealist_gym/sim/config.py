@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Mapping
 
+from ..errors import SurrealistError
 from .ranges import UAV_SETTING_PREFIX, FrozenDict  # a test's params uav.<setting> set the simulated UAV (profiles.py)
 
 if TYPE_CHECKING:  # the planners and the sensor load numba and PyBullet; a config names them only
@@ -67,6 +69,19 @@ class Physics(str, Enum):
 
     PYBULLET = "pybullet"  #: PyBullet (sim/world.py): the reference
     COMPILED = "compiled"  #: numba kernels: Bullet's integration, closed-form contacts (sim/compiled_physics.py)
+
+
+PHYSICS_ENV = "SURREALIST_PHYSICS"
+
+
+def default_physics() -> Physics:
+    """The physics of a :class:`SimConfig` that names none: ``$SURREALIST_PHYSICS`` (``compiled`` or ``pybullet``),
+    else the compiled kernels."""
+    value = os.environ.get(PHYSICS_ENV) or Physics.COMPILED.value
+    try:
+        return Physics(value)
+    except ValueError:
+        raise SurrealistError(f"${PHYSICS_ENV}: {value!r} is not a physics (compiled or pybullet)") from None
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,9 +149,9 @@ class SimConfig:
             model's defaults: :class:`~surrealist_gym.sim.px4_avoidance.Px4AvoidanceConfig` and the SITL Iris depth
             camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.AvoidanceConfig` and the PX4 Vision's camera
             for ``simple``).
-        physics: what integrates the vehicles and finds their contacts (:class:`Physics`): PyBullet (default, the
-            reference) or the compiled kernels, which fly the same runs within the tolerances of
-            tests/surrealist_gym/sim/test_compiled_physics.py.
+        physics: what integrates the vehicles and finds their contacts (:class:`Physics`): the compiled kernels
+            (default; ``$SURREALIST_PHYSICS`` sets another), which fly the same runs as PyBullet within the
+            tolerances of tests/surrealist_gym/sim/test_compiled_physics.py, or PyBullet, the reference.
         competition_buffer_m: half width added to the flight's polyline in each run's competition distance [m]
             (``--buffer``): 0.125 is Aerialist's since Oct 2024, whose figures read that much lower; 0 (default) is
             Aerialist's before then, as the labelled PX4 flights were measured.
@@ -165,7 +180,7 @@ class SimConfig:
     avoidance_config: PlannerConfig | None = None
     sensor_config: DepthSensorConfig | None = None
     competition_buffer_m: float = 0.0
-    physics: Physics = field(default=Physics.PYBULLET, repr=False)  # out of the repr: stores' digests stay as they were
+    physics: Physics = field(default_factory=default_physics, repr=False)  # out of the repr; stores' identities name it
 
     def __post_init__(self):
         if not (isinstance(self.competition_buffer_m, (int, float)) and 0 <= self.competition_buffer_m < math.inf):

@@ -18,10 +18,14 @@ import numpy as np
 import pytest
 
 from surrealist_gym import Mission, MissionItem, Obstacle, TestCase, Wind, load_test
+from surrealist_gym.cli import main as cli_main
+from surrealist_gym.errors import SurrealistError
 from surrealist_gym.evaluation import search_identity
 from surrealist_gym.mission import Command
 from surrealist_gym.sim import NoiseConfig, Physics, RunStatus, SimConfig, simulate
+from surrealist_gym.sim.config import PHYSICS_ENV
 from surrealist_gym.sim.profiles import resolve_uav
+from surrealist_gym.store import EvaluationStore
 from tests.conftest import CASE_STUDIES, EXPERIMENTS, SHARED_DATA
 
 RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
@@ -40,15 +44,29 @@ def _deviation(a, b, last: bool = True) -> float:
     return float(np.linalg.norm(a.true_xyz[:n] - b.true_xyz[:n], axis=1).max())
 
 
-def test_physics_is_a_checked_choice():
-    assert SimConfig(physics="compiled").physics == Physics.COMPILED
-    assert SimConfig().physics == Physics.PYBULLET
+def test_physics_is_a_checked_choice(monkeypatch, tmp_path, capsys):
+    monkeypatch.delenv(PHYSICS_ENV, raising=False)
+    assert SimConfig().physics == Physics.COMPILED
+    assert SimConfig(physics="pybullet").physics == Physics.PYBULLET
     with pytest.raises(ValueError):
         SimConfig(physics="bullet")
-    # a store's search identity names the physics only when it is not PyBullet, so older stores still resume
+    monkeypatch.setenv(PHYSICS_ENV, "pybullet")
+    assert SimConfig().physics == Physics.PYBULLET
+    # a store's search identity names the physics only when it is not PyBullet, so stores flown on PyBullet
+    # before the compiled physics existed resume on PyBullet, and only there
     assert repr(SimConfig()) == repr(SimConfig(physics="compiled"))
     assert "physics" not in search_identity(object(), 5, 0, SimConfig())
     assert search_identity(object(), 5, 0, SimConfig(physics="compiled"))["physics"] == "compiled"
+    with EvaluationStore(tmp_path / "evaluations.sqlite") as store:
+        store.claim(search_identity(object(), 5, 0, SimConfig()))
+        with pytest.raises(SurrealistError, match=r"another physics \(pybullet there, compiled here\); set \$SURREALIST_PHYSICS=pybullet"):
+            store.claim(search_identity(object(), 5, 0, SimConfig(physics="compiled")))
+    # a bad value is a one-line error, exit code 2, before any work
+    monkeypatch.setenv(PHYSICS_ENV, "bullet")
+    with pytest.raises(SurrealistError, match=r"\$SURREALIST_PHYSICS: 'bullet' is not a physics"):
+        SimConfig()
+    assert cli_main(["simulate", str(EXPERIMENTS / "rq1-seed1.yaml")]) == 2
+    assert capsys.readouterr().err == "error: $SURREALIST_PHYSICS: 'bullet' is not a physics (compiled or pybullet)\n"
 
 
 def test_takeoff_and_box_collision_agree():
