@@ -1,6 +1,7 @@
 """Simulator speed (and, with --realism, the realism figures of docs/simulator.md).
 
-    python benchmarks/bench_sim.py               # speed: one run, a batch of 10, plain PyBullet baseline
+    python benchmarks/bench_sim.py               # speed: one run, a batch of 10, plain PyBullet baseline; SITL Iris
+                                                 # on 1-3 boxes and a batch of 10 tests x 5 runs, on each physics
     python benchmarks/bench_sim.py --realism     # case0 figures vs the real flight + docs/img/sim_*.png
 
 Speed: the case0 mission (rq1-seed1.yaml: case0.plan, case0-params.csv, case0.ulg's parameters, the paper's seed-1
@@ -77,28 +78,55 @@ def speed(repeat: int) -> None:
     sitl_speed(repeat)
 
 
-def sitl_speed(repeat: int) -> None:
-    """One run of a competition test with the PX4 SITL Iris profile (PX4-Avoidance model, look-ahead tree)."""
+RILAST_TESTS = {1: "random_run0_1", 2: "random_run3_194", 3: "random_run0_0"}  # rilast-mission1 tests by boxes
+
+
+def rilast_tests(ids=None) -> list:
+    """Competition mission1 tests of the rilast-mission1 set (``../shared/data/competition``): the given test ids,
+    or every test of the set."""
     import csv
     import json
 
     import surrealist_gym as sg
-    from surrealist_gym.sim import simulate
-    from surrealist_gym.sim.profiles import load_profile
 
     competition = ROOT.parent / "shared" / "data" / "competition"
+    mission1 = sg.load_test(competition / "case_studies" / "mission1.yaml")
     with open(competition / "rilast-mission1" / "tests.csv", newline="") as f:
-        row = next(r for r in csv.DictReader(f) if r["test_id"] == "random_run3_194")
-    test = sg.load_test(competition / "case_studies" / "mission1.yaml").with_obstacles(
-        [sg.Obstacle(**o) for o in json.loads(row["obstacles"])])
-    cfg = load_profile("px4-v1.12-sitl-iris").sim_config()
-    (run,) = simulate(test, runs=1, config=cfg)
-    one = _best(lambda: simulate(test, runs=1, config=cfg), repeat)
-    base = _best(lambda: plain_pybullet(run.duration, cfg.physics_hz), repeat)
-    print(f"one run, competition mission1 + rilast random_run3_194 (2 boxes), profile px4-v1.12-sitl-iris "
-          f"({run.status.value}): {run.duration:.1f} s simulated in {one * 1e3:.0f} ms wall -> "
-          f"{run.duration / one:.0f}x real time; {one / base:.1f}x the bare PyBullet loop "
-          f"({run.duration / base:.0f}x real time)")
+        rows = {r["test_id"]: r for r in csv.DictReader(f)}
+    return [mission1.with_obstacles([sg.Obstacle(**o) for o in json.loads(rows[i]["obstacles"])])
+            for i in (ids if ids is not None else rows)]
+
+
+def sitl_speed(repeat: int, batch_tests: int = 10, batch_runs: int = 5, workers: int = 2) -> None:
+    """Competition tests on the PX4 SITL Iris profile (PX4-Avoidance model, look-ahead tree), on each physics: one
+    run of a rilast test with 1, 2 and 3 boxes against the bare PyBullet loop over the same simulated time, and a
+    batch of ``batch_tests`` tests x ``batch_runs`` runs on a local pool of ``workers`` processes (aggregate)."""
+    import dataclasses
+
+    from surrealist_gym.executors import executor_for, fly_many
+    from surrealist_gym.sim import Physics, simulate
+    from surrealist_gym.sim.profiles import load_profile
+
+    base_cfg = load_profile("px4-v1.12-sitl-iris").sim_config()
+    for physics in Physics:
+        cfg = dataclasses.replace(base_cfg, physics=physics)
+        for boxes, test in zip(RILAST_TESTS, rilast_tests(RILAST_TESTS.values())):
+            (run,) = simulate(test, runs=1, config=cfg)  # warm-up
+            one = _best(lambda: simulate(test, runs=1, config=cfg), repeat)
+            base = _best(lambda: plain_pybullet(run.duration, cfg.physics_hz), repeat)
+            print(f"{physics.value}: one run of mission1 + rilast {RILAST_TESTS[boxes]} ({boxes} box"
+                  f"{'es' if boxes > 1 else ''}, {run.status.value}): {run.duration:.1f} s simulated in "
+                  f"{one * 1e3:.0f} ms -> {run.duration / one:.0f}x real time; the bare PyBullet loop "
+                  f"{run.duration / base:.0f}x: {one / base:.2f}x its cost")
+        tests = rilast_tests()[:batch_tests]
+        with executor_for("process", workers) as pool:
+            fly_many(tests[:workers], 1, 0, cfg, pool)  # warm-up: the workers' imports and numba caches
+            t0 = time.perf_counter()
+            records = fly_many(tests, batch_runs, 0, cfg, pool)
+            wall = time.perf_counter() - t0
+        simulated = sum(r.duration for rs in records for r in rs)
+        print(f"{physics.value}: batch of {len(tests)} tests x {batch_runs} runs on {workers} workers: "
+              f"{simulated:.0f} s simulated in {wall:.1f} s -> {simulated / wall:.0f}x real time (aggregate)")
 
 
 def _stats(traj) -> dict:

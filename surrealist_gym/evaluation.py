@@ -263,8 +263,16 @@ def search_identity(objective, runs: int, seed: int, sim_config) -> dict:
             xyz = getattr(value, "xyz", value)
             problem[f.name] = (digest(np.round(np.asarray(xyz, dtype=np.float64), 6).tobytes())
                                if isinstance(xyz, np.ndarray) else getattr(value, "value", value))
-    return {"problem": problem, "runs": int(runs), "seed": int(seed), "uav": sim_config.profile,
-            "common_noise": bool(sim_config.common_noise), "sim": digest(sim_config), "version": __version__}
+    identity = {"problem": problem, "runs": int(runs), "seed": int(seed), "uav": sim_config.profile,
+                "common_noise": bool(sim_config.common_noise), "sim": digest(sim_config), "version": __version__}
+    return identity | named_physics([sim_config])
+
+
+def named_physics(sim_configs) -> dict:
+    """The physics of a store's flights, for its identity: named only when not PyBullet, as stores before the
+    compiled physics were flown on PyBullet and named none (they resume on PyBullet only)."""
+    names = sorted({c.physics.value for c in sim_configs})
+    return {} if names == ["pybullet"] else {"physics": names[0] if len(names) == 1 else names}
 
 
 def flown_with_common_noise(stored: StoredEvaluation) -> bool:

@@ -117,6 +117,11 @@ class EvaluationStore:
             return
         for key in sorted(set(held) | set(identity)):
             if key != "version" and held.get(key) != identity.get(key):
+                if key == "physics":  # named only when not PyBullet (evaluation.named_physics)
+                    there, here = (str(d.get(key) or "pybullet") for d in (held, identity))
+                    raise SurrealistError(f"{self.path}: holds the evaluations of a search flown on another physics "
+                                          f"({there} there, {here} here); set $SURREALIST_PHYSICS={there} to resume "
+                                          f"it, or use another results folder")
                 raise SurrealistError(f"{self.path}: holds the evaluations of another search ({key}: "
                                       f"{_short(held.get(key))} there, {_short(identity.get(key))} here); use "
                                       f"--resume with that search's options, or another results folder")

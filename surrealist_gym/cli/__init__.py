@@ -88,6 +88,9 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("ignore", DeprecationWarning)
     warnings.formatwarning = lambda msg, category, *a, **k: f"warning: {msg}\n"
     try:
+        from ..sim.config import default_physics
+
+        default_physics()  # a bad $SURREALIST_PHYSICS is refused before any work
         return importlib.import_module(args._module).run(args) or 0
     except SurrealistError as err:
         print(f"error: {err}", file=sys.stderr)

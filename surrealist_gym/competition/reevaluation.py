@@ -316,16 +316,17 @@ def regroup(ev: Evaluation, order: Sequence[int], files: Sequence) -> Evaluation
 
 def evaluation_identity(tests: Sequence[tuple[Path, TestCase]], runs: int, seed: int, configs: Sequence) -> dict:
     """What the runs of an evaluation depend on: its tests (file and a digest of ``TestCase.key()``, in order), the
-    runs per test, the base seed, the UAV profiles and the simulator settings (digest); and, recorded but not
-    compared, the package version."""
+    runs per test, the base seed, the UAV profiles, the simulator settings (digest) and physics; and, recorded but
+    not compared, the package version."""
     from .. import __version__
+    from ..evaluation import named_physics
 
     def digest(value) -> str:
         return hashlib.sha1(value.encode()).hexdigest()[:16]
 
     return {"command": "evaluate", "tests": [[os.fspath(path), digest(test.key())] for path, test in tests],
             "runs": int(runs), "seed": int(seed), "uav": sorted({c.profile for c in configs}),
-            "sim": digest(repr(list(configs))), "version": __version__}
+            "sim": digest(repr(list(configs))), "version": __version__} | named_physics(configs)
 
 
 def stored_runs(store, tests: Sequence[TestCase]) -> list[tuple[RunRecord, ...]]:

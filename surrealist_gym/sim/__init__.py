@@ -15,7 +15,8 @@ from __future__ import annotations
 import importlib
 
 _EXPORTS = {
-    "PX4_DEFAULTS": "config", "NoiseConfig": "config", "SimConfig": "config", "VehicleModel": "config",
+    "PX4_DEFAULTS": "config", "NoiseConfig": "config", "Physics": "config", "SimConfig": "config",
+    "VehicleModel": "config",
     "Clearance": "runner", "LocalPosition": "runner", "RunResult": "runner", "RunStatus": "runner",
     "simulate": "runner", "simulate_runs": "runner",
     "IRIS": "vehicle", "PRESETS": "vehicle", "PX4_VISION": "vehicle", "VehicleParams": "vehicle", "preset": "vehicle",
@@ -36,5 +37,5 @@ def __dir__() -> list[str]:
 
 
 __all__ = ["Clearance", "IRIS", "LocalPosition", "NoiseConfig", "PRESETS", "PX4_DEFAULTS", "PX4_VISION",
-           "RunResult", "RunStatus", "SimConfig", "VehicleModel", "VehicleParams", "preset", "simulate",
+           "Physics", "RunResult", "RunStatus", "SimConfig", "VehicleModel", "VehicleParams", "preset", "simulate",
            "simulate_runs"]

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Mapping
 
+from ..errors import SurrealistError
 from .ranges import UAV_SETTING_PREFIX, FrozenDict  # a test's params uav.<setting> set the simulated UAV (profiles.py)
 
 if TYPE_CHECKING:  # the planners and the sensor load numba and PyBullet; a config names them only
@@ -60,6 +62,26 @@ class AvoidanceModel(str, Enum):
 
     PX4 = "px4"        #: PX4-Avoidance's local planner as in Aerialist's SITL (sim/px4_avoidance.py)
     SIMPLE = "simple"  #: a reactive histogram planner tuned to the real PX4 Vision flight case0 (sim/avoidance.py)
+
+
+class Physics(str, Enum):
+    """What integrates the vehicles and finds their contacts."""
+
+    PYBULLET = "pybullet"  #: PyBullet (sim/world.py): the reference
+    COMPILED = "compiled"  #: numba kernels: Bullet's integration, closed-form contacts (sim/compiled_physics.py)
+
+
+PHYSICS_ENV = "SURREALIST_PHYSICS"
+
+
+def default_physics() -> Physics:
+    """The physics of a :class:`SimConfig` that names none: ``$SURREALIST_PHYSICS`` (``compiled`` or ``pybullet``),
+    else the compiled kernels."""
+    value = os.environ.get(PHYSICS_ENV) or Physics.COMPILED.value
+    try:
+        return Physics(value)
+    except ValueError:
+        raise SurrealistError(f"${PHYSICS_ENV}: {value!r} is not a physics (compiled or pybullet)") from None
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,6 +149,9 @@ class SimConfig:
             model's defaults: :class:`~surrealist_gym.sim.px4_avoidance.Px4AvoidanceConfig` and the SITL Iris depth
             camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.AvoidanceConfig` and the PX4 Vision's camera
             for ``simple``).
+        physics: what integrates the vehicles and finds their contacts (:class:`Physics`): the compiled kernels
+            (default; ``$SURREALIST_PHYSICS`` sets another), which fly the same runs as PyBullet within the
+            tolerances of tests/surrealist_gym/sim/test_compiled_physics.py, or PyBullet, the reference.
         competition_buffer_m: half width added to the flight's polyline in each run's competition distance [m]
             (``--buffer``): 0.125 is Aerialist's since Oct 2024, whose figures read that much lower; 0 (default) is
             Aerialist's before then, as the labelled PX4 flights were measured.
@@ -155,6 +180,7 @@ class SimConfig:
     avoidance_config: PlannerConfig | None = None
     sensor_config: DepthSensorConfig | None = None
     competition_buffer_m: float = 0.0
+    physics: Physics = field(default_factory=default_physics, repr=False)  # out of the repr; stores' identities name it
 
     def __post_init__(self):
         if not (isinstance(self.competition_buffer_m, (int, float)) and 0 <= self.competition_buffer_m < math.inf):
@@ -162,6 +188,7 @@ class SimConfig:
                              f"{self.competition_buffer_m!r}")
         object.__setattr__(self, "vehicle", VehicleModel(self.vehicle))
         object.__setattr__(self, "avoidance_model", AvoidanceModel(self.avoidance_model))
+        object.__setattr__(self, "physics", Physics(self.physics))
         object.__setattr__(self, "params", FrozenDict(dict(self.params)))
         object.__setattr__(self, "airframe_params", FrozenDict(dict(self.airframe_params)))
         if not 0.0 < self.obstacle_collision_scale <= 1.0:

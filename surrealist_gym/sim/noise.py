@@ -61,14 +61,26 @@ class NoiseSource:
         self.rng = sens if c.sensor else None
         # plain lists: indexing them in the loop is several times cheaper than numpy rows
         self.pos_list, self.vel_list, self.yaw_list, self.wind_list = [], [], [], []
+        self._drawn = 0  # steps drawn so far
 
     def at(self, k: int):
         """Step ``k``'s position and velocity estimate errors, yaw error and wind (blocks drawn as needed)."""
         while k >= len(self.pos_list):
-            self._draw_block()
+            pos, vel, yaw, wind = self._draw()
+            self.pos_list += pos.tolist()
+            self.vel_list += vel.tolist()
+            self.yaw_list += yaw.tolist()
+            self.wind_list += [tuple(w) for w in wind.tolist()]
         return self.pos_list[k], self.vel_list[k], self.yaw_list[k], self.wind_list[k]
 
-    def _draw_block(self) -> None:
+    def block(self) -> np.ndarray:
+        """The next ``BLOCK`` steps as one (BLOCK, 10) array (the compiled loop's form of :meth:`at`): position
+        error (3), velocity error (3), yaw error, wind (3). Do not mix with :meth:`at` on one source."""
+        pos, vel, yaw, wind = self._draw()
+        return np.concatenate((pos, vel, yaw[:, None], wind), axis=1)
+
+    def _draw(self):
+        """The next block's series, drawn from the run's generators in their fixed order."""
         n, c, est = self.BLOCK, self.config, self._est
         pos = self._drift.block(n)
         if c.pos_noise_std > 0:
@@ -78,11 +90,9 @@ class NoiseSource:
         wind = self._turbulence.block(n)
         wind[:, 2] *= 0.3  # vertical turbulence is weaker near the ground
         if self.plugin is not None:
-            wind += _plugin_wind(self._wnd, self.plugin, n, self.dt, len(self.pos_list) * self.dt)
-        self.pos_list += pos.tolist()
-        self.vel_list += vel.tolist()
-        self.yaw_list += yaw.tolist()
-        self.wind_list += [tuple(w) for w in wind.tolist()]
+            wind += _plugin_wind(self._wnd, self.plugin, n, self.dt, self._drawn * self.dt)
+        self._drawn += n
+        return pos, vel, yaw, wind
 
 
 def _plugin_wind(rng: np.random.Generator, wind, n: int, dt: float, t0: float = 0.0) -> np.ndarray:

@@ -41,8 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import line_projection
 from .planner import Planner, PlannerCommand
+from .px4_avoidance_cycle import closest_on_line, point_on_path
 from .px4_avoidance_tree import (  # noqa: F401 - re-exported: the kernels and constants live there
     _R2D,
     ALPHA_RES,
@@ -241,8 +241,8 @@ class Px4LocalPlanner(Planner):
                            dt, self._settings, out, out_age)
         self._cloud, self._age = out[:n], out_age[:n]
         # closest point on the mission line at goal altitude, or the goal when near the line (determineStrategy)
-        cl = _closest_on_line(px, py, (float(prev_goal[0]), float(prev_goal[1])), (gx, gy), self._line_band)
-        cpt = (float(cl[0]), float(cl[1]), gz) if cl is not None else (gx, gy, gz)
+        on_line, cx, cy = closest_on_line(px, py, float(prev_goal[0]), float(prev_goal[1]), gx, gy, self._line_band)
+        cpt = (cx, cy, gz) if on_line else (gx, gy, gz)
         built = False
         if n > 0:
             path = np.empty((MAX_NODES, 3))
@@ -250,11 +250,14 @@ class Px4LocalPlanner(Planner):
             if k > 0:
                 self._path, self._path_t, built = path[:k][::-1].copy(), t, True
         # waypoint generator
-        dist_goal = math.sqrt((gx - px) ** 2 + (gy - py) ** 2 + (gz - pz) ** 2)
+        dx, dy, dz = gx - px, gy - py, gz - pz
+        dist_goal = math.sqrt(dx * dx + dy * dy + dz * dz)
         state = "direct"
         aim = None
         if self._path.shape[0] >= 2:
-            aim = _point_on_path(self._path, c.tree_node_distance + self.cruise * (t - self._path_t))
+            found, *point = point_on_path(self._path, self._path.shape[0],
+                                          c.tree_node_distance + self.cruise * (t - self._path_t))
+            aim = tuple(point) if found else None
             if aim is None:
                 self._path = np.empty((0, 3))
             else:
@@ -309,22 +312,3 @@ class Px4LocalPlanner(Planner):
         yaw_sp = math.remainder(self._yaw + self._heading_offset, 2.0 * math.pi)
         return Px4PlannerOutput(position=self._sp, yaw=yaw_sp, state=state, speed=speed,
                                 path=self._path if built else np.empty((0, 3)), points=n)
-
-
-def _closest_on_line(px, py, a, b, near: float):
-    """The vehicle's projection on the line a -> b, or None when a == b or the vehicle is within ``near`` of it."""
-    projection = line_projection(px, py, a, b)
-    if projection is None or math.hypot(px - projection[1], py - projection[2]) < near:
-        return None
-    return projection[1], projection[2]
-
-
-def _point_on_path(path: np.ndarray, length: float):
-    """The point ``length`` metres along the polyline ``path`` (vehicle first), or None past its end."""
-    for i in range(path.shape[0] - 1):
-        seg = float(np.linalg.norm(path[i + 1] - path[i]))
-        if length <= seg:
-            f = length / seg if seg > 0 else 0.0
-            return tuple(path[i] + f * (path[i + 1] - path[i]))
-        length -= seg
-    return None

@@ -6,7 +6,12 @@ names; the planner class there calls them once per cycle.
 
 The kernels take the planner's constant settings as one :class:`KernelSettings` (a named tuple, which numba passes
 as a tuple of its fields), the per-cycle state (vehicle position, velocity, goal, the mission line's point) as
-3-tuples, and the cost search's work buffers as one :class:`_Work`.
+3-tuples, and the cost search's work buffers as one :class:`_Work` (the dense reference) or :class:`TreeWork`.
+
+Two versions of the tree search: :func:`_build_tree_reference` is PX4-Avoidance's as written, each expansion a
+dense 30 x 60 histogram, cost matrix and smoothing (:func:`_best_cells`); :func:`_build_tree`, which the planner
+calls, gives the same paths bit for bit (the same operations in the same order, no fastmath) on sparse buffers:
+each expansion (:func:`_expand`) touches only the cells its points fall in and smooths only where a sum can change.
 """
 from __future__ import annotations
 
@@ -350,10 +355,12 @@ def _best_cells(cloud, origin, velocity, goal, line, settings, work):  # pragma:
 
 
 @njit(cache=True)
-def _build_tree(cloud, vehicle, velocity, goal, line, settings, path):  # pragma: no cover - compiled
-    """StarPlanner::buildLookAheadTree from ``vehicle`` (x, y, z) with ``velocity`` toward ``goal``, ``line`` the
-    mission line's point (each a 3-tuple); writes the path deepest node first into ``path``, returns its length
-    (0 when the vehicle's histogram is empty)."""
+def _build_tree_reference(cloud, vehicle, velocity, goal, line, settings, path):  # pragma: no cover - compiled
+    """StarPlanner::buildLookAheadTree as PX4-Avoidance computes it, the readable reference of :func:`_build_tree`
+    (same arguments but ``work``, same result): from ``vehicle`` (x, y, z) with ``velocity`` toward ``goal``,
+    ``line`` the mission line's point (each a 3-tuple); writes the path deepest node first into ``path``, returns
+    its length (0 when the vehicle's histogram is empty). Each expansion is one :func:`_best_cells` on dense
+    30 x 60 matrices."""
     px, py, pz = vehicle
     gx, gy, gz = goal
     rmax, w_h, n_best = settings.max_range, settings.heuristic_weight, settings.children
@@ -420,6 +427,446 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path):  # pragma
                 continue
             d2 = (pos[i, 0] - px) ** 2 + (pos[i, 1] - py) ** 2 + (pos[i, 2] - pz) ** 2
             if total[i] < best_cost and d2 < rmax * rmax:
+                best_cost = total[i]
+                best = i
+        if best < 0:
+            break
+        origin = best
+    # the path ends at the first open node of the greatest depth (PR #555), the root when none is open
+    end, deepest = 0, 0
+    for i in range(size):
+        if not closed[i] and depth[i] > deepest:
+            end, deepest = i, depth[i]
+    n = 0
+    while end >= 0:
+        path[n, 0], path[n, 1], path[n, 2] = pos[end, 0], pos[end, 1], pos[end, 2]
+        n += 1
+        end = parent[end]
+    return n
+
+
+# --- the tree search on sparse buffers ---------------------------------------------------------------------------
+class TreeWork(NamedTuple):
+    """The buffers of :func:`_build_tree`, allocated once per planner (:func:`tree_work`) and reused by every build.
+    Between expansions the histogram (``dist``, ``count``), the padded obstacle matrix (``col``, ``used``) and
+    ``line`` are all zero: each expansion clears what it wrote, so it touches only the cells its points fall in.
+
+    Attributes:
+        pos, parent, depth, total, heur, closed, reach, near: the tree's nodes (position, parent, depth, cost from
+            the root plus heuristic, heuristic, expanded, within ``max_range`` of the vehicle) and a list of nodes.
+        dist, count, cells: the histogram's sums of distances and point counts (N_E x N_Z, flat) and the list of
+            the cells that hold points.
+        col, used, cols, lo, hi: smoothPolarMatrix's padded obstacle cost matrix, one row per padded column
+            ((N_Z + 2r) x (N_E + 2r)); which columns hold a nonzero cost, their list, their first and last ones.
+        colsm: each listed column smoothed along elevation (N_E values).
+        line, box, row: a padded histogram row, the running sums, a smoothed row of N_Z costs.
+        yaw_cost, row_cost, row_seen: the per-azimuth yaw costs, per-elevation pitch costs, rows already searched.
+        cos_a, sin_a, cos_e, sin_e: cosine and sine of each cell's azimuth and elevation (its centre).
+        cand_e, cand_z, cand_c: the cheapest cells (elevation, azimuth, cost), ascending cost.
+    """
+
+    pos: np.ndarray
+    parent: np.ndarray
+    depth: np.ndarray
+    total: np.ndarray
+    heur: np.ndarray
+    closed: np.ndarray
+    reach: np.ndarray
+    near: np.ndarray
+    dist: np.ndarray
+    count: np.ndarray
+    cells: np.ndarray
+    mean: np.ndarray
+    cell_cost: np.ndarray
+    col: np.ndarray
+    cols: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    colsm: np.ndarray
+    line: np.ndarray
+    box: np.ndarray
+    row: np.ndarray
+    yaw_cost: np.ndarray
+    row_cost: np.ndarray
+    row_seen: np.ndarray
+    cos_a: np.ndarray
+    sin_a: np.ndarray
+    cos_e: np.ndarray
+    sin_e: np.ndarray
+    cand_e: np.ndarray
+    cand_z: np.ndarray
+    cand_c: np.ndarray
+
+
+@njit(cache=True)
+def _tree_work(radius, children):  # pragma: no cover - compiled
+    """A :class:`TreeWork` for a smoothing radius of ``radius`` cells and ``children`` children per node."""
+    n_cols, n_rows = N_Z + 2 * radius, N_E + 2 * radius
+    cos_a, sin_a, cos_e, sin_e = np.empty(N_Z), np.empty(N_Z), np.empty(N_E), np.empty(N_E)
+    for z in range(N_Z):  # the expressions of _best_cells, so the same bits
+        az = z * ALPHA_RES + 0.5 * ALPHA_RES - 180.0
+        cos_a[z], sin_a[z] = math.cos(az / _R2D), math.sin(az / _R2D)
+    for e in range(N_E):
+        el = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0
+        cos_e[e], sin_e[e] = math.cos(el / _R2D), math.sin(el / _R2D)
+    return TreeWork(np.empty((MAX_NODES, 3)), np.empty(MAX_NODES, dtype=np.int64),
+                    np.empty(MAX_NODES, dtype=np.int64), np.empty(MAX_NODES), np.empty(MAX_NODES),
+                    np.zeros(MAX_NODES, dtype=np.bool_), np.zeros(MAX_NODES, dtype=np.bool_),
+                    np.empty(MAX_NODES, dtype=np.int64),
+                    np.zeros(N_E * N_Z), np.zeros(N_E * N_Z), np.empty(N_E * N_Z, dtype=np.int64),
+                    np.empty(N_E * N_Z), np.empty(N_E * N_Z),
+                    np.zeros((n_cols, n_rows)), np.empty(n_cols, dtype=np.int64),
+                    np.full(n_cols, n_rows, dtype=np.int64), np.full(n_cols, -1, dtype=np.int64),
+                    np.empty((n_cols, N_E)),
+                    np.zeros((1, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius), np.empty((1, N_Z)),
+                    np.empty(N_Z), np.empty(N_E), np.zeros(N_E, dtype=np.bool_),
+                    cos_a, sin_a, cos_e, sin_e,
+                    np.empty(children, dtype=np.int64), np.empty(children, dtype=np.int64), np.empty(children))
+
+
+def tree_work(settings: KernelSettings) -> TreeWork:
+    """The reusable buffers of :func:`_build_tree` for a planner with these settings."""
+    return _tree_work(settings.smoothing_radius, settings.children)
+
+
+@njit(cache=True, inline="always")
+def _mod360(x):  # pragma: no cover - compiled
+    """``x % 360.0`` for x in (-360, 720) or NaN, the operations Python's modulo does there: x + 360 below 0, x - 360
+    (exact: Sterbenz) from 360 on, x itself between (where Python gives -0.0 as 0.0; subtracting 180 then gives
+    the same). :func:`_expand` calls it with ``az - az_goal + 180`` in [-177, 537] (``az_goal`` from atan2).
+    Without the ``%`` (fmod), which the vectorized loop would compute for every cell."""
+    if x < 0.0:
+        return x + 360.0
+    if x >= 360.0:
+        return x - 360.0
+    return x
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _atan2_deg_select(y, x):  # pragma: no cover - compiled
+    """:func:`_atan2_deg` (the same bits) written with selects instead of branches, so that loops calling it
+    vectorize: ``min / max`` is the ratio it picks; at the origin the 0 / 0 (NaN under ``error_model="numpy"``) is
+    replaced by the 0.0 it returns there."""
+    ax, ay = abs(x), abs(y)
+    a = min(ax, ay) / max(ax, ay)
+    s = a * a
+    r = ((((((-0.0040540580 * s + 0.0218612288) * s - 0.0559098861) * s + 0.0964200441) * s - 0.1390853351) * s
+          + 0.1994653599) * s - 0.3332985605) * s * a + a
+    r = 1.5707963267948966 - r if ay > ax else r
+    r = 3.141592653589793 - r if x < 0.0 else r
+    r = -r if y < 0.0 else r
+    return 0.0 if ax == 0.0 and ay == 0.0 else r * 57.29577951308232
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _cell_index(dx, dy, dz):  # pragma: no cover - compiled
+    """The flat histogram cell ``ie * N_Z + iz`` of ``_hist_index(dx, dy, dz, ALPHA_RES)``, the same bits, with
+    selects instead of branches (:func:`_atan2_deg_select`)."""
+    h = math.sqrt(dx * dx + dy * dy)
+    az = _atan2_deg_select(dy, dx)
+    el = _atan2_deg_select(dz, h)
+    iz = int(math.floor(az / ALPHA_RES + 180.0 / ALPHA_RES))
+    ie = int(math.floor(el / ALPHA_RES + 90.0 / ALPHA_RES))
+    iz = iz - N_Z if iz >= N_Z else iz
+    iz = iz + N_Z if iz < 0 else iz
+    ie = N_E - 1 if ie >= N_E else ie
+    ie = 0 if ie < 0 else ie
+    return ie * N_Z + iz
+
+
+@njit(cache=True)
+def _conic_line(src, si, lo, hi, r, n, box, out, oi):  # pragma: no cover - compiled
+    """The conic kernel of radius ``r`` along one padded line ``src[si]`` (n + 2r values, zero outside ``[lo, hi]``)
+    into ``out[oi, :n]``: the two running box sums of :func:`_smooth_columns` / :func:`_smooth_row`, the same
+    additions in the same order, computed only where they can change. Before the first nonzero value enters the
+    window a running sum adds zeros and stays 0.0; after the last one leaves it adds ``c - c`` and keeps its value;
+    those stretches are written, not summed. ``box`` (>= n + r) is a work buffer."""
+    length = r + 1
+    m = n + r
+    j0 = max(0, lo - r)  # box[j] sums src[si, j:j + length]: 0.0 while j + r < lo
+    j1 = min(m - 1, hi + 1)  # and box[hi + 1] from then on
+    for j in range(j0):
+        box[j] = 0.0
+    s = 0.0
+    start = j0
+    if j0 == 0:
+        for j in range(length):
+            s += src[si, j]
+        box[0] = s
+        start = 1
+    for j in range(start, j1 + 1):
+        s += src[si, j + length - 1] - src[si, j - 1]
+        box[j] = s
+    for j in range(j1 + 1, m):
+        box[j] = s
+    i0 = max(0, j0 - r)  # the second pass over box: 0.0 before j0 and constant after j1, likewise
+    i1 = min(n - 1, j1 + 1)
+    for i in range(i0):
+        out[oi, i] = 0.0
+    s = 0.0
+    start = i0
+    if i0 == 0:
+        for j in range(length):
+            s += box[j]
+        out[oi, 0] = s / length
+        start = 1
+    for i in range(start, i1 + 1):
+        s += box[i + length - 1] - box[i - 1]
+        out[oi, i] = s / length
+    for i in range(i1 + 1, n):
+        out[oi, i] = s / length
+
+
+@njit(cache=True, error_model="numpy")
+def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):  # pragma: no cover - compiled
+    """:func:`_best_cells` (the histogram and cost matrix at ``origin``, the cheapest cells into ``work.cand_*``)
+    with the same result, for the cloud ``points`` (3, n) (x, y, z rows; ``pcell`` and ``pdist`` (n,) are work
+    buffers), on sparse buffers: the histogram only in the cells the points fall in, their obstacle
+    costs put in the padded matrix with its polar wrap, the smoothing along elevation only in the columns that hold
+    a cost (:func:`_conic_line`), along azimuth only in the rows the search visits. Returns (the number of cells,
+    whether a histogram cell is occupied); leaves ``work``'s sparse buffers zero."""
+    ox, oy, oz = origin
+    vx, vy, vz = velocity
+    gx, gy, gz = goal
+    cx, cy, cz = line
+    rmin, rmax = settings.min_range, settings.max_range
+    w_pitch, w_yaw, w_vel, obst_param = settings.pitch_cost, settings.yaw_cost, settings.velocity_cost, \
+        settings.obstacle_cost
+    r = settings.smoothing_radius
+    n_best = settings.children
+    dist, count, cells, col, cols, lo, hi = work.dist, work.count, work.cells, work.col, work.cols, work.lo, work.hi
+    cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
+    # the histogram (_histogram): each point's cell and distance (a loop that vectorizes), then the sums in point
+    # order, the touched cells listed
+    n_points = points.shape[1]
+    for i in range(n_points):
+        dx, dy, dz = points[0, i] - ox, points[1, i] - oy, points[2, i] - oz
+        pcell[i] = _cell_index(dx, dy, dz)
+        pdist[i] = math.sqrt(dx * dx + dy * dy + dz * dz)
+    n_cells = 0
+    for i in range(n_points):
+        c = pcell[i]
+        cells[n_cells] = c  # kept when the cell was empty (without a branch)
+        n_cells += count[c] == 0.0
+        dist[c] += pdist[i]
+        count[c] += 1.0
+    # mean distances and obstacle costs (a loop that vectorizes), then the costs put in the padded matrix (rows
+    # beyond the poles: the opposite azimuth, mirrored in elevation)
+    mean, cell_cost = work.mean, work.cell_cost
+    for k in range(n_cells):
+        c = cells[k]
+        d = dist[c] / count[c]
+        x = obst_param - d
+        mean[k] = d
+        cell_cost[k] = 5000.0 * (1.0 + x / math.sqrt(1.0 + x * x))
+    n_cols = 0
+    occupied = False
+    for k in range(n_cells):
+        c = cells[k]
+        d = mean[k]
+        dist[c] = d
+        if d > 0.0:
+            cost = cell_cost[k]
+            occupied = True
+            e, z = c // N_Z, c % N_Z
+            if r <= e < N_E - r and r <= z < N_Z - r:  # one place: the cell's own
+                cc, row = r + z, r + e
+                col[cc, row] = cost
+                cols[n_cols] = cc  # listed when new (hi < 0: lo and hi rest at n_rows and -1)
+                n_cols += hi[cc] < 0
+                lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+                continue
+            # the cell's places in the padded matrix: its own and, within r rows of a pole, its mirror beyond the
+            # pole (the opposite azimuth); each with its azimuth-wrapped copy within r cells of the wrap
+            for place in range(3):
+                if place == 0:
+                    row, zz = r + e, z
+                elif place == 1 and e < r:
+                    row, zz = r - 1 - e, (z - N_Z // 2) % N_Z
+                elif place == 2 and e >= N_E - r:
+                    row, zz = r + N_E + (N_E - 1 - e), (z - N_Z // 2) % N_Z
+                else:
+                    continue
+                for copy in range(3):
+                    if copy == 0:
+                        cc = r + zz
+                    elif copy == 1 and zz >= N_Z - r:
+                        cc = zz - (N_Z - r)
+                    elif copy == 2 and zz < r:
+                        cc = r + N_Z + zz
+                    else:
+                        continue
+                    col[cc, row] = cost
+                    cols[n_cols] = cc
+                    n_cols += hi[cc] < 0
+                    lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+    smooth = occupied and r > 0
+    first, last = N_Z + 2 * r, -1  # the first and last listed columns
+    for k in range(n_cols):
+        c = cols[k]
+        first, last = min(first, c), max(last, c)
+        if smooth:
+            _conic_line(col, c, lo[c], hi[c], r, N_E, work.box, work.colsm, c)
+    # goal and line directions from the origin
+    dgx, dgy, dgz = gx - ox, gy - oy, gz - oz
+    dist_goal = math.sqrt(dgx * dgx + dgy * dgy + dgz * dgz)
+    az_goal = math.atan2(dgy, dgx) * _R2D
+    el_goal = math.atan2(dgz, math.sqrt(dgx * dgx + dgy * dgy)) * _R2D
+    az_line = math.atan2(cy - oy, cx - ox) * _R2D
+    # obstacle in the goal's window (goal cell +-5 azimuth, +-2 elevation cells, distance in (0.2, 15) m)?
+    ge, gz_i = _hist_index(dgx, dgy, dgz, ALPHA_RES)
+    blocked = False
+    for de in range(-2, 3):
+        e = ge + de
+        if e < 0 or e >= N_E:
+            continue
+        for dz_ in range(-5, 6):
+            z = (gz_i + dz_) % N_Z
+            if rmin < dist[e * N_Z + z] < rmax:
+                blocked = True
+    w_line = 0.0 if blocked else 0.5
+    pitch_scale = 1.0
+    if dist_goal < 5.0:
+        pitch_scale = 1.0 / max((0.2 * dist_goal) ** 2, 1e-6)
+    speed = math.sqrt(vx * vx + vy * vy + vz * vz)
+    yaw_cost, row_cost, row_seen = work.yaw_cost, work.row_cost, work.row_seen
+    cos_a, sin_a, cos_e, sin_e = work.cos_a, work.sin_a, work.cos_e, work.sin_e
+    for z in range(N_Z):
+        az = z * ALPHA_RES + 0.5 * ALPHA_RES - 180.0
+        a = _mod360(az - az_goal + 180.0) - 180.0
+        b = _mod360(az - az_line + 180.0) - 180.0
+        yaw_cost[z] = w_yaw * ((1.0 - w_line) * a * a + w_line * b * b)
+    min_yaw = yaw_cost.min()
+    for e in range(N_E):
+        de = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0 - el_goal
+        row_cost[e] = w_pitch * de * de * pitch_scale
+        row_seen[e] = False
+    obst_row, padded_row = work.row, work.line
+    n = 0
+    for _ in range(N_E):
+        # rows by increasing pitch cost, the lower index first among equal costs (a stable sort's order); a row
+        # whose every cost is at least its pitch cost plus the least yaw cost (obstacle and velocity costs are
+        # >= 0) cannot beat a full candidate list, and ends the search
+        e = -1
+        for i in range(N_E):
+            if not row_seen[i] and (e < 0 or row_cost[i] < row_cost[e]):
+                e = i
+        row_seen[e] = True
+        pitch_cost = row_cost[e]
+        if n == n_best and pitch_cost + min_yaw >= cand_c[n - 1]:
+            break
+        if smooth:  # the row of the column-smoothed matrix, then smoothed along azimuth (_smooth_row)
+            for k in range(n_cols):
+                padded_row[0, cols[k]] = work.colsm[cols[k], e]
+            _conic_line(padded_row, 0, first, last, r, N_Z, work.box, obst_row, 0)
+            for k in range(n_cols):
+                padded_row[0, cols[k]] = 0.0
+        else:
+            for z in range(N_Z):
+                obst_row[0, z] = col[r + z, r + e]
+        ce, se = cos_e[e], sin_e[e]
+        for z in range(N_Z):
+            dot = ce * (cos_a[z] * vx + sin_a[z] * vy) + se * vz
+            cost = obst_row[0, z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
+            # keep the n_best cheapest, sorted ascending
+            if n < n_best:
+                j = n
+                n += 1
+            elif cost < cand_c[n - 1]:
+                j = n - 1
+            else:
+                continue
+            while j > 0 and cand_c[j - 1] > cost:
+                cand_c[j], cand_e[j], cand_z[j] = cand_c[j - 1], cand_e[j - 1], cand_z[j - 1]
+                j -= 1
+            cand_c[j], cand_e[j], cand_z[j] = cost, e, z
+    # leave the sparse buffers zero
+    for k in range(n_cells):
+        dist[cells[k]] = 0.0
+        count[cells[k]] = 0.0
+    for k in range(n_cols):
+        c = cols[k]
+        for i in range(lo[c], hi[c] + 1):
+            col[c, i] = 0.0
+        lo[c], hi[c] = col.shape[1], -1
+    return n, occupied
+
+
+@njit(cache=True)
+def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None):  # pragma: no cover - compiled
+    """StarPlanner::buildLookAheadTree from ``vehicle`` (x, y, z) with ``velocity`` toward ``goal``, ``line`` the
+    mission line's point (each a 3-tuple); writes the path deepest node first into ``path``, returns its length
+    (0 when the vehicle's histogram is empty). ``work``: the planner's :func:`tree_work` (allocated here when
+    None). The same result as :func:`_build_tree_reference`, bit for bit: each expansion is :func:`_expand`, and a
+    child is checked against the nodes near its parent only (a node within 0.2 m of the child lies within
+    ``node_distance`` + 0.2 m of the parent; the list takes 1 mm more, far above the rounding of coordinates)."""
+    if work is None:
+        work = _tree_work(settings.smoothing_radius, settings.children)
+    points = np.ascontiguousarray(cloud.T)
+    pcell, pdist = np.empty(cloud.shape[0], dtype=np.int64), np.empty(cloud.shape[0])
+    px, py, pz = vehicle
+    gx, gy, gz = goal
+    rmax, w_h = settings.max_range, settings.heuristic_weight
+    n_exp, step = settings.expansions, settings.node_distance
+    pos, parent, depth, total, heur = work.pos, work.parent, work.depth, work.total, work.heur
+    closed, reach, near = work.closed, work.reach, work.near
+    cos_a, sin_a, cos_e, sin_e = work.cos_a, work.sin_a, work.cos_e, work.sin_e
+    cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
+    near2 = (step + 0.201) ** 2
+    pos[0, 0], pos[0, 1], pos[0, 2] = px, py, pz
+    parent[0], depth[0], closed[0] = -1, 0, False
+    reach[0] = 0.0 < rmax * rmax  # the root's distance to the vehicle, 0
+    h0 = w_h * math.sqrt((gx - px) ** 2 + (gy - py) ** 2 + (gz - pz) ** 2)
+    total[0], heur[0] = h0, h0
+    size = 1
+    origin = 0
+    for it in range(n_exp):
+        ox, oy, oz = pos[origin, 0], pos[origin, 1], pos[origin, 2]
+        if origin == 0:
+            u = velocity
+        else:
+            p = parent[origin]
+            u = (ox - pos[p, 0], oy - pos[p, 1], oz - pos[p, 2])
+        k, occupied = _expand(points, pcell, pdist, (ox, oy, oz), u, goal, line, settings, work)
+        if it == 0 and not occupied:
+            return 0
+        n_near = 0
+        for i in range(size):
+            dx, dy, dz = pos[i, 0] - ox, pos[i, 1] - oy, pos[i, 2] - oz
+            if dx * dx + dy * dy + dz * dz < near2:
+                near[n_near] = i
+                n_near += 1
+        for j in range(k):
+            if size >= MAX_NODES:
+                break
+            e, z = cand_e[j], cand_z[j]
+            nx = ox + step * cos_e[e] * cos_a[z]
+            ny = oy + step * cos_e[e] * sin_a[z]
+            nz = oz + step * sin_e[e]
+            close = False
+            for q in range(n_near):
+                i = near[q]
+                dx, dy, dz = pos[i, 0] - nx, pos[i, 1] - ny, pos[i, 2] - nz
+                if dx * dx + dy * dy + dz * dz < 0.04:
+                    close = True
+                    break
+            if close:
+                continue
+            pos[size, 0], pos[size, 1], pos[size, 2] = nx, ny, nz
+            parent[size], depth[size], closed[size] = origin, depth[origin] + 1, False
+            dx, dy, dz = nx - px, ny - py, nz - pz
+            reach[size] = dx * dx + dy * dy + dz * dz < rmax * rmax
+            h = w_h * math.sqrt((gx - nx) ** 2 + (gy - ny) ** 2 + (gz - nz) ** 2)
+            heur[size] = h
+            total[size] = total[origin] - heur[origin] + cand_c[j] + h
+            near[n_near] = size
+            n_near += 1
+            size += 1
+        closed[origin] = True
+        best = -1
+        best_cost = np.inf
+        for i in range(size):
+            if not closed[i] and total[i] < best_cost and reach[i]:
                 best_cost = total[i]
                 best = i
         if best < 0:

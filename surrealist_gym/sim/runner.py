@@ -19,13 +19,15 @@ from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
 from ..outcomes import RunStatus
 from ..trajectory import Trajectory
-from .config import SimConfig, auto_timeout, resolve_params
+from .compiled_loop import fly_kernel
+from .compiled_physics import CompiledWorld, fly
+from .config import Physics, SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
 from .pybullet_quiet import pb
 from .ranges import FrozenDict
-from .vehicle import preset
+from .vehicle import GRAVITY, preset
 from .world import World
 
 if TYPE_CHECKING:
@@ -115,7 +117,7 @@ class _Run:
 
     __slots__ = ("body", "pp", "ps", "kp", "ks", "wind", "armed", "integ", "nav", "planner", "noise", "q_sp", "thrust",
                  "status", "message", "end_t", "log", "true", "plan_out", "anchor", "anchor_t", "anchor_phase",
-                 "ground", "active", "index")
+                 "ground", "active", "index", "held")
 
 
 def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
@@ -167,8 +169,9 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
     # modelled as converged: the controller's hover thrust is the vehicle's physical one.
     ctl_params = dict(params, MPC_THR_HOVER=vehicle.hover_command) if params.get("MPC_USE_HTE", 1) else params
-    with World(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz,
-               cfg.obstacle_collision_scale) as world:
+    world_type = World if cfg.physics == Physics.PYBULLET else CompiledWorld
+    with world_type(test.obstacles, vehicle, len(indices), cfg.physics_hz, cfg.control_hz,
+                    cfg.obstacle_collision_scale) as world:
         sensor = None
         if avoidance:
             sensor, make_planner = _avoidance(test, cfg, params)
@@ -189,10 +192,13 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
             r.status, r.message, r.end_t = None, "", 0.0
             r.log, r.true, r.plan_out = [], [], None
             r.anchor, r.anchor_t, r.anchor_phase = None, 0.0, None
-            r.ground, r.active, r.armed, r.integ = True, True, True, False
+            r.ground, r.active, r.armed, r.integ, r.held = True, True, True, False, True
             world.set_yaw(body, yaw0)
             runs.append(r)
-        _loop(world, runs, cfg, params, vehicle, sensor, timeout)
+        if world_type is World:
+            _loop(world, runs, cfg, params, vehicle, sensor, timeout)
+        else:
+            _fly_compiled(world, runs, cfg, sensor, timeout, mission, params)
     return [_result(r, test, cfg, params, seed) for r in runs]
 
 
@@ -240,6 +246,9 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
     apply_force, apply_torque, frame = pb.applyExternalForce, pb.applyExternalTorque, pb.WORLD_FRAME
     step_sim, contacts = pb.stepSimulation, pb.getContactPoints
     stuck_w, stuck_d = cfg.stuck_window_s, cfg.stuck_distance_m
+    weight = vehicle.mass * GRAVITY
+    rest = {r.body: get_pose(r.body, physicsClientId=cid) for r in runs}  # each vehicle's pose on the ground
+    reset_pose, reset_vel, still = pb.resetBasePositionAndOrientation, pb.resetBaseVelocity, (0.0, 0.0, 0.0)
     active = list(runs)
     step = 0
     max_steps = int(math.ceil(timeout * cfg.control_hz))
@@ -258,6 +267,8 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
                 continue
             fx, fy, fz, tx, ty, tz = inner(orn, lin, ang, r.q_sp, r.thrust, r.wind, dt, r.armed, r.integ, r.kp,
                                            r.ks)
+            if r.held and -fz > weight:
+                r.held = False  # the thrust lifts it: from here the physics flies it
             apply_force(body, -1, (fx, fy, fz), pos, frame, physicsClientId=cid)
             apply_torque(body, -1, (tx, ty, tz), frame, physicsClientId=cid)
         step_sim(physicsClientId=cid)
@@ -275,6 +286,10 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
                 r.message = f"collision with obstacle {obstacle_index[other]} at t={step * dt:.2f} s"
             else:
                 r.ground = True
+        for r in active:
+            if r.held:  # resting on the ground until the thrust first lifts it: held at its starting pose
+                reset_pose(r.body, *rest[r.body], physicsClientId=cid)
+                reset_vel(r.body, still, still, physicsClientId=cid)
         if step >= max_steps:
             done = True
             for r in active:
@@ -290,6 +305,29 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
                     rest_z, k)
             world.remove(r.body)
             active.remove(r)
+
+
+def _fly_compiled(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float, mission,
+                  params) -> None:
+    """The compiled loop (:func:`~surrealist_gym.sim.compiled_loop.fly_kernel`): everything in kernels."""
+    fly_kernel(world, runs, cfg, sensor, timeout, mission, params)
+
+
+def _fly_compiled_outer(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float, mission,
+                        params) -> None:
+    """The reference of :func:`_fly_compiled` (the same results bit for bit, tests/.../test_compiled_loop): the
+    Python :func:`_outer` per outer period, :func:`~surrealist_gym.sim.compiled_physics.advance` for the rest."""
+    outer_dt = int(round(cfg.control_hz / cfg.outer_hz)) * (1.0 / cfg.control_hz)  # as _loop's
+    plan_div, log_div = int(round(cfg.outer_hz / cfg.planner_hz)), int(round(cfg.outer_hz / cfg.log_hz))
+    rest_z, stuck_w, stuck_d = world.rest_z, cfg.stuck_window_s, cfg.stuck_distance_m
+
+    def outer(r, k, t, pos, lin, orn):
+        return _outer(r, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d)
+
+    def record(r, t, pos, orn, lin, ang, k):
+        _record(r, t, pos, orn, lin, ang, rest_z, k)
+
+    fly(world, runs, cfg, timeout, outer, record)
 
 
 def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d) -> bool:

@@ -1,29 +1,39 @@
 """The PX4-Avoidance model: its kernels against direct computations, memory, tree, waypoint generator, flight task."""
 from __future__ import annotations
 
+import csv
+import json
 import math
 
 import numpy as np
 import pytest
 
+from surrealist_gym import load_test
+from surrealist_gym.sim import px4_avoidance, simulate
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
-from surrealist_gym.sim.profiles import SITL_IRIS
+from surrealist_gym.sim.profiles import SITL_IRIS, load_profile
 from surrealist_gym.sim.px4_avoidance import (
+    ALPHA_RES,
+    MAX_NODES,
     N_E,
     N_Z,
     KernelSettings,
     Px4AvoidanceConfig,
     Px4LocalPlanner,
     _atan2_deg,
+    _hist_index,
     _smooth_columns,
     _smooth_row,
     kernel_settings,
 )
+from surrealist_gym.sim.px4_avoidance_tree import _build_tree_reference, _cell_index, _mod360, tree_work
 from surrealist_gym.sim.sensor import DepthSensor
 from surrealist_gym.testcase import Obstacle
+from tests.conftest import CASE_STUDIES, SHARED_DATA
 
 CAMERA = SITL_IRIS.sensor_config()
+RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
 
 
 def _direct_smoothing(matrix: np.ndarray, r: int) -> np.ndarray:
@@ -67,6 +77,60 @@ def test_fast_atan2_is_within_a_ten_thousandth_of_a_degree():
     rng = np.random.default_rng(0)
     worst = max(abs(_atan2_deg(y, x) - math.degrees(math.atan2(y, x))) for y, x in rng.normal(size=(20000, 2)))
     assert worst < 1e-4
+
+
+def test_branch_free_cell_index_and_modulo_are_the_kernels_bits():
+    """_build_tree's vectorizable pieces against the operations they replace: the flat cell of _hist_index (random
+    directions, cell boundaries, the axes, the origin) and Python's ``% 360.0`` on its range (-360, 720)."""
+    rng = np.random.default_rng(5)
+    dirs = [tuple(v) for v in rng.normal(size=(20000, 3)) * rng.choice([1e-3, 1.0, 30.0], size=(20000, 1))]
+    for az in np.arange(-180.0, 181.0, ALPHA_RES):  # on the azimuth boundaries, level and tilted
+        for el in (-90.0, -48.0, 0.0, 6.0, 90.0):
+            dirs.append((math.cos(math.radians(el)) * math.cos(math.radians(az)),
+                         math.cos(math.radians(el)) * math.sin(math.radians(az)), math.sin(math.radians(el))))
+    dirs += [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, -2.0), (-0.0, 0.0, 1.0)]
+    for d in dirs:
+        ie, iz = _hist_index(*d, ALPHA_RES)
+        assert _cell_index(*d) == ie * N_Z + iz, d
+    xs = np.concatenate([rng.uniform(-360.0, 720.0, 20000), [-359.9999, -1e-300, -0.0, 0.0, 359.99999, 360.0, 719.9]])
+    for x in xs:
+        want, got = x % 360.0 - 180.0, _mod360(x) - 180.0
+        assert got == want, x
+
+
+def _rilast(test_id: str):
+    with open(RILAST, newline="") as f:
+        row = next(r for r in csv.DictReader(f) if r["test_id"] == test_id)
+    obstacles = [Obstacle(**o) for o in json.loads(row["obstacles"])]
+    return load_test(CASE_STUDIES / "mission1.yaml").with_obstacles(obstacles)
+
+
+@pytest.mark.filterwarnings("ignore:.*is not supported")
+def test_tree_kernel_gives_the_reference_paths_on_a_recorded_flight(monkeypatch):
+    """Every look-ahead tree build of a flight (mission1 + rilast random_run3_194, SITL Iris: ~260 builds, 180 points
+    on average, up to ~500) replayed through the sparse _build_tree, with one planner's reused buffers and with its
+    own, and through the dense _build_tree_reference: the same paths, bit for bit."""
+    if not RILAST.is_file():
+        pytest.skip("no rilast-mission1 tests in ../shared/data")
+    calls, build = [], px4_avoidance._build_tree
+
+    def recording(cloud, *args):
+        calls.append((cloud.copy(), *args[:-1]))
+        return build(cloud, *args)
+
+    monkeypatch.setattr(px4_avoidance, "_build_tree", recording)
+    simulate(_rilast("random_run3_194"), runs=1, seed=0, config=load_profile("px4-v1.12-sitl-iris").sim_config())
+    monkeypatch.undo()
+    assert len(calls) > 100
+    work = tree_work(calls[0][5])
+    want, got, own = np.empty((MAX_NODES, 3)), np.empty((MAX_NODES, 3)), np.empty((MAX_NODES, 3))
+    lengths = []
+    for args in calls:
+        k = _build_tree_reference(*args, want)
+        assert build(*args, got, work) == k and build(*args, own) == k
+        assert np.array_equal(got[:k], want[:k]) and np.array_equal(own[:k], want[:k])
+        lengths.append(k)
+    assert max(lengths) >= 5  # real trees, not only the vehicle
 
 
 def test_stopping_speed_is_trajmath():
