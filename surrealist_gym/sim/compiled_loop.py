@@ -28,7 +28,7 @@ from numba import njit, types
 from numba.typed import Dict
 
 from ..outcomes import RunStatus
-from . import avoidance_cycle, px4_avoidance_cycle, rigid_body as rb
+from . import avoidance_cycle, px4_avoidance_cycle, rigid_body as rb, run_end
 from .compiled_physics import advance
 from .control import position_step
 from .geometry_kernels import GROUND
@@ -361,12 +361,11 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
 def _message(status: int, t: float, info: int, cfg, timeout: float) -> str:
     """The run's end as the Python loops word it."""
     if status == ST_SUCCESS:
-        return ("landed and disarmed" if info == PH_DONE else "mission finished in the air") + f" at t={t:.2f} s"
+        return run_end.finished(info == PH_DONE, t)
     if status == ST_COLLISION:
-        return f"collision with obstacle {info} at t={t:.2f} s"
+        return run_end.collided(info, t)
     if status == ST_TIMEOUT:
-        return f"timeout after {timeout:g} s in phase {PHASES[info].value}"
+        return run_end.timed_out(timeout, PHASES[info].value)
     if status == ST_STUCK:
-        return (f"stuck: no progress of {cfg.stuck_distance_m:g} m toward the goal in {cfg.stuck_window_s:g} s "
-                f"(phase {PHASES[info].value}, t={t:.2f} s)")
-    return f"vehicle flipped or state invalid at t={t:.2f} s"
+        return run_end.stuck(cfg.stuck_distance_m, cfg.stuck_window_s, PHASES[info].value, t)
+    return run_end.invalid(t)

@@ -23,7 +23,7 @@ from numba import njit
 
 from ..outcomes import RunStatus
 from ..testcase import Obstacle
-from . import rigid_body as rb
+from . import rigid_body as rb, run_end
 from .control import inner_step
 from .geometry_kernels import GROUND, MISS, contact_threshold, scene_array, vehicle_axes_ned, vehicle_contact
 from .vehicle import VehicleParams
@@ -129,7 +129,7 @@ def fly(world: CompiledWorld, runs: list, cfg, timeout: float, outer: Callable, 
                                           body, half, scene, thr, r.held, rest[r.body])
             if what >= 0:
                 r.status, r.end_t = RunStatus.COLLISION, (step + taken) * dt
-                r.message = f"collision with obstacle {what} at t={(step + taken) * dt:.2f} s"
+                r.message = run_end.collided(what, (step + taken) * dt)
                 ended.append((r, r.end_t))
             elif what == GROUND:
                 r.ground = True
@@ -138,7 +138,7 @@ def fly(world: CompiledWorld, runs: list, cfg, timeout: float, outer: Callable, 
             for r in active:
                 if r.status is None:
                     r.status, r.end_t = RunStatus.TIMEOUT, step * dt
-                    r.message = f"timeout after {timeout:g} s in phase {r.nav.phase.value}"
+                    r.message = run_end.timed_out(timeout, r.nav.phase.value)
                     ended.append((r, r.end_t))
         for r, end_t in ended:
             if r in active:

@@ -19,6 +19,7 @@ from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
 from ..outcomes import RunStatus
 from ..trajectory import Trajectory
+from . import run_end
 from .compiled_loop import fly_kernel
 from .compiled_physics import CompiledWorld, fly
 from .config import Physics, SimConfig, auto_timeout, resolve_params
@@ -283,7 +284,7 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
                 continue
             if other in obstacle_index:
                 r.status, r.end_t, done = RunStatus.COLLISION, step * dt, True
-                r.message = f"collision with obstacle {obstacle_index[other]} at t={step * dt:.2f} s"
+                r.message = run_end.collided(obstacle_index[other], step * dt)
             else:
                 r.ground = True
         for r in active:
@@ -295,7 +296,7 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
             for r in active:
                 if r.status is None:
                     r.status, r.end_t = RunStatus.TIMEOUT, step * dt
-                    r.message = f"timeout after {timeout:g} s in phase {r.nav.phase.value}"
+                    r.message = run_end.timed_out(timeout, r.nav.phase.value)
         if not done:
             continue
         done = False
@@ -339,7 +340,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
     yaw = math.atan2(2 * (qx * qy + qw * qz), 1 - 2 * (qy * qy + qz * qz)) + yaw_err
     if not (math.isfinite(pos[0]) and math.isfinite(pos[2])) or 1 - 2 * (qx * qx + qy * qy) < -0.1:
         r.status, r.end_t = RunStatus.ERROR, t
-        r.message = f"vehicle flipped or state invalid at t={t:.2f} s"
+        r.message = run_end.invalid(t)
         return False
     ex, ey, ez = pos[0] + pe[0], pos[1] + pe[1], pos[2] - rest_z + pe[2]
     evx, evy, evz = lin[0] + ve[0], lin[1] + ve[1], lin[2] + ve[2]
@@ -359,8 +360,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
     r.ground = False  # collects the contacts of the next outer period
     if nav.mission_complete:
         r.status, r.end_t = RunStatus.SUCCESS, t
-        r.message = ("landed and disarmed" if nav.phase == Phase.DONE else "mission finished in the air") + \
-            f" at t={t:.2f} s"
+        r.message = run_end.finished(nav.phase == Phase.DONE, t)
         return False
     r.armed, r.integ = nav.armed, not nav.on_ground_phase
     if nav.on_ground_phase:
@@ -380,8 +380,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
             r.anchor, r.anchor_t, r.anchor_phase = d, t, (nav.phase, nav.index)
         elif t - r.anchor_t > stuck_w:
             r.status, r.end_t = RunStatus.STUCK, t
-            r.message = (f"stuck: no progress of {stuck_d:g} m toward the goal in {stuck_w:g} s "
-                         f"(phase {nav.phase.value}, t={t:.2f} s)")
+            r.message = run_end.stuck(stuck_d, stuck_w, nav.phase.value, t)
             return False
     else:
         r.anchor = None
