@@ -101,19 +101,21 @@ def navigator_per_call(test, config) -> None:
 def _tree_calls(test, config) -> list[tuple]:
     """The arguments of every look-ahead tree build of one flight (``_build_tree`` as ``Px4LocalPlanner.update``
     calls it), without the output buffer."""
-    from surrealist_gym.sim import px4_avoidance, simulate
+    from surrealist_gym.sim import px4_avoidance, runner, simulate
 
-    calls, build = [], px4_avoidance._build_tree
+    calls, build, fly = [], px4_avoidance._build_tree, runner._fly_compiled
 
     def recording(cloud, *args):
         calls.append((cloud.copy(), *args[:-1]))
         return build(cloud, *args)
 
-    px4_avoidance._build_tree = recording
+    # the Python outer loop (the compiled loop's bit-identical reference) runs the planner class, which calls
+    # px4_avoidance._build_tree; the compiled loop calls the kernel from compiled code
+    px4_avoidance._build_tree, runner._fly_compiled = recording, runner._fly_compiled_outer
     try:
         simulate(test, runs=1, config=config)
     finally:
-        px4_avoidance._build_tree = build
+        px4_avoidance._build_tree, runner._fly_compiled = build, fly
     return calls
 
 
