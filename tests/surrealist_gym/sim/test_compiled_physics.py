@@ -59,7 +59,8 @@ def test_physics_is_a_checked_choice(monkeypatch, tmp_path, capsys):
     assert search_identity(object(), 5, 0, SimConfig(physics="compiled"))["physics"] == "compiled"
     with EvaluationStore(tmp_path / "evaluations.sqlite") as store:
         store.claim(search_identity(object(), 5, 0, SimConfig()))
-        with pytest.raises(SurrealistError, match=r"another physics \(pybullet there, compiled here\); set \$SURREALIST_PHYSICS=pybullet"):
+        other = r"another physics \(pybullet there, compiled here\); set \$SURREALIST_PHYSICS=pybullet"
+        with pytest.raises(SurrealistError, match=other):
             store.claim(search_identity(object(), 5, 0, SimConfig(physics="compiled")))
     # a bad value is a one-line error, exit code 2, before any work
     monkeypatch.setenv(PHYSICS_ENV, "bullet")
