@@ -521,8 +521,8 @@ def _tree_work(radius, children):  # pragma: no cover - compiled
                     np.zeros((n_cols, n_rows)), np.empty(n_cols, dtype=np.int64),
                     np.full(n_cols, n_rows, dtype=np.int64), np.full(n_cols, -1, dtype=np.int64),
                     np.empty((n_cols, N_E)),
-                    np.zeros((1, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius),
-                    np.empty((4, max(N_E, N_Z) + 2 * radius)), np.empty((1, N_Z)), np.empty(N_Z),
+                    np.zeros((2, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius),
+                    np.empty((4, max(N_E, N_Z) + 2 * radius)), np.empty((2, N_Z)), np.empty(N_Z),
                     np.empty(N_Z), np.empty(N_E), np.zeros(N_E, dtype=np.bool_),
                     cos_a, sin_a, cos_e, sin_e,
                     np.empty(children, dtype=np.int64), np.empty(children, dtype=np.int64), np.empty(children))
@@ -689,6 +689,66 @@ def _conic_lines4(src, ca, cb, cc, cd, lo, hi, r, n, box, out):  # pragma: no co
             out[cd, i] /= length
 
 
+@njit(cache=True)
+def _conic_lines2(src, lo, hi, r, n, box, out):  # pragma: no cover - compiled
+    """:func:`_conic_line` on the two lines ``src[0]`` and ``src[1]``, zero outside ``[lo, hi]``, into ``out[0]``
+    and ``out[1]`` (``[:n]``), in lockstep: two independent chains of additions at once, each line's sums the same
+    bits as alone (:func:`_conic_lines4`). ``box`` (>= 2 rows of n + r) is a work buffer."""
+    length = r + 1
+    m = n + r
+    j0 = max(0, lo - r)
+    j1 = min(m - 1, hi + 1)
+    for j in range(j0):
+        box[0, j] = box[1, j] = 0.0
+    sa = sb = 0.0
+    start = j0
+    if j0 == 0:
+        for j in range(length):
+            sa += src[0, j]
+            sb += src[1, j]
+        box[0, 0], box[1, 0] = sa, sb
+        start = 1
+    for j in range(start, j1 + 1):
+        sa += src[0, j + length - 1] - src[0, j - 1]
+        sb += src[1, j + length - 1] - src[1, j - 1]
+        box[0, j], box[1, j] = sa, sb
+    for j in range(j1 + 1, m):
+        box[0, j], box[1, j] = sa, sb
+    i0 = max(0, j0 - r)
+    i1 = min(n - 1, j1 + 1)
+    for i in range(i0):
+        out[0, i] = out[1, i] = 0.0
+    sa = sb = 0.0
+    start = i0
+    if i0 == 0:
+        for j in range(length):
+            sa += box[0, j]
+            sb += box[1, j]
+        out[0, 0], out[1, 0] = sa, sb
+        start = 1
+    for i in range(start, i1 + 1):
+        sa += box[0, i + length - 1] - box[0, i - 1]
+        sb += box[1, i + length - 1] - box[1, i - 1]
+        out[0, i], out[1, i] = sa, sb
+    for i in range(i1 + 1, n):
+        out[0, i], out[1, i] = sa, sb
+    for i in range(n):  # the means, in a loop that vectorizes
+        out[0, i] /= length
+        out[1, i] /= length
+
+
+@njit(cache=True, inline="always")
+def _next_row(row_cost, row_seen):  # pragma: no cover - compiled
+    """The unseen row of least pitch cost, the lower index first among equal costs (then seen); -1 when none."""
+    e = -1
+    for i in range(N_E):
+        if not row_seen[i] and (e < 0 or row_cost[i] < row_cost[e]):
+            e = i
+    if e >= 0:
+        row_seen[e] = True
+    return e
+
+
 @njit(cache=True, error_model="numpy")
 def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):  # pragma: no cover - compiled
     """:func:`_best_cells` (the histogram and cost matrix at ``origin``, the cheapest cells into ``work.cand_*``)
@@ -820,32 +880,42 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         row_seen[e] = False
     obst_row, padded_row, rc = work.row, work.line, work.row_c
     n = 0
+    ahead = -1  # the next row, smoothed with this one (in obst_row[1])
     for _ in range(N_E):
         # rows by increasing pitch cost, the lower index first among equal costs (a stable sort's order); a row
         # whose every cost is at least its pitch cost plus the least yaw cost (obstacle and velocity costs are
         # >= 0) cannot beat a full candidate list, and ends the search
-        e = -1
-        for i in range(N_E):
-            if not row_seen[i] and (e < 0 or row_cost[i] < row_cost[e]):
-                e = i
-        row_seen[e] = True
+        if ahead >= 0:
+            e, slot, ahead = ahead, 1, -1
+        else:
+            e, slot = _next_row(row_cost, row_seen), 0
         pitch_cost = row_cost[e]
         if n == n_best and pitch_cost + min_yaw >= cand_c[n - 1]:
             break
-        if smooth:  # the row of the column-smoothed matrix, then smoothed along azimuth (_smooth_row)
-            for k in range(n_cols):
-                padded_row[0, cols[k]] = work.colsm[cols[k], e]
-            _conic_line(padded_row, 0, first, last, r, N_Z, work.box, obst_row, 0)
-            for k in range(n_cols):
-                padded_row[0, cols[k]] = 0.0
-        else:
+        if smooth and slot == 0:  # the row of the column-smoothed matrix, then smoothed along azimuth
+            # (_smooth_row), with the next row when there is one: two chains of additions at once
+            ahead = _next_row(row_cost, row_seen)
+            if ahead >= 0:
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = work.colsm[cols[k], e]
+                    padded_row[1, cols[k]] = work.colsm[cols[k], ahead]
+                _conic_lines2(padded_row, first, last, r, N_Z, work.box4, obst_row)
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = padded_row[1, cols[k]] = 0.0
+            else:
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = work.colsm[cols[k], e]
+                _conic_line(padded_row, 0, first, last, r, N_Z, work.box, obst_row, 0)
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = 0.0
+        elif not smooth:
             for z in range(N_Z):
                 obst_row[0, z] = col[r + z, r + e]
         ce, se = cos_e[e], sin_e[e]
         finite = True
         for z in range(N_Z):  # the row's costs (a loop that vectorizes)
             dot = ce * (cos_a[z] * vx + sin_a[z] * vy) + se * vz
-            cost = obst_row[0, z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
+            cost = obst_row[slot, z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
             rc[z] = cost
             finite &= abs(cost) < np.inf
         # the first row fills the list with its n_best cheapest cells by (cost, azimuth index), the order the
