@@ -448,19 +448,21 @@ def _build_tree_reference(cloud, vehicle, velocity, goal, line, settings, path):
 # --- the tree search on sparse buffers ---------------------------------------------------------------------------
 class TreeWork(NamedTuple):
     """The buffers of :func:`_build_tree`, allocated once per planner (:func:`tree_work`) and reused by every build.
-    Between expansions the histogram (``dist``, ``count``), the padded obstacle matrix (``col``, ``used``) and
-    ``line`` are all zero: each expansion clears what it wrote, so it touches only the cells its points fall in.
+    Between expansions the histogram (``dist``, ``count``), the padded obstacle matrix (``col``) and ``line`` are
+    all zero: each expansion clears what it wrote, so it touches only the cells its points fall in.
 
     Attributes:
         pos, parent, depth, total, heur, closed: the tree's nodes (position as x, y, z rows, parent, depth, cost
             from the root plus heuristic, heuristic, expanded); near: a list of nodes; heap: the open nodes that can
             be expanded, a binary heap by (cost, index).
         dist, count, cells: the histogram's sums of distances and point counts (N_E x N_Z, flat) and the list of
-            the cells that hold points.
-        col, used, cols, lo, hi: smoothPolarMatrix's padded obstacle cost matrix, one row per padded column
-            ((N_Z + 2r) x (N_E + 2r)); which columns hold a nonzero cost, their list, their first and last ones.
+            the cells that hold points; mean, cell_cost: their mean distances and obstacle costs, in list order.
+        col, cols, hi: smoothPolarMatrix's padded obstacle cost matrix, one row per padded column
+            ((N_Z + 2r) x (N_E + 2r)); the list of the columns that hold a cost, and whether a column is listed
+            (0, else -1).
         colsm: each listed column smoothed along elevation (N_E values).
-        line, box, row: a padded histogram row, the running sums, a smoothed row of N_Z costs.
+        line, box, box4, row, row_c: two padded histogram rows, the running sums of one line and of four, two
+            smoothed rows of N_Z costs, a row's total costs.
         yaw_cost, row_cost, row_seen: the per-azimuth yaw costs, per-elevation pitch costs, rows already searched.
         cos_a, sin_a, cos_e, sin_e: cosine and sine of each cell's azimuth and elevation (its centre).
         cand_e, cand_z, cand_c: the cheapest cells (elevation, azimuth, cost), ascending cost.
@@ -481,7 +483,6 @@ class TreeWork(NamedTuple):
     cell_cost: np.ndarray
     col: np.ndarray
     cols: np.ndarray
-    lo: np.ndarray
     hi: np.ndarray
     colsm: np.ndarray
     line: np.ndarray
@@ -518,8 +519,7 @@ def _tree_work(radius, children):  # pragma: no cover - compiled
                     np.empty(MAX_NODES, dtype=np.int64),
                     np.zeros(N_E * N_Z), np.zeros(N_E * N_Z), np.empty(N_E * N_Z, dtype=np.int64),
                     np.empty(N_E * N_Z), np.empty(N_E * N_Z),
-                    np.zeros((n_cols, n_rows)), np.empty(n_cols, dtype=np.int64),
-                    np.full(n_cols, n_rows, dtype=np.int64), np.full(n_cols, -1, dtype=np.int64),
+                    np.zeros((n_cols, n_rows)), np.empty(n_cols, dtype=np.int64), np.full(n_cols, -1, dtype=np.int64),
                     np.empty((n_cols, N_E)),
                     np.zeros((2, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius),
                     np.empty((4, max(N_E, N_Z) + 2 * radius)), np.empty((2, N_Z)), np.empty(N_Z),
@@ -766,7 +766,7 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         settings.obstacle_cost
     r = settings.smoothing_radius
     n_best = settings.children
-    dist, count, cells, col, cols, lo, hi = work.dist, work.count, work.cells, work.col, work.cols, work.lo, work.hi
+    dist, count, cells, col, cols, hi = work.dist, work.count, work.cells, work.col, work.cols, work.hi
     cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
     # the histogram (_histogram): each point's cell and distance (a loop that vectorizes), then the sums in point
     # order, the touched cells listed
@@ -794,6 +794,7 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         mean[k] = d
         cell_cost[k] = 5000.0 * (1.0 + x / math.sqrt(1.0 + x * x))
     n_cols = 0
+    top, bottom = N_E + 2 * r, -1  # the first and last rows that hold a cost
     occupied = False
     for k in range(n_cells):
         c = cells[k]
@@ -806,9 +807,10 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
             if r <= e < N_E - r and r <= z < N_Z - r:  # one place: the cell's own
                 cc, row = r + z, r + e
                 col[cc, row] = cost
-                cols[n_cols] = cc  # listed when new (hi < 0: lo and hi rest at n_rows and -1)
+                cols[n_cols] = cc  # listed when new (hi rests at -1)
                 n_cols += hi[cc] < 0
-                lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+                hi[cc] = 0
+                top, bottom = min(top, row), max(bottom, row)
                 continue
             # the cell's places in the padded matrix: its own and, within r rows of a pole, its mirror beyond the
             # pole (the opposite azimuth); each with its azimuth-wrapped copy within r cells of the wrap
@@ -833,7 +835,8 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
                     col[cc, row] = cost
                     cols[n_cols] = cc
                     n_cols += hi[cc] < 0
-                    lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+                    hi[cc] = 0
+                    top, bottom = min(top, row), max(bottom, row)
     smooth = occupied and r > 0
     first, last = N_Z + 2 * r, -1  # the first and last listed columns
     for k in range(n_cols):
@@ -842,8 +845,7 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         for k in range(0, n_cols, 4):
             c0, c1 = cols[k], cols[min(k + 1, n_cols - 1)]
             c2, c3 = cols[min(k + 2, n_cols - 1)], cols[min(k + 3, n_cols - 1)]
-            _conic_lines4(col, c0, c1, c2, c3, min(min(lo[c0], lo[c1]), min(lo[c2], lo[c3])),
-                          max(max(hi[c0], hi[c1]), max(hi[c2], hi[c3])), r, N_E, work.box4, work.colsm)
+            _conic_lines4(col, c0, c1, c2, c3, top, bottom, r, N_E, work.box4, work.colsm)
     # goal and line directions from the origin
     dgx, dgy, dgz = gx - ox, gy - oy, gz - oz
     dist_goal = math.sqrt(dgx * dgx + dgy * dgy + dgz * dgz)
@@ -948,9 +950,9 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         count[cells[k]] = 0.0
     for k in range(n_cols):
         c = cols[k]
-        for i in range(lo[c], hi[c] + 1):
+        for i in range(top, bottom + 1):
             col[c, i] = 0.0
-        lo[c], hi[c] = col.shape[1], -1
+        hi[c] = -1
     return n, occupied
 
 
