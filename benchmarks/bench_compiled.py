@@ -101,29 +101,31 @@ def navigator_per_call(test, config) -> None:
 def _tree_calls(test, config) -> list[tuple]:
     """The arguments of every look-ahead tree build of one flight (``_build_tree`` as ``Px4LocalPlanner.update``
     calls it), without the output buffer."""
-    from surrealist_gym.sim import px4_avoidance, simulate
+    from surrealist_gym.sim import px4_avoidance, runner, simulate
 
-    calls, build = [], px4_avoidance._build_tree
+    calls, build, fly = [], px4_avoidance._build_tree, runner._fly_compiled
 
     def recording(cloud, *args):
         calls.append((cloud.copy(), *args[:-1]))
         return build(cloud, *args)
 
-    px4_avoidance._build_tree = recording
+    # the Python outer loop (the compiled loop's bit-identical reference) runs the planner class, which calls
+    # px4_avoidance._build_tree; the compiled loop calls the kernel from compiled code
+    px4_avoidance._build_tree, runner._fly_compiled = recording, runner._fly_compiled_outer
     try:
         simulate(test, runs=1, config=config)
     finally:
-        px4_avoidance._build_tree = build
+        px4_avoidance._build_tree, runner._fly_compiled = build, fly
     return calls
 
 
 def tree_per_build(test, config, repeat: int = 9) -> None:
     """Print the look-ahead tree's cost per build on every build of one flight, the dense reference
-    (``_build_tree_reference``) against ``_build_tree`` (checked equal first), and the whole flight with each; the
-    two alternate, medians."""
+    (``_build_tree_reference``) against ``_build_tree`` (checked equal first), and the whole flight with each (on
+    the Python outer loop, where the planner class calls the tree); the two alternate, medians."""
     import time
 
-    from surrealist_gym.sim import px4_avoidance, simulate
+    from surrealist_gym.sim import px4_avoidance, runner, simulate
     from surrealist_gym.sim.px4_avoidance_tree import MAX_NODES, _build_tree, _build_tree_reference, tree_work
 
     calls = _tree_calls(test, config)
@@ -147,14 +149,15 @@ def tree_per_build(test, config, repeat: int = 9) -> None:
     print(f"look-ahead tree, the flight's {len(calls)} builds (same paths): dense reference {ref * 1e6:.0f} us, "
           f"_build_tree {new * 1e6:.0f} us per build ({ref / new:.2f}x)")
 
-    def flight(build):
-        px4_avoidance._build_tree = build
+    def flight(build):  # on the Python outer loop, whose planner class calls px4_avoidance._build_tree
+        fly = runner._fly_compiled
+        px4_avoidance._build_tree, runner._fly_compiled = build, runner._fly_compiled_outer
         try:
             t0 = time.perf_counter()
             (run,) = simulate(test, runs=1, config=config)
             return time.perf_counter() - t0, run
         finally:
-            px4_avoidance._build_tree = _build_tree
+            px4_avoidance._build_tree, runner._fly_compiled = _build_tree, fly
 
     flights = {build: [] for build in (_build_tree_reference, _build_tree)}
     for _ in range(max(repeat // 2, 3)):
@@ -162,7 +165,8 @@ def tree_per_build(test, config, repeat: int = 9) -> None:
             times.append(flight(build))
     (before, a), (after, b) = ((float(np.median([t for t, _ in v])), v[0][1]) for v in flights.values())
     same = np.array_equal(a.true_xyz, b.true_xyz)
-    print(f"flight with the dense reference tree {before * 1e3:.0f} ms, with _build_tree {after * 1e3:.0f} ms "
+    print(f"flight on the Python outer loop with the dense reference tree {before * 1e3:.0f} ms, with _build_tree "
+          f"{after * 1e3:.0f} ms "
           f"({before / after:.2f}x; {a.duration:.1f} s simulated, same trajectory: {same})")
 
 

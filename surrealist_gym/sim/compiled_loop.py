@@ -58,7 +58,7 @@ from .navigator_kernels import (
     py_square,
 )
 from .noise import NoiseSource
-from .px4_avoidance_tree import MAX_NODES
+from .px4_avoidance_tree import MAX_NODES, _tree_work
 from .sensor import _cast
 
 __all__ = ["fly_kernel", "fly_span"]
@@ -121,6 +121,7 @@ def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
     """
     n_rays = rays.shape[0]
     k_end = k_first + noise.shape[0]
+    tree = _tree_work(settings.smoothing_radius, settings.children)  # the look-ahead tree's buffers, this call's
     while True:
         step = int(ls[L_STEP])
         k = step // outer_div
@@ -173,7 +174,7 @@ def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
                         hits[j, 2] = hits[j, 2] + -pe2
                     if kind == PX4_PLANNER:
                         out = px4_avoidance_cycle.cycle(cloud, age, path, pstate, settings, pconsts, t, pos_up,
-                                                        vel_up, yaw, nav_goal(nav), nav_prev(nav), hits[:m], 0.0)
+                                                        vel_up, yaw, nav_goal(nav), nav_prev(nav), hits[:m], 0.0, tree)
                         cloud, age = out[0], out[1]
                         ls[L_PLAN_KIND] = PLAN_POSITION
                         ls[L_PLAN_VEC], ls[L_PLAN_VEC + 1], ls[L_PLAN_VEC + 2] = out[2], out[3], out[4]

@@ -81,11 +81,13 @@ def closest_on_line(px, py, ax, ay, bx, by, near):  # pragma: no cover - compile
 
 @njit(cache=True)
 def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw, goal, prev_goal, hits,
-          pitch):  # pragma: no cover - compiled
+          pitch, work=None):  # pragma: no cover - compiled
     """One planner cycle (Px4LocalPlanner.update): updates ``path`` and ``state`` in place and returns
     (cloud, age, x, y, z, yaw_sp, state code, speed, built, points): the new cloud memory, the smoothed position
     setpoint, the yaw setpoint [rad], DIRECT or TRY_PATH, the adapted speed, whether a tree was built this cycle
-    (its path is then ``path[:state[PATH_LEN]]``) and the number of points in the cloud."""
+    (its path is then ``path[:state[PATH_LEN]]``) and the number of points in the cloud. ``work``: the tree's
+    buffers (:func:`~surrealist_gym.sim.px4_avoidance_tree.tree_work`), reused across cycles; allocated per build
+    when None."""
     t_prev = state[T_PREV]
     dt = 0.1 if math.isnan(t_prev) else min(max(t - t_prev, 1e-3), 1.0)
     state[T_PREV] = t
@@ -102,7 +104,7 @@ def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw,
     built = False
     if n > 0:
         tree = np.empty((MAX_NODES, 3))
-        k = _build_tree(cloud, (px, py, pz), (vx, vy, vz), (gx, gy, gz), cpt, settings, tree)
+        k = _build_tree(cloud, (px, py, pz), (vx, vy, vz), (gx, gy, gz), cpt, settings, tree, work)
         if k > 0:
             for i in range(k):  # the tree's path is deepest node first: reversed, vehicle first
                 path[i, 0], path[i, 1], path[i, 2] = tree[k - 1 - i, 0], tree[k - 1 - i, 1], tree[k - 1 - i, 2]

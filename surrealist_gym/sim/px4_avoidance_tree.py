@@ -448,18 +448,21 @@ def _build_tree_reference(cloud, vehicle, velocity, goal, line, settings, path):
 # --- the tree search on sparse buffers ---------------------------------------------------------------------------
 class TreeWork(NamedTuple):
     """The buffers of :func:`_build_tree`, allocated once per planner (:func:`tree_work`) and reused by every build.
-    Between expansions the histogram (``dist``, ``count``), the padded obstacle matrix (``col``, ``used``) and
-    ``line`` are all zero: each expansion clears what it wrote, so it touches only the cells its points fall in.
+    Between expansions the histogram (``dist``, ``count``), the padded obstacle matrix (``col``) and ``line`` are
+    all zero: each expansion clears what it wrote, so it touches only the cells its points fall in.
 
     Attributes:
-        pos, parent, depth, total, heur, closed, reach, near: the tree's nodes (position, parent, depth, cost from
-            the root plus heuristic, heuristic, expanded, within ``max_range`` of the vehicle) and a list of nodes.
+        pos, parent, depth, total, heur, closed: the tree's nodes (position as x, y, z rows, parent, depth, cost
+            from the root plus heuristic, heuristic, expanded); near: a list of nodes; heap: the open nodes that can
+            be expanded, a binary heap by (cost, index).
         dist, count, cells: the histogram's sums of distances and point counts (N_E x N_Z, flat) and the list of
-            the cells that hold points.
-        col, used, cols, lo, hi: smoothPolarMatrix's padded obstacle cost matrix, one row per padded column
-            ((N_Z + 2r) x (N_E + 2r)); which columns hold a nonzero cost, their list, their first and last ones.
+            the cells that hold points; mean, cell_cost: their mean distances and obstacle costs, in list order.
+        col, cols, hi: smoothPolarMatrix's padded obstacle cost matrix, one row per padded column
+            ((N_Z + 2r) x (N_E + 2r)); the list of the columns that hold a cost, and whether a column is listed
+            (0, else -1).
         colsm: each listed column smoothed along elevation (N_E values).
-        line, box, row: a padded histogram row, the running sums, a smoothed row of N_Z costs.
+        line, box, box4, row, row_c: two padded histogram rows, the running sums of one line and of four, two
+            smoothed rows of N_Z costs, a row's total costs.
         yaw_cost, row_cost, row_seen: the per-azimuth yaw costs, per-elevation pitch costs, rows already searched.
         cos_a, sin_a, cos_e, sin_e: cosine and sine of each cell's azimuth and elevation (its centre).
         cand_e, cand_z, cand_c: the cheapest cells (elevation, azimuth, cost), ascending cost.
@@ -471,8 +474,8 @@ class TreeWork(NamedTuple):
     total: np.ndarray
     heur: np.ndarray
     closed: np.ndarray
-    reach: np.ndarray
     near: np.ndarray
+    heap: np.ndarray
     dist: np.ndarray
     count: np.ndarray
     cells: np.ndarray
@@ -480,12 +483,13 @@ class TreeWork(NamedTuple):
     cell_cost: np.ndarray
     col: np.ndarray
     cols: np.ndarray
-    lo: np.ndarray
     hi: np.ndarray
     colsm: np.ndarray
     line: np.ndarray
     box: np.ndarray
+    box4: np.ndarray
     row: np.ndarray
+    row_c: np.ndarray
     yaw_cost: np.ndarray
     row_cost: np.ndarray
     row_seen: np.ndarray
@@ -509,16 +513,16 @@ def _tree_work(radius, children):  # pragma: no cover - compiled
     for e in range(N_E):
         el = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0
         cos_e[e], sin_e[e] = math.cos(el / _R2D), math.sin(el / _R2D)
-    return TreeWork(np.empty((MAX_NODES, 3)), np.empty(MAX_NODES, dtype=np.int64),
+    return TreeWork(np.empty((3, MAX_NODES)), np.empty(MAX_NODES, dtype=np.int64),
                     np.empty(MAX_NODES, dtype=np.int64), np.empty(MAX_NODES), np.empty(MAX_NODES),
-                    np.zeros(MAX_NODES, dtype=np.bool_), np.zeros(MAX_NODES, dtype=np.bool_),
+                    np.zeros(MAX_NODES, dtype=np.bool_), np.empty(MAX_NODES, dtype=np.int64),
                     np.empty(MAX_NODES, dtype=np.int64),
                     np.zeros(N_E * N_Z), np.zeros(N_E * N_Z), np.empty(N_E * N_Z, dtype=np.int64),
                     np.empty(N_E * N_Z), np.empty(N_E * N_Z),
-                    np.zeros((n_cols, n_rows)), np.empty(n_cols, dtype=np.int64),
-                    np.full(n_cols, n_rows, dtype=np.int64), np.full(n_cols, -1, dtype=np.int64),
+                    np.zeros((n_cols, n_rows)), np.empty(n_cols, dtype=np.int64), np.full(n_cols, -1, dtype=np.int64),
                     np.empty((n_cols, N_E)),
-                    np.zeros((1, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius), np.empty((1, N_Z)),
+                    np.zeros((2, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius),
+                    np.empty((4, max(N_E, N_Z) + 2 * radius)), np.empty((2, N_Z)), np.empty(N_Z),
                     np.empty(N_Z), np.empty(N_E), np.zeros(N_E, dtype=np.bool_),
                     cos_a, sin_a, cos_e, sin_e,
                     np.empty(children, dtype=np.int64), np.empty(children, dtype=np.int64), np.empty(children))
@@ -608,13 +612,141 @@ def _conic_line(src, si, lo, hi, r, n, box, out, oi):  # pragma: no cover - comp
     if i0 == 0:
         for j in range(length):
             s += box[j]
-        out[oi, 0] = s / length
+        out[oi, 0] = s
         start = 1
     for i in range(start, i1 + 1):
         s += box[i + length - 1] - box[i - 1]
-        out[oi, i] = s / length
+        out[oi, i] = s
     for i in range(i1 + 1, n):
-        out[oi, i] = s / length
+        out[oi, i] = s
+    for i in range(n):  # the means, in a loop that vectorizes
+        out[oi, i] /= length
+
+
+@njit(cache=True)
+def _conic_lines4(src, ca, cb, cc, cd, lo, hi, r, n, box, out):  # pragma: no cover - compiled
+    """:func:`_conic_line` on the four lines ``src[ca]``, ``src[cb]``, ``src[cc]``, ``src[cd]``, each zero outside
+    ``[lo, hi]``, into the same rows of ``out``, in lockstep: four independent chains of additions at once. Each
+    line's sums are the same bits as alone: a line's sum over its own zeros before its first nonzero value is
+    0.0 + (0.0 - 0.0), and after its last one it adds 0.0 (the window's values are equal), so running it over the
+    group's range changes nothing. ``box`` (4, >= n + r) is a work buffer."""
+    length = r + 1
+    m = n + r
+    j0 = max(0, lo - r)
+    j1 = min(m - 1, hi + 1)
+    for j in range(j0):
+        box[0, j] = box[1, j] = box[2, j] = box[3, j] = 0.0
+    sa = sb = sc = sd = 0.0
+    start = j0
+    if j0 == 0:
+        for j in range(length):
+            sa += src[ca, j]
+            sb += src[cb, j]
+            sc += src[cc, j]
+            sd += src[cd, j]
+        box[0, 0], box[1, 0], box[2, 0], box[3, 0] = sa, sb, sc, sd
+        start = 1
+    for j in range(start, j1 + 1):
+        sa += src[ca, j + length - 1] - src[ca, j - 1]
+        sb += src[cb, j + length - 1] - src[cb, j - 1]
+        sc += src[cc, j + length - 1] - src[cc, j - 1]
+        sd += src[cd, j + length - 1] - src[cd, j - 1]
+        box[0, j], box[1, j], box[2, j], box[3, j] = sa, sb, sc, sd
+    for j in range(j1 + 1, m):
+        box[0, j], box[1, j], box[2, j], box[3, j] = sa, sb, sc, sd
+    i0 = max(0, j0 - r)
+    i1 = min(n - 1, j1 + 1)
+    for i in range(i0):
+        out[ca, i] = out[cb, i] = out[cc, i] = out[cd, i] = 0.0
+    sa = sb = sc = sd = 0.0
+    start = i0
+    if i0 == 0:
+        for j in range(length):
+            sa += box[0, j]
+            sb += box[1, j]
+            sc += box[2, j]
+            sd += box[3, j]
+        out[ca, 0], out[cb, 0], out[cc, 0], out[cd, 0] = sa, sb, sc, sd
+        start = 1
+    for i in range(start, i1 + 1):
+        sa += box[0, i + length - 1] - box[0, i - 1]
+        sb += box[1, i + length - 1] - box[1, i - 1]
+        sc += box[2, i + length - 1] - box[2, i - 1]
+        sd += box[3, i + length - 1] - box[3, i - 1]
+        out[ca, i], out[cb, i], out[cc, i], out[cd, i] = sa, sb, sc, sd
+    for i in range(i1 + 1, n):
+        out[ca, i], out[cb, i], out[cc, i], out[cd, i] = sa, sb, sc, sd
+    for i in range(n):  # the means, in loops that vectorize (a repeated line is divided once)
+        out[ca, i] /= length
+    if cb != ca:
+        for i in range(n):
+            out[cb, i] /= length
+    if cc != cb:
+        for i in range(n):
+            out[cc, i] /= length
+    if cd != cc:
+        for i in range(n):
+            out[cd, i] /= length
+
+
+@njit(cache=True)
+def _conic_lines2(src, lo, hi, r, n, box, out):  # pragma: no cover - compiled
+    """:func:`_conic_line` on the two lines ``src[0]`` and ``src[1]``, zero outside ``[lo, hi]``, into ``out[0]``
+    and ``out[1]`` (``[:n]``), in lockstep: two independent chains of additions at once, each line's sums the same
+    bits as alone (:func:`_conic_lines4`). ``box`` (>= 2 rows of n + r) is a work buffer."""
+    length = r + 1
+    m = n + r
+    j0 = max(0, lo - r)
+    j1 = min(m - 1, hi + 1)
+    for j in range(j0):
+        box[0, j] = box[1, j] = 0.0
+    sa = sb = 0.0
+    start = j0
+    if j0 == 0:
+        for j in range(length):
+            sa += src[0, j]
+            sb += src[1, j]
+        box[0, 0], box[1, 0] = sa, sb
+        start = 1
+    for j in range(start, j1 + 1):
+        sa += src[0, j + length - 1] - src[0, j - 1]
+        sb += src[1, j + length - 1] - src[1, j - 1]
+        box[0, j], box[1, j] = sa, sb
+    for j in range(j1 + 1, m):
+        box[0, j], box[1, j] = sa, sb
+    i0 = max(0, j0 - r)
+    i1 = min(n - 1, j1 + 1)
+    for i in range(i0):
+        out[0, i] = out[1, i] = 0.0
+    sa = sb = 0.0
+    start = i0
+    if i0 == 0:
+        for j in range(length):
+            sa += box[0, j]
+            sb += box[1, j]
+        out[0, 0], out[1, 0] = sa, sb
+        start = 1
+    for i in range(start, i1 + 1):
+        sa += box[0, i + length - 1] - box[0, i - 1]
+        sb += box[1, i + length - 1] - box[1, i - 1]
+        out[0, i], out[1, i] = sa, sb
+    for i in range(i1 + 1, n):
+        out[0, i], out[1, i] = sa, sb
+    for i in range(n):  # the means, in a loop that vectorizes
+        out[0, i] /= length
+        out[1, i] /= length
+
+
+@njit(cache=True, inline="always")
+def _next_row(row_cost, row_seen):  # pragma: no cover - compiled
+    """The unseen row of least pitch cost, the lower index first among equal costs (then seen); -1 when none."""
+    e = -1
+    for i in range(N_E):
+        if not row_seen[i] and (e < 0 or row_cost[i] < row_cost[e]):
+            e = i
+    if e >= 0:
+        row_seen[e] = True
+    return e
 
 
 @njit(cache=True, error_model="numpy")
@@ -634,7 +766,7 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         settings.obstacle_cost
     r = settings.smoothing_radius
     n_best = settings.children
-    dist, count, cells, col, cols, lo, hi = work.dist, work.count, work.cells, work.col, work.cols, work.lo, work.hi
+    dist, count, cells, col, cols, hi = work.dist, work.count, work.cells, work.col, work.cols, work.hi
     cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
     # the histogram (_histogram): each point's cell and distance (a loop that vectorizes), then the sums in point
     # order, the touched cells listed
@@ -653,13 +785,16 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
     # mean distances and obstacle costs (a loop that vectorizes), then the costs put in the padded matrix (rows
     # beyond the poles: the opposite azimuth, mirrored in elevation)
     mean, cell_cost = work.mean, work.cell_cost
-    for k in range(n_cells):
+    for k in range(n_cells):  # gathered first, so that the arithmetic vectorizes
         c = cells[k]
-        d = dist[c] / count[c]
+        mean[k], cell_cost[k] = dist[c], count[c]
+    for k in range(n_cells):
+        d = mean[k] / cell_cost[k]
         x = obst_param - d
         mean[k] = d
         cell_cost[k] = 5000.0 * (1.0 + x / math.sqrt(1.0 + x * x))
     n_cols = 0
+    top, bottom = N_E + 2 * r, -1  # the first and last rows that hold a cost
     occupied = False
     for k in range(n_cells):
         c = cells[k]
@@ -672,9 +807,10 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
             if r <= e < N_E - r and r <= z < N_Z - r:  # one place: the cell's own
                 cc, row = r + z, r + e
                 col[cc, row] = cost
-                cols[n_cols] = cc  # listed when new (hi < 0: lo and hi rest at n_rows and -1)
+                cols[n_cols] = cc  # listed when new (hi rests at -1)
                 n_cols += hi[cc] < 0
-                lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+                hi[cc] = 0
+                top, bottom = min(top, row), max(bottom, row)
                 continue
             # the cell's places in the padded matrix: its own and, within r rows of a pole, its mirror beyond the
             # pole (the opposite azimuth); each with its azimuth-wrapped copy within r cells of the wrap
@@ -699,14 +835,17 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
                     col[cc, row] = cost
                     cols[n_cols] = cc
                     n_cols += hi[cc] < 0
-                    lo[cc], hi[cc] = min(lo[cc], row), max(hi[cc], row)
+                    hi[cc] = 0
+                    top, bottom = min(top, row), max(bottom, row)
     smooth = occupied and r > 0
     first, last = N_Z + 2 * r, -1  # the first and last listed columns
     for k in range(n_cols):
-        c = cols[k]
-        first, last = min(first, c), max(last, c)
-        if smooth:
-            _conic_line(col, c, lo[c], hi[c], r, N_E, work.box, work.colsm, c)
+        first, last = min(first, cols[k]), max(last, cols[k])
+    if smooth:  # the listed columns four at a time (a last group repeats its last column)
+        for k in range(0, n_cols, 4):
+            c0, c1 = cols[k], cols[min(k + 1, n_cols - 1)]
+            c2, c3 = cols[min(k + 2, n_cols - 1)], cols[min(k + 3, n_cols - 1)]
+            _conic_lines4(col, c0, c1, c2, c3, top, bottom, r, N_E, work.box4, work.colsm)
     # goal and line directions from the origin
     dgx, dgy, dgz = gx - ox, gy - oy, gz - oz
     dist_goal = math.sqrt(dgx * dgx + dgy * dgy + dgz * dgz)
@@ -741,33 +880,58 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         de = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0 - el_goal
         row_cost[e] = w_pitch * de * de * pitch_scale
         row_seen[e] = False
-    obst_row, padded_row = work.row, work.line
+    obst_row, padded_row, rc = work.row, work.line, work.row_c
     n = 0
+    ahead = -1  # the next row, smoothed with this one (in obst_row[1])
     for _ in range(N_E):
         # rows by increasing pitch cost, the lower index first among equal costs (a stable sort's order); a row
         # whose every cost is at least its pitch cost plus the least yaw cost (obstacle and velocity costs are
         # >= 0) cannot beat a full candidate list, and ends the search
-        e = -1
-        for i in range(N_E):
-            if not row_seen[i] and (e < 0 or row_cost[i] < row_cost[e]):
-                e = i
-        row_seen[e] = True
+        if ahead >= 0:
+            e, slot, ahead = ahead, 1, -1
+        else:
+            e, slot = _next_row(row_cost, row_seen), 0
         pitch_cost = row_cost[e]
         if n == n_best and pitch_cost + min_yaw >= cand_c[n - 1]:
             break
-        if smooth:  # the row of the column-smoothed matrix, then smoothed along azimuth (_smooth_row)
-            for k in range(n_cols):
-                padded_row[0, cols[k]] = work.colsm[cols[k], e]
-            _conic_line(padded_row, 0, first, last, r, N_Z, work.box, obst_row, 0)
-            for k in range(n_cols):
-                padded_row[0, cols[k]] = 0.0
-        else:
+        if smooth and slot == 0:  # the row of the column-smoothed matrix, then smoothed along azimuth
+            # (_smooth_row), with the next row when there is one: two chains of additions at once
+            ahead = _next_row(row_cost, row_seen)
+            if ahead >= 0:
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = work.colsm[cols[k], e]
+                    padded_row[1, cols[k]] = work.colsm[cols[k], ahead]
+                _conic_lines2(padded_row, first, last, r, N_Z, work.box4, obst_row)
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = padded_row[1, cols[k]] = 0.0
+            else:
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = work.colsm[cols[k], e]
+                _conic_line(padded_row, 0, first, last, r, N_Z, work.box, obst_row, 0)
+                for k in range(n_cols):
+                    padded_row[0, cols[k]] = 0.0
+        elif not smooth:
             for z in range(N_Z):
                 obst_row[0, z] = col[r + z, r + e]
         ce, se = cos_e[e], sin_e[e]
-        for z in range(N_Z):
+        finite = True
+        for z in range(N_Z):  # the row's costs (a loop that vectorizes)
             dot = ce * (cos_a[z] * vx + sin_a[z] * vy) + se * vz
-            cost = obst_row[0, z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
+            cost = obst_row[slot, z] + yaw_cost[z] + pitch_cost + w_vel * (speed - dot)
+            rc[z] = cost
+            finite &= abs(cost) < np.inf
+        # the first row fills the list with its n_best cheapest cells by (cost, azimuth index), the order the
+        # insertion gives (a later cell enters, or passes a listed one, only when strictly cheaper); n_best cells
+        # about the goal's azimuth bound them: a cell dearer than all of those cannot be among them, and is skipped
+        bound = np.inf
+        if n == 0 and n_best <= N_Z and finite:
+            bound = -np.inf
+            for q in range(n_best):
+                bound = max(bound, rc[(gz_i - n_best // 2 + q) % N_Z])
+        for z in range(N_Z):
+            cost = rc[z]
+            if cost > bound:
+                continue
             # keep the n_best cheapest, sorted ascending
             if n < n_best:
                 j = n
@@ -786,20 +950,64 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         count[cells[k]] = 0.0
     for k in range(n_cols):
         c = cols[k]
-        for i in range(lo[c], hi[c] + 1):
+        for i in range(top, bottom + 1):
             col[c, i] = 0.0
-        lo[c], hi[c] = col.shape[1], -1
+        hi[c] = -1
     return n, occupied
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _heap_less(a, b, total):  # pragma: no cover - compiled
+    """Whether node ``a`` comes before node ``b`` in the open set: the lower total cost, the lower index among
+    equal costs (the node a scan in index order with a strict ``<`` finds first)."""
+    return total[a] < total[b] or (total[a] == total[b] and a < b)
+
+
+@njit(cache=True, inline="always")
+def _heap_push(heap, n, node, total):  # pragma: no cover - compiled
+    """Add ``node`` to the binary heap ``heap[:n]`` ordered by :func:`_heap_less`; returns the new size."""
+    i = n
+    while i > 0:
+        up = (i - 1) >> 1
+        if not _heap_less(node, heap[up], total):
+            break
+        heap[i] = heap[up]
+        i = up
+    heap[i] = node
+    return n + 1
+
+
+@njit(cache=True, inline="always")
+def _heap_pop(heap, n, total):  # pragma: no cover - compiled
+    """Remove the first node of the binary heap ``heap[:n]`` (n > 0); returns (it, the new size)."""
+    top = heap[0]
+    n -= 1
+    last = heap[n]
+    i = 0
+    while True:
+        c = 2 * i + 1
+        if c >= n:
+            break
+        if c + 1 < n and _heap_less(heap[c + 1], heap[c], total):
+            c += 1
+        if not _heap_less(heap[c], last, total):
+            break
+        heap[i] = heap[c]
+        i = c
+    heap[i] = last
+    return top, n
+
+
+@njit(cache=True, error_model="numpy")
 def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None):  # pragma: no cover - compiled
     """StarPlanner::buildLookAheadTree from ``vehicle`` (x, y, z) with ``velocity`` toward ``goal``, ``line`` the
     mission line's point (each a 3-tuple); writes the path deepest node first into ``path``, returns its length
     (0 when the vehicle's histogram is empty). ``work``: the planner's :func:`tree_work` (allocated here when
-    None). The same result as :func:`_build_tree_reference`, bit for bit: each expansion is :func:`_expand`, and a
+    None). The same result as :func:`_build_tree_reference`, bit for bit: each expansion is :func:`_expand`; a
     child is checked against the nodes near its parent only (a node within 0.2 m of the child lies within
-    ``node_distance`` + 0.2 m of the parent; the list takes 1 mm more, far above the rounding of coordinates)."""
+    ``node_distance`` + 0.2 m of the parent; the list takes 1 mm more, far above the rounding of coordinates); the
+    next node to expand, the reference's scan for the cheapest open node within ``max_range`` of the vehicle (the
+    first one among equal costs), is the top of a binary heap of those nodes ordered by (cost, index)."""
     if work is None:
         work = _tree_work(settings.smoothing_radius, settings.children)
     points = np.ascontiguousarray(cloud.T)
@@ -809,33 +1017,33 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None)
     rmax, w_h = settings.max_range, settings.heuristic_weight
     n_exp, step = settings.expansions, settings.node_distance
     pos, parent, depth, total, heur = work.pos, work.parent, work.depth, work.total, work.heur
-    closed, reach, near = work.closed, work.reach, work.near
+    closed, near, heap = work.closed, work.near, work.heap
+    pos_x, pos_y, pos_z = pos[0], pos[1], pos[2]
     cos_a, sin_a, cos_e, sin_e = work.cos_a, work.sin_a, work.cos_e, work.sin_e
     cand_e, cand_z, cand_c = work.cand_e, work.cand_z, work.cand_c
     near2 = (step + 0.201) ** 2
-    pos[0, 0], pos[0, 1], pos[0, 2] = px, py, pz
+    pos_x[0], pos_y[0], pos_z[0] = px, py, pz
     parent[0], depth[0], closed[0] = -1, 0, False
-    reach[0] = 0.0 < rmax * rmax  # the root's distance to the vehicle, 0
     h0 = w_h * math.sqrt((gx - px) ** 2 + (gy - py) ** 2 + (gz - pz) ** 2)
     total[0], heur[0] = h0, h0
     size = 1
+    n_open = 0  # the heap: open nodes within max_range of the vehicle and of finite cost, but the root
     origin = 0
     for it in range(n_exp):
-        ox, oy, oz = pos[origin, 0], pos[origin, 1], pos[origin, 2]
+        ox, oy, oz = pos_x[origin], pos_y[origin], pos_z[origin]
         if origin == 0:
             u = velocity
         else:
             p = parent[origin]
-            u = (ox - pos[p, 0], oy - pos[p, 1], oz - pos[p, 2])
+            u = (ox - pos_x[p], oy - pos_y[p], oz - pos_z[p])
         k, occupied = _expand(points, pcell, pdist, (ox, oy, oz), u, goal, line, settings, work)
         if it == 0 and not occupied:
             return 0
         n_near = 0
-        for i in range(size):
-            dx, dy, dz = pos[i, 0] - ox, pos[i, 1] - oy, pos[i, 2] - oz
-            if dx * dx + dy * dy + dz * dz < near2:
-                near[n_near] = i
-                n_near += 1
+        for i in range(size):  # listed without a branch
+            dx, dy, dz = pos_x[i] - ox, pos_y[i] - oy, pos_z[i] - oz
+            near[n_near] = i
+            n_near += dx * dx + dy * dy + dz * dz < near2
         for j in range(k):
             if size >= MAX_NODES:
                 break
@@ -846,32 +1054,28 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None)
             close = False
             for q in range(n_near):
                 i = near[q]
-                dx, dy, dz = pos[i, 0] - nx, pos[i, 1] - ny, pos[i, 2] - nz
+                dx, dy, dz = pos_x[i] - nx, pos_y[i] - ny, pos_z[i] - nz
                 if dx * dx + dy * dy + dz * dz < 0.04:
                     close = True
                     break
             if close:
                 continue
-            pos[size, 0], pos[size, 1], pos[size, 2] = nx, ny, nz
+            pos_x[size], pos_y[size], pos_z[size] = nx, ny, nz
             parent[size], depth[size], closed[size] = origin, depth[origin] + 1, False
-            dx, dy, dz = nx - px, ny - py, nz - pz
-            reach[size] = dx * dx + dy * dy + dz * dz < rmax * rmax
             h = w_h * math.sqrt((gx - nx) ** 2 + (gy - ny) ** 2 + (gz - nz) ** 2)
             heur[size] = h
-            total[size] = total[origin] - heur[origin] + cand_c[j] + h
+            t = total[origin] - heur[origin] + cand_c[j] + h
+            total[size] = t
+            dx, dy, dz = nx - px, ny - py, nz - pz
+            if dx * dx + dy * dy + dz * dz < rmax * rmax and t < np.inf:
+                n_open = _heap_push(heap, n_open, size, total)
             near[n_near] = size
             n_near += 1
             size += 1
         closed[origin] = True
-        best = -1
-        best_cost = np.inf
-        for i in range(size):
-            if not closed[i] and total[i] < best_cost and reach[i]:
-                best_cost = total[i]
-                best = i
-        if best < 0:
+        if n_open == 0:
             break
-        origin = best
+        origin, n_open = _heap_pop(heap, n_open, total)
     # the path ends at the first open node of the greatest depth (PR #555), the root when none is open
     end, deepest = 0, 0
     for i in range(size):
@@ -879,7 +1083,7 @@ def _build_tree(cloud, vehicle, velocity, goal, line, settings, path, work=None)
             end, deepest = i, depth[i]
     n = 0
     while end >= 0:
-        path[n, 0], path[n, 1], path[n, 2] = pos[end, 0], pos[end, 1], pos[end, 2]
+        path[n, 0], path[n, 1], path[n, 2] = pos_x[end], pos_y[end], pos_z[end]
         n += 1
         end = parent[end]
     return n
