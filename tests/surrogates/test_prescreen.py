@@ -383,7 +383,8 @@ def test_a_search_in_the_measured_shape_keeps_its_figures(model):
             return super().tell(actions, fitnesses, infos)
 
     env = gym.make("Surrealist-Generate-v0", budget=5, runs=3, executor="inline",
-                   sim_config=SimConfig(common_noise=True))  # the bare UAV these figures were first measured on
+                   sim_config=SimConfig(common_noise=True, physics="pybullet"))  # the bare UAV and the physics these
+    # figures were measured on
     config = PrescreenConfig.of(threshold=0.3, first_runs=(1, 2), race_margin=0.5, skips="budget", verify_stop=True,
                                 retrain_every=2)
     agent = Prescreened(Recording("paper"), model, config, seed=0)

@@ -68,6 +68,8 @@ def _fly(test, config) -> list[_Recording]:
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(Navigator, "__init__", recording_init)
         mp.setattr(Navigator, "update", recording_update)
+        # the Python outer loop (the compiled loop's bit-identical reference) calls the Navigator class
+        mp.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)
         (result,) = simulate(test, runs=1, seed=0, config=config)
     assert len(recordings) == 1 and recordings[0].calls
     return recordings
@@ -211,8 +213,9 @@ def test_compiled_navigator_flies_the_same_run(shared_data):
     """The run loop with CompiledNavigator in place of Navigator: the same true trajectory, bit for bit."""
     test, config = _rilast("random_run3_194"), load_profile("px4-v1.12-sitl-iris").sim_config()
     config = replace(config, timeout_s=40.0)
-    (a,) = simulate(test, runs=1, seed=0, config=config)
     with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)  # the loop that calls runner.Navigator
+        (a,) = simulate(test, runs=1, seed=0, config=config)
         mp.setattr(runner, "Navigator", nk.CompiledNavigator)
         (b,) = simulate(test, runs=1, seed=0, config=config)
     assert a.status == b.status and a.message == b.message
