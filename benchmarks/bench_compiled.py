@@ -22,7 +22,7 @@ import numpy as np
 from bench_sim import ROOT, _best, plain_pybullet
 from numba import njit
 
-from surrealist_gym.sim import navigator_kernels as nk
+from surrealist_gym.sim import navigator_kernels as nk, navigator_state as ns
 
 
 def _per_call(fn, n: int, repeat: int = 5) -> float:
@@ -72,8 +72,8 @@ def navigator_per_call(test, config) -> None:
     from surrealist_gym.sim.navigator import Navigator
 
     made, calls = _navigator_calls(test, config)
-    mission, params = nk.mission_array(made[0]), nk.param_vector(made[1], *made[2:])
-    inputs = [(*args[:6], *nk.plan_inputs(args[6])) for args in calls]
+    mission, params = ns.mission_array(made[0]), ns.param_vector(made[1], *made[2:])
+    inputs = [(*args[:6], *ns.plan_inputs(args[6])) for args in calls]
     table = np.array([(t, *pos, *vel, yaw, dt, float(ground), kind, *vector, plan_yaw)
                       for t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw in inputs], dtype=np.float64)
 
@@ -83,12 +83,12 @@ def navigator_per_call(test, config) -> None:
             nav.update(*args)
 
     def run_kernel():
-        state = nk.initial_state(params)
+        state = ns.initial_state(params)
         for t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw in inputs:
             nk.nav_update(state, mission, params, t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw)
 
     def run_compiled():
-        _replay_navigator(nk.initial_state(params), mission, params, table)
+        _replay_navigator(ns.initial_state(params), mission, params, table)
 
     run_kernel(), run_compiled()  # compile
     n = len(calls)

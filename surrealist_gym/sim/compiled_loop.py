@@ -32,7 +32,8 @@ from . import avoidance_cycle, px4_avoidance_cycle, rigid_body as rb, run_end
 from .compiled_physics import advance
 from .control import position_step
 from .geometry_kernels import GROUND
-from .navigator_kernels import (
+from .navigator_kernels import nav_update
+from .navigator_state import (
     PH_CLIMB,
     PH_CRUISE,
     PH_DESCEND,
@@ -53,7 +54,6 @@ from .navigator_kernels import (
     nav_phase,
     nav_prev,
     nav_target,
-    nav_update,
     param_vector,
     py_square,
 )

@@ -22,7 +22,15 @@ import pytest
 from surrealist_gym import Mission, MissionItem, Obstacle, TestCase, load_test
 from surrealist_gym.geometry import line_projection
 from surrealist_gym.mission import Command, read_mission
-from surrealist_gym.sim import SimConfig, cpython_math as cm, navigator_kernels as nk, runner, simulate
+from surrealist_gym.sim import (
+    SimConfig,
+    cpython_math as cm,
+    flight_task_kernels as fk,
+    navigator_kernels as nk,
+    navigator_state as ns,
+    runner,
+    simulate,
+)
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask
 from surrealist_gym.sim.navigator import Navigator, Phase
@@ -116,23 +124,23 @@ def _flat(out) -> list[float]:
 
 
 def _kernel_properties(state) -> tuple:
-    target = tuple(state[nk.S_TARGET:nk.S_TARGET + 5])
-    return (nk.phase_of(state), nk.nav_index(state), nk.nav_mission_complete(state), nk.nav_armed(state),
-            nk.nav_on_ground_phase(state), nk.nav_uses_planner(state), nk.nav_goal(state), target, nk.nav_prev(state),
-            nk.nav_cruise(state))
+    target = tuple(state[ns.S_TARGET:ns.S_TARGET + 5])
+    return (ns.phase_of(state), ns.nav_index(state), ns.nav_mission_complete(state), ns.nav_armed(state),
+            ns.nav_on_ground_phase(state), ns.nav_uses_planner(state), ns.nav_goal(state), target, ns.nav_prev(state),
+            ns.nav_cruise(state))
 
 
 def _assert_replay_equal(rec: _Recording, expected=None, params=None) -> int:
     """Replay ``rec``'s calls through the kernel; each output and property must equal ``expected`` (default: what
     the class returned in the flight). Returns the number of calls."""
     params = rec.params if params is None else params
-    p = nk.param_vector(params, rec.start_time, rec.takeoff_hold_s)
-    mission = nk.mission_array(rec.mission)
-    state = nk.initial_state(p)
+    p = ns.param_vector(params, rec.start_time, rec.takeoff_hold_s)
+    mission = ns.mission_array(rec.mission)
+    state = ns.initial_state(p)
     expected = expected or [(out, props) for _, _, out, props in rec.calls]
     for i, ((args, planner, _, _), (out, props)) in enumerate(zip(rec.calls, expected)):
         t, pos, vel, yaw, dt, ground = args
-        kind, vector, plan_yaw = nk.plan_inputs(planner)
+        kind, vector, plan_yaw = ns.plan_inputs(planner)
         got = nk.nav_update(state, mission, p, t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw)
         assert _same(_flat(got), _flat(out)), (i, t, props[0], _flat(got), _flat(out))
         mine = _kernel_properties(state)
@@ -159,10 +167,10 @@ def test_recorded_flights_cover_the_navigator(flights):
     phases, kinds, commands = set(), set(), set()
     for rec in flights.values():
         phases |= {props[0] for *_, props in rec.calls}
-        kinds |= {nk.plan_inputs(planner)[0] for _, planner, _, _ in rec.calls}
+        kinds |= {ns.plan_inputs(planner)[0] for _, planner, _, _ in rec.calls}
         commands |= {it.command for it in rec.mission.items}
     assert phases == set(Phase)
-    assert kinds == {nk.PLAN_NONE, nk.PLAN_VELOCITY, nk.PLAN_POSITION}
+    assert kinds == {ns.PLAN_NONE, ns.PLAN_VELOCITY, ns.PLAN_POSITION}
     assert commands == set(Command)
 
 
@@ -186,18 +194,18 @@ def test_kernel_equals_navigator_in_every_yaw_mode(flights, name, yaw_mode):
 
 def test_a_mission_padded_for_a_batch_flies_the_same(flights):
     rec = flights["case0 seed1 (PX4 Vision, simple planner)"]
-    p = nk.param_vector(rec.params, rec.start_time, rec.takeoff_hold_s)
-    short, padded = nk.mission_array(rec.mission), nk.mission_array(rec.mission, rows=6)
-    assert padded.shape == (6, nk.N_MISSION_FIELDS) and (padded[2:, nk.M_COMMAND] == nk.NO_ITEM).all()
-    a, b = nk.initial_state(p), nk.initial_state(p)
+    p = ns.param_vector(rec.params, rec.start_time, rec.takeoff_hold_s)
+    short, padded = ns.mission_array(rec.mission), ns.mission_array(rec.mission, rows=6)
+    assert padded.shape == (6, ns.N_MISSION_FIELDS) and (padded[2:, ns.M_COMMAND] == ns.NO_ITEM).all()
+    a, b = ns.initial_state(p), ns.initial_state(p)
     for (t, pos, vel, yaw, dt, ground), planner, _, _ in rec.calls:
-        kind, vector, plan_yaw = nk.plan_inputs(planner)
+        kind, vector, plan_yaw = ns.plan_inputs(planner)
         out_a = nk.nav_update(a, short, p, t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw)
         out_b = nk.nav_update(b, padded, p, t, pos, vel, yaw, dt, ground, kind, vector, plan_yaw)
         assert _same(_flat(out_a), _flat(out_b))
     assert _same(a, b)
     with pytest.raises(ValueError):
-        nk.mission_array(rec.mission, rows=1)
+        ns.mission_array(rec.mission, rows=1)
 
 
 def test_the_comparison_sees_one_ulp(flights):
@@ -227,26 +235,26 @@ def test_compiled_navigator_flies_the_same_run(shared_data):
 def test_task_kernel_equals_flight_task(nav_acc_rad):
     """Random legs: the vehicle wanders around the trajectory, the injected point jumps (turns, the speed lock)."""
     params = dict(PX4_DEFAULTS, NAV_ACC_RAD=nav_acc_rad)
-    p = nk.param_vector(params)
+    p = ns.param_vector(params)
     rng = np.random.default_rng(11)
     turning_seen = 0
     for _ in range(20):
         pos, vel = tuple((rng.normal(size=3) * 3).tolist()), tuple(rng.normal(size=3).tolist())
         prev, goal = tuple((rng.normal(size=3) * 10).tolist()), tuple((rng.normal(size=3) * 10).tolist())
         cruise = float(rng.uniform(1, 6))
-        ref, state = AvoidanceFlightTask(params, cruise, pos, vel), np.zeros(nk.N_STATE)
-        nk.task_start(state, cruise, pos, vel)
+        ref, state = AvoidanceFlightTask(params, cruise, pos, vel), np.zeros(ns.N_STATE)
+        fk.task_start(state, cruise, pos, vel)
         setpoint = tuple((rng.normal(size=3) * 5).tolist())
         for _ in range(100):
             if rng.uniform() < 0.1:
                 setpoint = tuple((rng.normal(size=3) * 5).tolist())
             pos = tuple((np.array(ref.pos) + rng.normal(size=3) * 0.3).tolist())
             expected = ref.update(0.02, pos, setpoint, prev, goal)
-            got = nk.task_update(state, p, 0.02, pos, setpoint, prev, goal)
+            got = fk.task_update(state, p, 0.02, pos, setpoint, prev, goal)
             assert _same([*got[0], *got[1], *got[2]], [*expected[0], *expected[1], *expected[2]])
-            assert bool(state[nk.S_TASK_TURNING]) == ref.turning
-            assert state[nk.S_TASK_MAX_SPEED_PREV] == ref.max_speed_prev
-            assert nk.task_target(p, pos, prev, goal) == tuple(ref.target(pos, prev, goal))
+            assert bool(state[ns.S_TASK_TURNING]) == ref.turning
+            assert state[ns.S_TASK_MAX_SPEED_PREV] == ref.max_speed_prev
+            assert fk.task_target(p, pos, prev, goal) == tuple(ref.target(pos, prev, goal))
             turning_seen += ref.turning
     assert turning_seen > 0
 
@@ -282,25 +290,25 @@ def test_py_square_is_cpythons_power():
     """CPython's ``x ** 2`` is libm's pow, which rounds some squares differently from ``x * x``; the kernel calls
     pow."""
     xs = _random_floats(200_000, 5)
-    p = nk.param_vector(PX4_DEFAULTS)
+    p = ns.param_vector(PX4_DEFAULTS)
     assert any(x * x != x ** 2 for x in xs)  # the case this guards against occurs
-    assert all(nk.py_square(x, p) == x ** 2 for x in xs)
+    assert all(ns.py_square(x, p) == x ** 2 for x in xs)
 
 
 def test_line_projection_is_geometrys():
     rng = np.random.default_rng(6)
     for px, py, ax, ay, bx, by in (rng.normal(size=(2000, 6)) * 10).tolist() + [[1.0, 2.0, 3.0, 3.0, 3.0, 3.0005]]:
-        ok, s, cx, cy = nk._line_projection(px, py, ax, ay, bx, by)
+        ok, s, cx, cy = ns.line_projection(px, py, ax, ay, bx, by)
         ref = line_projection(px, py, (ax, ay), (bx, by))
         assert (ref is None and not ok) or (ok and (s, cx, cy) == ref)
 
 
 def test_parameter_vector_and_phase_codes():
-    p = nk.param_vector(PX4_DEFAULTS, start_time=15.0, takeoff_hold_s=2.0)
-    assert p.shape == (nk.N_PARAMS,)
-    assert [p[nk.PARAM_NAMES.index(name)] for name in nk.PARAM_NAMES] == [PX4_DEFAULTS[n] for n in nk.PARAM_NAMES]
-    assert p[nk.P_START_TIME] == 15.0 and p[nk.P_TAKEOFF_HOLD_S] == 2.0
-    assert p[nk.P_YAW_RATE_RAD] == math.radians(PX4_DEFAULTS["MPC_YAWRAUTO_MAX"])
-    assert [nk.PHASES[i] for i in (nk.PH_IDLE, nk.PH_CRUISE, nk.PH_DONE)] == [Phase.IDLE, Phase.CRUISE, Phase.DONE]
-    state = nk.initial_state(p)
-    assert nk.phase_of(state) == Phase.IDLE and nk.nav_index(state) == -1 and nk.nav_cruise(state) == p[0]
+    p = ns.param_vector(PX4_DEFAULTS, start_time=15.0, takeoff_hold_s=2.0)
+    assert p.shape == (ns.N_PARAMS,)
+    assert [p[ns.PARAM_NAMES.index(name)] for name in ns.PARAM_NAMES] == [PX4_DEFAULTS[n] for n in ns.PARAM_NAMES]
+    assert p[ns.P_START_TIME] == 15.0 and p[ns.P_TAKEOFF_HOLD_S] == 2.0
+    assert p[ns.P_YAW_RATE_RAD] == math.radians(PX4_DEFAULTS["MPC_YAWRAUTO_MAX"])
+    assert [ns.PHASES[i] for i in (ns.PH_IDLE, ns.PH_CRUISE, ns.PH_DONE)] == [Phase.IDLE, Phase.CRUISE, Phase.DONE]
+    state = ns.initial_state(p)
+    assert ns.phase_of(state) == Phase.IDLE and ns.nav_index(state) == -1 and ns.nav_cruise(state) == p[0]
