@@ -126,7 +126,9 @@ def tree_per_build(test, config, repeat: int = 9) -> None:
     import time
 
     from surrealist_gym.sim import px4_avoidance, runner, simulate
-    from surrealist_gym.sim.px4_avoidance_tree import MAX_NODES, _build_tree, _build_tree_reference, tree_work
+    from surrealist_gym.sim.px4_avoidance_settings import MAX_NODES
+    from surrealist_gym.sim.px4_avoidance_tree import _build_tree, tree_work
+    from surrealist_gym.sim.px4_avoidance_tree_reference import _build_tree_reference
 
     calls = _tree_calls(test, config)
     path, other = np.empty((MAX_NODES, 3)), np.empty((MAX_NODES, 3))

@@ -58,7 +58,8 @@ from .navigator_state import (
     py_square,
 )
 from .noise import NoiseSource
-from .px4_avoidance_tree import MAX_NODES, _tree_work
+from .px4_avoidance_settings import MAX_NODES
+from .px4_avoidance_tree import _tree_work
 from .sensor import _cast
 
 __all__ = ["fly_kernel", "fly_span"]

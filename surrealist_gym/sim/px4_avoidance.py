@@ -42,26 +42,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .planner import Planner, PlannerCommand
+from .px4_avoidance_cloud import _process_cloud
 from .px4_avoidance_cycle import closest_on_line, point_on_path
-from .px4_avoidance_tree import (  # noqa: F401 - re-exported: the kernels and constants live there
-    _R2D,
-    ALPHA_RES,
-    MAX_NODES,
-    N_E,
-    N_E2,
-    N_Z,
-    N_Z2,
-    SUB_RES,
-    KernelSettings,
-    _atan2_deg,
-    _best_cells,
-    _build_tree,
-    _hist_index,
-    _histogram,
-    _process_cloud,
-    _smooth_columns,
-    _smooth_row,
-)
+from .px4_avoidance_settings import ALPHA_RES, MAX_NODES, KernelSettings
+from .px4_avoidance_tree import _build_tree
 
 __all__ = ["KernelSettings", "Px4AvoidanceConfig", "Px4LocalPlanner", "Px4PlannerOutput", "kernel_settings"]
 

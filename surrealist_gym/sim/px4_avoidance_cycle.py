@@ -22,7 +22,9 @@ import numpy as np
 from numba import njit
 
 from .cpython_math import py_hypot, py_remainder
-from .px4_avoidance_tree import MAX_NODES, _build_tree, _process_cloud
+from .px4_avoidance_cloud import _process_cloud
+from .px4_avoidance_settings import MAX_NODES
+from .px4_avoidance_tree import _build_tree
 
 # state vector
 T_PREV, PATH_T, SPEED, SP, SP_V, YAW, YAW_RATE, YAW_AT_GOAL, PATH_LEN = 0, 1, 2, 3, 6, 9, 10, 11, 12

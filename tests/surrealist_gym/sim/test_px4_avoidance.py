@@ -13,21 +13,12 @@ from surrealist_gym.sim import px4_avoidance, runner, simulate
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
 from surrealist_gym.sim.profiles import SITL_IRIS, load_profile
-from surrealist_gym.sim.px4_avoidance import (
-    ALPHA_RES,
-    MAX_NODES,
-    N_E,
-    N_Z,
-    KernelSettings,
-    Px4AvoidanceConfig,
-    Px4LocalPlanner,
-    _atan2_deg,
-    _hist_index,
-    _smooth_columns,
-    _smooth_row,
-    kernel_settings,
-)
-from surrealist_gym.sim.px4_avoidance_tree import _build_tree_reference, _cell_index, _mod360, tree_work
+from surrealist_gym.sim.px4_avoidance import Px4AvoidanceConfig, Px4LocalPlanner, kernel_settings
+from surrealist_gym.sim.px4_avoidance_cloud import _atan2_deg, _hist_index
+from surrealist_gym.sim.px4_avoidance_expansion import _cell_index, _mod360
+from surrealist_gym.sim.px4_avoidance_settings import ALPHA_RES, MAX_NODES, N_E, N_Z, KernelSettings
+from surrealist_gym.sim.px4_avoidance_tree import tree_work
+from surrealist_gym.sim.px4_avoidance_tree_reference import _build_tree_reference, _smooth_columns, _smooth_row
 from surrealist_gym.sim.sensor import DepthSensor
 from surrealist_gym.testcase import Obstacle
 from tests.conftest import CASE_STUDIES, SHARED_DATA

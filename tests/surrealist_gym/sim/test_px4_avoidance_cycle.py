@@ -12,7 +12,7 @@ from surrealist_gym import Obstacle, load_test
 from surrealist_gym.sim import px4_avoidance_cycle as kc, runner, simulate
 from surrealist_gym.sim.profiles import resolve_uav
 from surrealist_gym.sim.px4_avoidance import Px4LocalPlanner
-from surrealist_gym.sim.px4_avoidance_tree import MAX_NODES
+from surrealist_gym.sim.px4_avoidance_settings import MAX_NODES
 from tests.conftest import CASE_STUDIES, SHARED_DATA
 
 RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
