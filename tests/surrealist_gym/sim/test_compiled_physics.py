@@ -122,3 +122,14 @@ def test_agreement_over_shipped_scenarios():
             assert _deviation(ra, rb) <= 0.05, name
             total += 1
     assert total == 14
+
+
+def test_a_flip_ends_the_run_as_an_error_on_both():
+    """A rate loop with about 17 times PX4's default D gain (0.05 against 0.003) rocks the vehicle over within 1.5 s
+    of the take-off: both loops end the run as an error at the same time, with the same words."""
+    test = load_test(EXPERIMENTS / "rq1-seed1.yaml")
+    config = SimConfig(params={"MC_ROLLRATE_D": 0.05, "MC_PITCHRATE_D": 0.05}, timeout_s=30.0)
+    ((a,), (b,)) = _both(test, 1, config)
+    assert a.status == b.status == RunStatus.ERROR
+    assert a.message == b.message and a.message.startswith("vehicle flipped or state invalid")
+    assert a.duration == pytest.approx(b.duration, abs=0.02) and a.duration < 10.0
