@@ -136,9 +136,7 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
             if r <= e < N_E - r and r <= z < N_Z - r:  # one place: the cell's own
                 cc, row = r + z, r + e
                 col[cc, row] = cost
-                cols[n_cols] = cc  # listed when new (hi rests at -1)
-                n_cols += hi[cc] < 0
-                hi[cc] = 0
+                hi[cc] = 0  # the column holds a cost (hi rests at -1); listed below
                 top, bottom = min(top, row), max(bottom, row)
                 continue
             # the cell's places in the padded matrix: its own and, within r rows of a pole, its mirror beyond the
@@ -162,14 +160,17 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
                     else:
                         continue
                     col[cc, row] = cost
-                    cols[n_cols] = cc
-                    n_cols += hi[cc] < 0
                     hi[cc] = 0
                     top, bottom = min(top, row), max(bottom, row)
+    # the columns that hold a cost, listed in order (without a branch; listing them as the cells came read back
+    # each mark just stored): each column's smoothing is its own, so the order of the list changes no result
+    for cc in range(N_Z + 2 * r):
+        cols[n_cols] = cc
+        n_cols += hi[cc] == 0
     smooth = occupied and r > 0
     first, last = N_Z + 2 * r, -1  # the first and last listed columns
-    for k in range(n_cols):
-        first, last = min(first, cols[k]), max(last, cols[k])
+    if n_cols > 0:
+        first, last = cols[0], cols[n_cols - 1]
     if smooth:  # the listed columns four at a time (a last group repeats its last column)
         for k in range(0, n_cols, 4):
             c0, c1 = cols[k], cols[min(k + 1, n_cols - 1)]
@@ -209,7 +210,7 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
         de = e * ALPHA_RES + 0.5 * ALPHA_RES - 90.0 - el_goal
         row_cost[e] = w_pitch * de * de * pitch_scale
         row_seen[e] = False
-    obst_row, padded_row, rc = work.row, work.line, work.row_c
+    obst_row, padded_row, rc, sel = work.row, work.line, work.row_c, work.sel
     n = 0
     ahead = -1  # the next row, smoothed with this one (in obst_row[1])
     for _ in range(N_E):
@@ -251,7 +252,25 @@ def _expand(points, pcell, pdist, origin, velocity, goal, line, settings, work):
             finite &= abs(cost) < np.inf
         # the first row fills the list with its n_best cheapest cells by (cost, azimuth index), the order the
         # insertion gives (a later cell enters, or passes a listed one, only when strictly cheaper); n_best cells
-        # about the goal's azimuth bound them: a cell dearer than all of those cannot be among them, and is skipped
+        # about the goal's azimuth bound them: a cell dearer than all of those cannot be among them, and is skipped;
+        # with the list full, only a cell cheaper than its dearest now can enter (the dearest only falls): those are
+        # listed first, without a branch, and only they are inserted
+        if n == n_best:
+            thr = cand_c[n - 1]
+            m = 0
+            for z in range(N_Z):
+                sel[m] = z
+                m += rc[z] < thr
+            for q in range(m):
+                z = sel[q]
+                cost = rc[z]
+                if cost < cand_c[n - 1]:
+                    j = n - 1
+                    while j > 0 and cand_c[j - 1] > cost:
+                        cand_c[j], cand_e[j], cand_z[j] = cand_c[j - 1], cand_e[j - 1], cand_z[j - 1]
+                        j -= 1
+                    cand_c[j], cand_e[j], cand_z[j] = cost, e, z
+            continue
         bound = np.inf
         if n == 0 and n_best <= N_Z and finite:
             bound = -np.inf

@@ -35,8 +35,8 @@ class TreeWork(NamedTuple):
             ((N_Z + 2r) x (N_E + 2r)); the list of the columns that hold a cost, and whether a column is listed
             (0, else -1).
         colsm: each listed column smoothed along elevation (N_E values).
-        line, box, box4, row, row_c: two padded histogram rows, the running sums of one line and of four, two
-            smoothed rows of N_Z costs, a row's total costs.
+        line, box, box4, row, row_c, sel: two padded histogram rows, the running sums of one line and of four, two
+            smoothed rows of N_Z costs, a row's total costs, the azimuths of a row that can enter the cheapest cells.
         yaw_cost, row_cost, row_seen: the per-azimuth yaw costs, per-elevation pitch costs, rows already searched.
         cos_a, sin_a, cos_e, sin_e: cosine and sine of each cell's azimuth and elevation (its centre).
         cand_e, cand_z, cand_c: the cheapest cells (elevation, azimuth, cost), ascending cost.
@@ -64,6 +64,7 @@ class TreeWork(NamedTuple):
     box4: np.ndarray
     row: np.ndarray
     row_c: np.ndarray
+    sel: np.ndarray
     yaw_cost: np.ndarray
     row_cost: np.ndarray
     row_seen: np.ndarray
@@ -97,6 +98,7 @@ def _tree_work(radius, children):  # pragma: no cover - compiled
                     np.empty((n_cols, N_E)),
                     np.zeros((2, n_cols)), np.empty(max(N_E, N_Z) + 2 * radius),
                     np.empty((4, max(N_E, N_Z) + 2 * radius)), np.empty((2, N_Z)), np.empty(N_Z),
+                    np.empty(N_Z, dtype=np.int64),
                     np.empty(N_Z), np.empty(N_E), np.zeros(N_E, dtype=np.bool_),
                     cos_a, sin_a, cos_e, sin_e,
                     np.empty(children, dtype=np.int64), np.empty(children, dtype=np.int64), np.empty(children))
