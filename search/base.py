@@ -32,6 +32,42 @@ class SearchResult:
     simulations: int = 0         # runs the search simulated, as the env layer it searched through counts them
 
 
+class SearchLog:
+    """The bookkeeping of one search as the env saw it: the best evaluation, the evaluations spent (in all and until
+    the best), and the fitness of every step in the order stepped. What an agent and a loop that drives one
+    (:class:`surrogates.prescreened.Prescreened`) keep alike.
+
+    Args:
+        env: the Surrealist layer searched through (it counts the simulations).
+        start: where the search starts, as (action, fitness, info): the seed test, or the test a restart begins at.
+        info: the episode's reset info.
+    """
+
+    def __init__(self, env, start: tuple[np.ndarray, float, dict], info: dict):
+        self.env = env
+        action, fitness, start_info = start
+        self.best = (np.array(action, dtype=np.float64), float(fitness), start_info)
+        self.evaluations = int(info.get("evaluations", 1))
+        self.evaluations_to_best = self.evaluations
+        self.history = [self.best[1]]
+
+    def add(self, stepped) -> None:
+        """Record steps, as (action, fitness, info), in the order stepped."""
+        for action, fitness, info in stepped:
+            self.history.append(float(fitness))
+            count = int(info.get("evaluations", self.evaluations))
+            self.evaluations = max(self.evaluations, count)  # never decreases, whatever order results are told in
+            if fitness > self.best[1]:
+                self.best = (np.asarray(action, dtype=np.float64), float(fitness), info)
+                self.evaluations_to_best = count
+
+    def result(self, stop_reason: str) -> SearchResult:
+        """The :class:`SearchResult` of the search so far."""
+        action, fitness, info = self.best
+        return SearchResult(action, fitness, info, self.evaluations, self.evaluations_to_best, tuple(self.history),
+                            stop_reason, int(self.env.simulations))
+
+
 class Agent(ABC):
     """Base class of every search agent (ask/tell; ``run`` drives an env with them)."""
 
@@ -41,10 +77,7 @@ class Agent(ABC):
         self.seed = seed
         self._pending: list[np.ndarray] | None = None
         self._env = None
-        self._best: tuple[np.ndarray, float, dict] | None = None
-        self._evaluations = 0
-        self._evaluations_to_best = 0
-        self._history: list[float] = []
+        self._log: SearchLog | None = None
         self._stop_reason = ""
 
     # --- public verbs: bookkeeping, then the subclass hook ------------------------------------------------------
@@ -56,10 +89,7 @@ class Agent(ABC):
         self._env = search_layer(env)
         self.rng = np.random.default_rng(self.seed)
         seed = np.array(self._env.seed_action, dtype=np.float64)
-        self._best = (seed, float(info["fitness"]), info) if start is None else start
-        self._evaluations = int(info.get("evaluations", 1))
-        self._evaluations_to_best = self._evaluations
-        self._history = [float(self._best[1])]
+        self._log = SearchLog(self._env, (seed, info["fitness"], info) if start is None else start, info)
         self._stop_reason = ""
         self._pending = None
         self._setup(info)
@@ -82,13 +112,7 @@ class Agent(ABC):
             raise ValueError(f"tell() got {len(actions)} actions, {len(fitnesses)} fitnesses and {len(infos)} infos "
                              f"for {len(self._pending)} asked")
         self._pending = None
-        for action, fitness, info in zip(actions, fitnesses, infos):
-            self._history.append(float(fitness))
-            count = int(info.get("evaluations", self._evaluations))
-            self._evaluations = max(self._evaluations, count)  # never decreases, whatever order results are told in
-            if fitness > self._best[1]:
-                self._best = (np.asarray(action, dtype=np.float64), float(fitness), info)
-                self._evaluations_to_best = count
+        self._log.add(zip(actions, fitnesses, infos))
         self._tell(list(actions), [float(f) for f in fitnesses], list(infos))
 
     def stop(self) -> dict:
@@ -99,11 +123,9 @@ class Agent(ABC):
     def result(self) -> SearchResult:
         """The search's outcome: best action, fitness and info, evaluation counts, history and stop reason
         (RuntimeError before a run)."""
-        if self._best is None:
+        if self._log is None:
             raise RuntimeError("no result before a run")
-        action, fitness, info = self._best
-        return SearchResult(action, fitness, info, self._evaluations, self._evaluations_to_best,
-                            tuple(self._history), self._stop_reason, int(self._env.simulations))
+        return self._log.result(self._stop_reason)
 
     def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
         """Search on ``env`` until the agent stops or the env's budget is spent."""
@@ -149,4 +171,4 @@ class Agent(ABC):
     @property
     def best(self) -> tuple[np.ndarray, float, dict[str, Any]]:
         """The best evaluation so far as (action, fitness, info); None before the first."""
-        return self._best
+        return None if self._log is None else self._log.best

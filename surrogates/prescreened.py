@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from search.base import Agent, SearchResult
+from search.base import Agent, SearchLog, SearchResult
 from surrealist_gym.errors import SurrealistError
 
 from .config import PrescreenConfig
@@ -41,7 +41,7 @@ class VerifyStop:
         self.enabled = enabled
         self.verified_at: int | None = None  #: real evaluations when the unscreened restart began
 
-    def restart(self, agent: Agent, prescreener: Prescreener, info: dict, record: "SearchRecord") -> bool:
+    def restart(self, agent: Agent, prescreener: Prescreener, info: dict, record: SearchLog) -> bool:
         """Restart ``agent`` (``info``: the episode's reset info) from the best of ``record`` if due; True when it
         goes on."""
         if not self.enabled or self.verified_at is not None or prescreener.env.budget_left <= 0:
@@ -50,41 +50,6 @@ class VerifyStop:
         prescreener.stop_screening()
         agent.setup(prescreener.env, info, start=record.best)  # the env's own budget: what screening saved
         return not agent.stop()
-
-
-class SearchRecord:
-    """The search as the env saw it: the best real evaluation, the evaluations spent (to it), and the fitness of
-    every step on the env (skipped candidates are not in it).
-
-    Args:
-        env: the Surrealist layer searched through (it counts the simulations).
-        start: where the search starts, as (action, fitness, info): the agent's best after its setup.
-        info: the episode's reset info.
-    """
-
-    def __init__(self, env, start: tuple[np.ndarray, float, dict], info: dict):
-        self.env = env
-        action, fitness, start_info = start
-        self.best = (np.array(action, dtype=np.float64), float(fitness), start_info)
-        self.evaluations = int(info.get("evaluations", 1))
-        self.evaluations_to_best = self.evaluations
-        self.history = [self.best[1]]
-
-    def add(self, stepped) -> None:
-        """Record steps on the env, as (action, fitness, info), in the order stepped."""
-        for action, fitness, info in stepped:
-            self.history.append(float(fitness))
-            count = int(info.get("evaluations", self.evaluations))
-            self.evaluations = max(self.evaluations, count)  # never decreases
-            if fitness > self.best[1]:
-                self.best = (np.asarray(action, dtype=np.float64), float(fitness), info)
-                self.evaluations_to_best = count
-
-    def result(self, stop_reason: str) -> SearchResult:
-        """The :class:`~search.base.SearchResult` of the search so far."""
-        action, fitness, info = self.best
-        return SearchResult(action, fitness, info, self.evaluations, self.evaluations_to_best, tuple(self.history),
-                            stop_reason, int(self.env.simulations))
 
 
 class Prescreened:
@@ -119,7 +84,7 @@ class Prescreened:
         _, info = env.reset(seed=seed if seed is not None else self.seed)
         prescreener.start(env, info)
         agent.setup(prescreener.agent_env, info)
-        record = SearchRecord(prescreener.env, agent.best, info)
+        record = SearchLog(prescreener.env, agent.best, info)
         self.verify = VerifyStop(prescreener.config.verify_stop)
         while not (reason := self._stop(info, record)):
             actions = agent.ask()
@@ -128,7 +93,7 @@ class Prescreened:
             agent.tell(actions[:len(batch.fitnesses)], batch.fitnesses, batch.infos)
         return record.result(reason["reason"])
 
-    def _stop(self, info: dict, record: SearchRecord) -> dict:
+    def _stop(self, info: dict, record: SearchLog) -> dict:
         """The prescreener's stop, else the agent's; an agent's stop may restart it instead (:class:`VerifyStop`:
         a restart goes on only when the agent does, with screening off, so neither stop holds then)."""
         prescreener = self.prescreener
@@ -156,4 +121,4 @@ def wrap(agent: Agent, spec: str | Path | None, env=None, config: PrescreenConfi
     return Prescreened(agent, model, config)
 
 
-__all__ = ["Prescreened", "SearchRecord", "VerifyStop", "wrap"]
+__all__ = ["Prescreened", "VerifyStop", "wrap"]
