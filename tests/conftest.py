@@ -14,6 +14,15 @@ REFERENCE_CSV = SHARED_DATA / "reference" / "case0_reference_trajectory.csv"
 CASE_STUDIES = SHARED_DATA / "competition" / "case_studies"
 
 
+def fly_the_python_outer_loop(mp: pytest.MonkeyPatch) -> None:
+    """Let the compiled physics fly ``runner._fly_compiled_outer``, the compiled loop's bit-identical reference, which
+    calls the Python classes (the navigator, both planners, the tree) that the compiled loop runs as kernels: for
+    tests that record or swap those classes."""
+    from surrealist_gym.sim import runner
+
+    mp.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)
+
+
 def sigint_as_a_terminal_gives_it() -> None:
     """``Popen(preexec_fn=...)``: the child takes SIGINT as Ctrl-C (KeyboardInterrupt), even when these tests run as a
     background job, whose children inherit SIGINT ignored (and Python keeps an ignored SIGINT ignored)."""

@@ -10,10 +10,10 @@ from numba import types
 from numba.typed import Dict
 
 from surrealist_gym import load_test
-from surrealist_gym.sim import avoidance_cycle as kc, runner, simulate
+from surrealist_gym.sim import avoidance_cycle as kc, simulate
 from surrealist_gym.sim.avoidance import LocalPlanner
 from surrealist_gym.sim.profiles import resolve_uav
-from tests.conftest import EXPERIMENTS
+from tests.conftest import EXPERIMENTS, fly_the_python_outer_loop
 
 
 def _recorded_cycles(test, monkeypatch):
@@ -32,9 +32,7 @@ def _recorded_cycles(test, monkeypatch):
         return out
 
     monkeypatch.setattr(LocalPlanner, "update", recording)
-    # the Python outer loop (the compiled loop's bit-identical reference) calls the planner class; the compiled
-    # loop runs the kernel
-    monkeypatch.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)
+    fly_the_python_outer_loop(monkeypatch)
     simulate(test, runs=1, seed=0, config=resolve_uav(test=test).sim_config())
     monkeypatch.undo()
     return planners[0], calls

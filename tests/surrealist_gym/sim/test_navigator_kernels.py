@@ -35,7 +35,7 @@ from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask
 from surrealist_gym.sim.navigator import Navigator, Phase
 from surrealist_gym.sim.profiles import load_profile
-from tests.conftest import CASE_STUDIES, EXPERIMENTS, FORMATS, SHARED_DATA
+from tests.conftest import CASE_STUDIES, EXPERIMENTS, FORMATS, SHARED_DATA, fly_the_python_outer_loop
 
 RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
 QGC_SAMPLE = FORMATS / "plan" / "mavsdk_qgroundcontrol_sample.plan"
@@ -76,8 +76,7 @@ def _fly(test, config) -> list[_Recording]:
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(Navigator, "__init__", recording_init)
         mp.setattr(Navigator, "update", recording_update)
-        # the Python outer loop (the compiled loop's bit-identical reference) calls the Navigator class
-        mp.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)
+        fly_the_python_outer_loop(mp)
         (result,) = simulate(test, runs=1, seed=0, config=config)
     assert len(recordings) == 1 and recordings[0].calls
     return recordings
@@ -222,7 +221,7 @@ def test_compiled_navigator_flies_the_same_run(shared_data):
     test, config = _rilast("random_run3_194"), load_profile("px4-v1.12-sitl-iris").sim_config()
     config = replace(config, timeout_s=40.0)
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)  # the loop that calls runner.Navigator
+        fly_the_python_outer_loop(mp)  # the loop that calls runner.Navigator
         (a,) = simulate(test, runs=1, seed=0, config=config)
         mp.setattr(runner, "Navigator", nk.CompiledNavigator)
         (b,) = simulate(test, runs=1, seed=0, config=config)

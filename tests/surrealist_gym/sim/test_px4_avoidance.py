@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from surrealist_gym import load_test
-from surrealist_gym.sim import px4_avoidance, runner, simulate
+from surrealist_gym.sim import px4_avoidance, simulate
 from surrealist_gym.sim.config import PX4_DEFAULTS
 from surrealist_gym.sim.flight_task import AvoidanceFlightTask, stopping_speed
 from surrealist_gym.sim.profiles import SITL_IRIS, load_profile
@@ -21,7 +21,7 @@ from surrealist_gym.sim.px4_avoidance_tree import tree_work
 from surrealist_gym.sim.px4_avoidance_tree_reference import _build_tree_reference, _smooth_columns, _smooth_row
 from surrealist_gym.sim.sensor import DepthSensor
 from surrealist_gym.testcase import Obstacle
-from tests.conftest import CASE_STUDIES, SHARED_DATA
+from tests.conftest import CASE_STUDIES, SHARED_DATA, fly_the_python_outer_loop
 
 CAMERA = SITL_IRIS.sensor_config()
 RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
@@ -110,9 +110,7 @@ def test_tree_kernel_gives_the_reference_paths_on_a_recorded_flight(monkeypatch)
         return build(cloud, *args)
 
     monkeypatch.setattr(px4_avoidance, "_build_tree", recording)
-    # the Python outer loop (the compiled loop's bit-identical reference) runs the planner class, which calls
-    # px4_avoidance._build_tree; the compiled loop calls the kernel from compiled code
-    monkeypatch.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)
+    fly_the_python_outer_loop(monkeypatch)
     simulate(_rilast("random_run3_194"), runs=1, seed=0, config=load_profile("px4-v1.12-sitl-iris").sim_config())
     monkeypatch.undo()
     assert len(calls) > 100

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from surrealist_gym import Obstacle, load_test
-from surrealist_gym.sim import px4_avoidance_cycle as kc, runner, simulate
+from surrealist_gym.sim import px4_avoidance_cycle as kc, simulate
 from surrealist_gym.sim.profiles import resolve_uav
 from surrealist_gym.sim.px4_avoidance import Px4LocalPlanner
 from surrealist_gym.sim.px4_avoidance_settings import MAX_NODES
-from tests.conftest import CASE_STUDIES, SHARED_DATA
+from tests.conftest import CASE_STUDIES, SHARED_DATA, fly_the_python_outer_loop
 
 RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
 
@@ -42,9 +42,7 @@ def _recorded_cycles(test, monkeypatch):
         return out
 
     monkeypatch.setattr(Px4LocalPlanner, "update", recording)
-    # the Python outer loop (the compiled loop's bit-identical reference) calls the planner class; the compiled
-    # loop runs the kernel
-    monkeypatch.setattr(runner, "_fly_compiled", runner._fly_compiled_outer)
+    fly_the_python_outer_loop(monkeypatch)
     simulate(test, runs=1, seed=0, config=resolve_uav(test=test).sim_config())
     monkeypatch.undo()
     return planners[0], calls
