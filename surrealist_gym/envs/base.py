@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import InvalidTestCase
 from ..evaluation import Evaluation, Evaluator
-from ..mutators import PropertyMutator, apply_action
+from ..mutators import PropertyMutator, action_values, apply_action
 from ..store import EvaluationStore
 from ..testcase import TestCase
 from ..trajectory import Trajectory
@@ -208,8 +208,8 @@ class SurrealistEnv(gym.Env):
         return self._best
 
     def values_for(self, action) -> np.ndarray:
-        """Mutator values (metres, degrees) of an action in [-1, 1]."""
-        return self._centre + np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0) * self._half_range
+        """Mutator values (metres, degrees) of an action in [-1, 1]: those its test is made with (``action_values``)."""
+        return np.array(action_values(self._mutators, np.asarray(action, dtype=np.float64).reshape(-1)))
 
     def action_for(self, values) -> np.ndarray:
         """The action in [-1, 1] of mutator values (metres, degrees); values beyond a mutator's range are clipped."""
