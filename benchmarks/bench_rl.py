@@ -9,14 +9,15 @@ moved from the seed layout by up to the rule's width either way, ``seed + a x wi
 
 Part 2 (the study, unless ``--sample-only``): PPO trained for ``--steps`` env steps on the case study
 (``search.rl.train_policy``, noise seed 0, episodes of ``--episode-budget`` evaluations), then every agent of
-``--agents`` (``ppo`` is the trained policy, rolled out by ``search.PPOAgent``; any other name goes to
-``search.make_agent``) searches the case study with ``--budget`` single-run evaluations on each held-out noise seed
+``--agents`` (``ppo``, ``ppo-sample`` are the trained policy rolled out by ``search.PPOAgent``, deterministic first
+or sampled at every step; any other name goes to ``search.make_agent``) searches the case study with ``--budget``
+single-run evaluations on each held-out noise seed
 (``--first-seed``, ... ; training never flew with them), the agent seeded with the same number. Per search: the soft
 failures among the runs flown (a collision, or a competition distance below 1.5 m; the seed's flight, the same for
 every agent, not counted), per simulation, and the distinct failures a ``RecordSuite`` keeps (the seed's, when it
 fails, not counted either). The table gives each agent's mean and standard deviation, and the paper's test
-(Shapiro-Wilk, then ANOVA or Mann-Whitney U; ``search.statistics.compare``) with the Vargha-Delaney A12 of ``ppo``
-against each other agent on soft failures per simulation.
+(Shapiro-Wilk, then ANOVA or Mann-Whitney U; ``search.statistics.compare``) with the Vargha-Delaney A12 of the first
+agent against each other agent on soft failures per simulation.
 
 Everything is kept in ``--out``: the policy, trained in parts of ``--part`` steps (``ppo-STEPS-partKofN.zip``, each
 with its record ``.json``; ``ppo-STEPS.zip`` when one part), each search's evaluations (``searches/AGENT-seedN.sqlite``)
@@ -125,7 +126,7 @@ def train(args, out: Path) -> Path:
 
 def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     """One search on a held-out noise seed, cached in ``out/searches/AGENT-seedN.json`` (its store beside it)."""
-    from search.registry import make_agent
+    from search.registry import POLICY_PREFIXES, make_agent
     from search.rl import TrainingRecord
     from surrealist_gym.competition.case_study_env import CaseStudyEnv
     from surrealist_gym.competition.suite_env import RecordSuite
@@ -139,7 +140,7 @@ def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
                                    executor="inline", store=stem.with_suffix(".sqlite")))
     counts = TrainingRecord()  # counts a search's steps as it counts a training's
     start = time.perf_counter()
-    name = f"ppo:{policy}" if agent == "ppo" else agent
+    name = f"{agent}:{policy}" if agent in POLICY_PREFIXES else agent
     try:
         result = make_agent(name, seed=seed).run(env, seed=seed, callback=lambda info: counts.add(info, False))
     finally:
@@ -156,12 +157,13 @@ def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
 
 
 def summarise(records: list[dict], agents: list[str]) -> str:
-    """The study's table (markdown): per agent mean ± sd, and ppo against each other agent."""
+    """The study's table (markdown): per agent mean ± sd, and the first agent against each other agent."""
     from search.statistics import compare, vargha_delaney_a12
 
+    first = agents[0]
     lines = ["| agent | searches | simulations | soft failures | soft failures per simulation | distinct failures | "
-             "refused steps | p-value, ppo vs agent | A12 (ppo more) |", "|---|---|---|---|---|---|---|---|---|"]
-    ours = [r["per_simulation"] for r in records if r["agent"] == "ppo"]
+             f"refused steps | p-value, {first} vs agent | A12 ({first} more) |", "|---" * 9 + "|"]
+    ours = [r["per_simulation"] for r in records if r["agent"] == first]
     for agent in agents:
         rows = [r for r in records if r["agent"] == agent]
         if not rows:
@@ -173,10 +175,10 @@ def summarise(records: list[dict], agents: list[str]) -> str:
             return f"{np.mean(values):.{digits}f} ± {np.std(values, ddof=1) if len(values) > 1 else 0:.{digits}f}"
 
         test = a12 = "-"
-        if agent != "ppo" and len(ours) >= 3 and len(per) >= 3:
+        if agent != first and len(ours) >= 3 and len(per) >= 3:
             p, name = compare(ours, per)
             test, a12 = f"{p:.3g} ({name})", f"{vargha_delaney_a12(ours, per):.2f}"
-        elif agent != "ppo" and ours:
+        elif agent != first and ours:
             test = "needs 3 seeds"
         lines.append(f"| {agent} | {len(rows)} | {mean_sd('simulations')} | {mean_sd('soft_failures')} | "
                      f"{np.mean(per):.3f} ± {np.std(per, ddof=1) if len(per) > 1 else 0:.3f} | "
@@ -193,7 +195,8 @@ def main(argv=None) -> int:
     parser.add_argument("--episode-budget", type=int, default=15, help="evaluations per training episode (15)")
     parser.add_argument("--envs", type=int, default=1, help="training envs in SubprocVecEnv (default 1)")
     parser.add_argument("--part", type=int, default=5000, help="training steps per saved part (default 5000)")
-    parser.add_argument("--agents", default="ppo,random", help="agents compared (default ppo,random)")
+    parser.add_argument("--agents", default="ppo-sample,ppo,random",
+                        help="agents compared, the first against each other (default ppo-sample,ppo,random)")
     parser.add_argument("--seeds", type=int, default=3, help="held-out noise seeds (default 3; the study: 5)")
     parser.add_argument("--first-seed", type=int, default=100, help="the first held-out seed (default 100)")
     parser.add_argument("--budget", type=int, default=20, help="evaluations per search (default 20; the study: 100)")
@@ -222,7 +225,8 @@ def main(argv=None) -> int:
             print(f"  {agent} seed {seed}: {record['soft_failures']} soft failures in {record['simulations']} "
                   f"simulations, {record['distinct_failures']} distinct ({record['wall_s']:.0f} s)")
     table = summarise(records, agents)
-    head = (f"{args.mission}: PPO trained for {args.steps} steps against {', '.join(a for a in agents if a != 'ppo')}"
+    head = (f"{args.mission}: PPO trained for {args.steps} steps; {agents[0]} against "
+            f"{', '.join(agents[1:])}"
             f"; {args.seeds} held-out seeds from {args.first_seed}, budget {args.budget} single-run evaluations")
     print(head)
     print(table)

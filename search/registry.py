@@ -3,7 +3,8 @@
 Names:
     ``greedy`` (the adaptive greedy with the authors' preset), ``greedy-paper`` (paper Table 1), ``random``,
     ``cmaes``, ``suite`` (suites of distinct failures), ``ppo:POLICY.zip`` / ``sac:POLICY.zip`` (a policy
-    trained by ``surrealist train``), any name added with :func:`register_agent`, and ``module:Class`` or
+    trained by ``surrealist train``, deterministic first), ``ppo-sample:POLICY.zip`` / ``sac-sample:POLICY.zip``
+    (every action sampled from the policy), any name added with :func:`register_agent`, and ``module:Class`` or
     ``path/to/file.py:Class`` for an Agent subclass of your own (built as ``Class(seed=seed, **options)``).
 
 Example:
@@ -26,7 +27,7 @@ from surrealist_gym.errors import UnknownAgent
 
 from .base import Agent
 
-POLICY_PREFIXES = ("ppo", "sac")
+POLICY_PREFIXES = ("ppo", "sac", "ppo-sample", "sac-sample")
 
 
 def _greedy(preset: str) -> Callable[..., Agent]:
@@ -68,7 +69,7 @@ def register_agent(name: str, factory: Callable[..., Agent]) -> None:
 
 
 def agent_names() -> list[str]:
-    """The registered names (policies are spelled ``ppo:PATH`` / ``sac:PATH``)."""
+    """The registered names (policies are spelled ``ppo:PATH``, ``sac:PATH``, ``ppo-sample:PATH``, ...)."""
     return sorted(_REGISTRY) + [f"{p}:POLICY.zip" for p in POLICY_PREFIXES]
 
 
@@ -85,7 +86,8 @@ def make_agent(name: str, seed: int | None = None, **options) -> Agent:
     prefix, sep, rest = name.partition(":")
     if sep and prefix in POLICY_PREFIXES:
         from .rl import PPOAgent
-        return PPOAgent(rest, seed=seed, algorithm=prefix, **options)
+        algorithm, _, sample = prefix.partition("-")
+        return PPOAgent(rest, seed=seed, algorithm=algorithm, sample=bool(sample), **options)
     if sep:
         return _import_agent(prefix, rest)(seed=seed, **options)
     if name in _REGISTRY:

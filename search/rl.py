@@ -12,7 +12,9 @@ envs in SB3's ``SubprocVecEnv``, whose workers fly their runs inline.
 
 Search (:class:`PPOAgent`): the trained policy acts deterministically on the env; an action the env answers from
 its memo (already evaluated) or rejects as invalid is followed by one sampled from the policy, so the rollout keeps
-spending the budget. RL libraries are run-style, so the agent overrides ``run`` and returns a SearchResult.
+spending the budget. ``sample=True`` samples every action from the policy, as training does: the policy is then a
+search distribution, not one answer (on a case study, where failures are many and scattered, that is what finds them).
+RL libraries are run-style, so the agent overrides ``run`` and returns a SearchResult.
 
 Example:
     >>> train_policy(steps=256, out="ppo.zip", problem="replicate")            # doctest: +SKIP
@@ -371,10 +373,11 @@ class PPOAgent(Agent):
 
     name = "ppo"
 
-    def __init__(self, policy, seed: int | None = None, algorithm: Algorithm | str = "ppo"):
+    def __init__(self, policy, seed: int | None = None, algorithm: Algorithm | str = "ppo", sample: bool = False):
         super().__init__(seed)
         self.algorithm = Algorithm(algorithm)
-        self.name = self.algorithm.value
+        self.sample = bool(sample)
+        self.name = self.algorithm.value + ("-sample" if self.sample else "")
         if isinstance(policy, (str, os.PathLike)):
             if not Path(policy).is_file():
                 raise SurrealistError(f"{policy}: no such policy file (train one with `surrealist train`)")
@@ -385,7 +388,7 @@ class PPOAgent(Agent):
         self._explore = False
 
     def _ask(self) -> list[np.ndarray]:
-        if not self._explore:
+        if not (self._explore or self.sample):
             action, _ = self.model.predict(self._obs, deterministic=True)
         else:  # sample with torch's global generator, seeded from this agent's: reproducible beside other threads
             import torch

@@ -8,6 +8,7 @@ import pytest
 import surrealist_gym  # noqa: F401 - registers the envs
 from search import CMAES, Agent, PPOAgent, RandomSearch, make_agent, register_agent
 from search.registry import agent_label
+from search.rl import load_policy
 from surrealist_gym.errors import SurrealistError, UnknownAgent
 
 BUDGET = 5
@@ -28,9 +29,9 @@ def policy(tmp_path_factory):
                             n_steps=8, batch_size=8, n_epochs=1)
 
 
-@pytest.fixture(params=["greedy", "greedy-paper", "random", "cmaes", "ppo"])
+@pytest.fixture(params=["greedy", "greedy-paper", "random", "cmaes", "ppo", "ppo-sample"])
 def agent_name(request, policy):
-    return f"ppo:{policy}" if request.param == "ppo" else request.param
+    return f"{request.param}:{policy}" if request.param.startswith("ppo") else request.param
 
 
 def test_agent_spends_the_budget_and_keeps_the_seed(agent_name):
@@ -86,6 +87,7 @@ def test_policy_for_other_mutators_is_rejected(policy):
 
 def test_registry_names_hints_and_custom_agents(tmp_path):
     assert agent_label("ppo:some/where.zip") == "ppo" and agent_label("pkg.mod:Mine") == "Mine"
+    assert agent_label("ppo-sample:some/where.zip") == "ppo-sample"
     with pytest.raises(UnknownAgent, match="did you mean 'cmaes'"):
         make_agent("cmaess")
     with pytest.raises(UnknownAgent, match="ppo:POLICY.zip"):
@@ -107,6 +109,32 @@ def test_registry_names_hints_and_custom_agents(tmp_path):
     assert make_agent(f"{source}:Mine", seed=0).name == "mine"
     with pytest.raises(UnknownAgent, match="cannot import"):
         make_agent(f"{source}:Missing")
+
+
+def test_a_sampled_rollout_draws_every_action_from_the_policy(policy):
+    """``ppo:`` acts on the policy's mean until a memo hit or a refusal; ``ppo-sample:`` samples every step."""
+    from surrealist_gym.envs.wrapper import SurrealistWrapper
+
+    class Recording(SurrealistWrapper):
+        def __init__(self, env):
+            super().__init__(env)
+            self.actions = []
+
+        def step(self, action):
+            self.actions.append(tuple(np.round(np.asarray(action, dtype=np.float64), 9)))
+            return self.env.step(action)
+
+    def first_actions(name):
+        env = Recording(_env(4))
+        make_agent(f"{name}:{policy}", seed=3).run(env, seed=3)
+        return env.actions
+
+    deterministic, sampled = first_actions("ppo"), first_actions("ppo-sample")
+    mean, _ = load_policy(policy).predict(_env(4).reset(seed=3)[0], deterministic=True)
+    assert np.allclose(deterministic[0], np.clip(mean, -1, 1), atol=1e-6)
+    assert not np.allclose(sampled[0], np.clip(mean, -1, 1), atol=1e-3)
+    assert len(set(sampled)) == len(sampled)
+    assert make_agent(f"ppo-sample:{policy}").name == "ppo-sample"
 
 
 def test_ppo_searches_in_parallel_threads_are_reproducible(policy):
