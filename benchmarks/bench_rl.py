@@ -30,6 +30,7 @@ Usage::
     python benchmarks/bench_rl.py --sample-only                     # part 1 only (~5 s)
     python benchmarks/bench_rl.py                                   # short study: 256 steps, 3 seeds, budget 20
     python benchmarks/bench_rl.py --steps 50000 --seeds 5 --budget 100 --envs 2 --out results/bench-rl-50k
+    python benchmarks/bench_rl.py --steps 50000 --seeds 5 --budget 100 --envs 2 --hyper gamma=0 --out results/rl-gamma0
 """
 from __future__ import annotations
 
@@ -51,6 +52,15 @@ def case_study(name: str) -> str:
     """A case study's YAML: the shared data's when it holds it, else the name (looked up by the rules)."""
     path = CASE_STUDIES / f"{name}.yaml"
     return str(path) if path.is_file() else name
+
+
+def hyper_setting(text: str) -> tuple[str, object]:
+    """``KEY=VALUE`` of ``--hyper``: the value read as JSON (``gamma=0`` -> 0, ``n_steps=128`` -> 128)."""
+    key, sep, value = text.partition("=")
+    try:
+        return key.strip(), json.loads(value)
+    except json.JSONDecodeError:
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE with a number or JSON value, got {text!r}") from None
 
 
 def action_space_figures(mission: str, samples: int, seed: int = 0) -> dict:
@@ -107,12 +117,13 @@ def train(args, out: Path) -> Path:
         record = policy.with_suffix(".json")
         if policy.is_file() and record.is_file():
             saved = json.loads(record.read_text())
-            if {key: saved.get(key) for key in settings} == settings:
+            if ({key: saved.get(key) for key in settings} == settings
+                    and all(saved.get("hyper", {}).get(key) == value for key, value in args.hyper.items())):
                 previous, total = policy, total + saved["wall_seconds"]
                 print(f"policy part {k + 1}/{parts}: {policy} (read back)")
                 continue
         train_policy(steps, policy, problem="case-study", case_study=settings["case_study"],
-                     budget=args.episode_budget, envs=args.envs, seed=k, init=previous,
+                     budget=args.episode_budget, envs=args.envs, seed=k, init=previous, **args.hyper,
                      progress=lambda n, k=k: print(f"\rtraining part {k + 1}/{parts}: {n}/{steps} steps", end="",
                                                    file=sys.stderr))
         print(file=sys.stderr)
@@ -194,6 +205,9 @@ def main(argv=None) -> int:
     parser.add_argument("--steps", type=int, default=256, help="PPO training steps (default 256; the study: 50000)")
     parser.add_argument("--episode-budget", type=int, default=15, help="evaluations per training episode (15)")
     parser.add_argument("--envs", type=int, default=1, help="training envs in SubprocVecEnv (default 1)")
+    parser.add_argument("--hyper", type=hyper_setting, action="append", default=[], metavar="KEY=VALUE",
+                        help="a setting of SB3's PPO (repeatable), e.g. gamma=0; a part is read back only when it "
+                             "was trained with the same")
     parser.add_argument("--part", type=int, default=5000, help="training steps per saved part (default 5000)")
     parser.add_argument("--agents", default="ppo-sample,ppo,random",
                         help="agents compared, the first against each other (default ppo-sample,ppo,random)")
@@ -202,6 +216,7 @@ def main(argv=None) -> int:
     parser.add_argument("--budget", type=int, default=20, help="evaluations per search (default 20; the study: 100)")
     parser.add_argument("--out", type=Path, default=Path("results/bench-rl"), help="results folder (resumable)")
     args = parser.parse_args(argv)
+    args.hyper = dict(args.hyper)
     warnings.simplefilter("ignore")
 
     figures = action_space_figures(args.mission, args.samples)
