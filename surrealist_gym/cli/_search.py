@@ -117,8 +117,10 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
             elif f.name != "agent" and (flag in flags or given != f.default) and given != getattr(options, f.name):
                 raise SurrealistError(f"{flag}: the search in {out} was started with {getattr(options, f.name)!r}; "
                                       f"--resume keeps its options (only --workers and --dask-scheduler change)")
+        from search.registry import POLICY_PREFIXES
+
         module = options.agent.split(":", 1)[0] if ":" in (options.agent or "") else None
-        if module not in (None, "ppo", "sac") and args.agent != options.agent:
+        if module not in (None, *POLICY_PREFIXES) and args.agent != options.agent:
             raise SurrealistError(f"{saved}: the search's agent {options.agent!r} is code from module {module!r}; "
                                   f"resuming would import it: give --agent {options.agent} to confirm")
         return out, options

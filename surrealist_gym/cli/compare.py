@@ -20,7 +20,7 @@ def add_arguments(parser) -> None:
                         help=f"the UAV Testing Competition case study the searches generate tests for (mission1, "
                              f"mission2, mission3 or its YAML), on {CASE_STUDY_ENV} (default mission1)")
     parser.add_argument("--agents", default="greedy,random,cmaes",
-                        help="comma-separated agents: greedy, greedy-paper, random, cmaes, ppo:POLICY.zip, "
+                        help="comma-separated agents: greedy, greedy-paper, random, cmaes, ppo[-sample]:POLICY.zip, "
                              "sac:POLICY.zip, module:Class or file.py:Class (default greedy,random,cmaes)")
     parser.add_argument("--repetitions", type=int, default=10, help="searches per agent (default 10)")
     parser.add_argument("--budget", type=int, default=100, help="evaluations per search (default 100)")

@@ -129,7 +129,8 @@ class SearchOptions:
     dask_scheduler: str | None = _opt(None, DASK_HELP, metavar="ADDRESS")
     preset: str = _opt("authors", _PRESET_HELP, choices=["paper", "authors"])
     agent: str = _opt(PROBLEM_DEFAULTS["replicate"]["agent"], "search agent: greedy, greedy-paper, random, cmaes, "
-                                                             "suite, ppo:POLICY.zip, module:Class (default {default})")
+                                                             "suite, ppo[-sample]:POLICY.zip, module:Class "
+                                                             "(default {default})")
     random_seed: int = _opt(0, "base seed of the simulation noise (default {default})", type=int, metavar="N")
     uav: str | None = _opt(None, _UAV_HELP + "; default: the log's vehicle (a PX4 Vision: px4-vision-case0, else "
                                              "px4-v1.12-sitl-iris, on the ground as long as the log)",
@@ -273,7 +274,7 @@ class GenerateOptions(SearchOptions):
     runs: int = _opt(PROBLEM_DEFAULTS["generate"]["runs"], "simulations per evaluation (default {default}; with "
                      f"--case-study {CASE_STUDY_DEFAULTS['runs']})", type=int)
     agent: str = _opt(PROBLEM_DEFAULTS["generate"]["agent"],
-                      "search agent: greedy, greedy-paper, random, cmaes, suite, ppo:POLICY.zip, module:Class "
+                      "search agent: greedy, greedy-paper, random, cmaes, suite, ppo[-sample]:POLICY.zip, module:Class "
                       f"(default {{default}}; with --case-study {CASE_STUDY_DEFAULTS['agent']})")
     uav: str | None = _opt(None, _UAV_HELP + "; default: px4-vision-case0 for a seed test with a reference log, as "
                                              "the paper's, else px4-v1.12-sitl-iris (with --case-study too)",
