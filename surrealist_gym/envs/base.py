@@ -277,7 +277,7 @@ class SurrealistEnv(gym.Env):
         so the one before stays) as an H x W x 3 uint8 array; None without a render mode or before ``reset``."""
         if self.render_mode is None or self._shown is None:
             return None
-        from ..plots import top_view_image
+        from ..cli.plots import top_view_image
 
         shown = self._shown
         flights = [Trajectory.from_array(r.trajectory) for r in shown.runs

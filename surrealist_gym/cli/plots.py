@@ -12,9 +12,9 @@ import math
 import os
 from typing import Mapping, Sequence
 
-from .errors import DependencyNotInstalled
-from .testcase import Obstacle, Shape
-from .trajectory import Trajectory
+from ..errors import DependencyNotInstalled
+from ..testcase import Obstacle, Shape
+from ..trajectory import Trajectory
 
 _REFERENCE_STYLE = {"color": "black", "linewidth": 2.5, "zorder": 5}
 _OBSTACLE_STYLE = {"facecolor": "tab:red", "edgecolor": "darkred", "alpha": 0.35, "linewidth": 1.0}
