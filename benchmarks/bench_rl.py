@@ -9,15 +9,15 @@ moved from the seed layout by up to the rule's width either way, ``seed + a x wi
 
 Part 2 (the study, unless ``--sample-only``): PPO trained for ``--steps`` env steps on the case study
 (``search.rl.train_policy``, noise seed 0, episodes of ``--episode-budget`` evaluations), then every agent of
-``--agents`` (``ppo``, ``ppo-sample`` are the trained policy rolled out by ``search.PPOAgent``, deterministic first
-or sampled at every step; any other name goes to ``search.make_agent``) searches the case study with ``--budget``
-single-run evaluations on each held-out noise seed
-(``--first-seed``, ... ; training never flew with them), the agent seeded with the same number. Per search: the soft
-failures among the runs flown (a collision, or a competition distance below 1.5 m; the seed's flight, the same for
-every agent, not counted), per simulation, and the distinct failures a ``RecordSuite`` keeps (the seed's, when it
-fails, not counted either). The table gives each agent's mean and standard deviation, and the paper's test
-(Shapiro-Wilk, then ANOVA or Mann-Whitney U; ``search.statistics.compare``) with the Vargha-Delaney A12 of the first
-agent against each other agent on soft failures per simulation.
+``--agents`` (``ppo``, ``ppo-sample`` are the trained policy rolled out by ``search.PPOAgent``, deterministic first or
+sampled at every step; any other name goes to ``search.make_agent``) searches the case study with ``--budget``
+single-run evaluations on each held-out noise seed (``--seeds`` from each of ``--first-seed``; training never flew with
+them), the agent seeded with the same number. Per search: the soft failures among the runs flown (a collision, or a
+competition distance below 1.5 m; the seed's flight, the same for every agent, not counted), per simulation, and the
+distinct failures a ``RecordSuite`` keeps (the seed's, when it fails, not counted either). The table gives each agent's
+mean and standard deviation, and the paper's test (Shapiro-Wilk, then ANOVA or Mann-Whitney U;
+``search.statistics.compare``) with the Vargha-Delaney A12 of the first agent against each other agent on soft failures
+per simulation.
 
 Everything is kept in ``--out``: the policy, trained in parts of ``--part`` steps (``ppo-STEPS-partKofN.zip``, each
 with its record ``.json``; ``ppo-STEPS.zip`` when one part), each search's evaluations (``searches/AGENT-seedN.sqlite``)
@@ -29,7 +29,7 @@ Usage::
 
     python benchmarks/bench_rl.py --sample-only                     # part 1 only (~5 s)
     python benchmarks/bench_rl.py                                   # short study: 256 steps, 3 seeds, budget 20
-    python benchmarks/bench_rl.py --steps 50000 --seeds 5 --budget 100 --envs 2 --out results/bench-rl-50k
+    python benchmarks/bench_rl.py --steps 50000 --seeds 5 --first-seed 100,200 --budget 100 --envs 2 --out results/rl
     python benchmarks/bench_rl.py --steps 50000 --seeds 5 --budget 100 --envs 2 --hyper gamma=0 --out results/rl-gamma0
 """
 from __future__ import annotations
@@ -61,6 +61,17 @@ def hyper_setting(text: str) -> tuple[str, object]:
         return key.strip(), json.loads(value)
     except json.JSONDecodeError:
         raise argparse.ArgumentTypeError(f"expected KEY=VALUE with a number or JSON value, got {text!r}") from None
+
+
+def seed_starts(text: str) -> tuple[int, ...]:
+    """``--first-seed``: one non-negative seed or several, comma-separated."""
+    try:
+        starts = tuple(int(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected N or N,N,...; got {text!r}") from None
+    if any(start < 0 for start in starts):
+        raise argparse.ArgumentTypeError(f"expected non-negative seeds, got {text!r}")
+    return starts
 
 
 def action_space_figures(mission: str, samples: int, seed: int = 0) -> dict:
@@ -105,9 +116,9 @@ def train(args, out: Path) -> Path:
     from search.rl import train_policy
 
     parts = -(-args.steps // args.part)
-    if parts > args.first_seed:
+    if parts > min(args.first_seed):
         raise SystemExit(f"--steps {args.steps} in parts of {args.part}: part seeds would reach the held-out seeds "
-                         f"from --first-seed {args.first_seed}; raise --part or --first-seed")
+                         f"from --first-seed {min(args.first_seed)}; raise --part or --first-seed")
     previous, total = None, 0.0
     for k in range(parts):
         steps = min(args.part, args.steps - k * args.part)
@@ -212,7 +223,8 @@ def main(argv=None) -> int:
     parser.add_argument("--agents", default="ppo-sample,ppo,random",
                         help="agents compared, the first against each other (default ppo-sample,ppo,random)")
     parser.add_argument("--seeds", type=int, default=3, help="held-out noise seeds (default 3; the study: 5)")
-    parser.add_argument("--first-seed", type=int, default=100, help="the first held-out seed (default 100)")
+    parser.add_argument("--first-seed", type=seed_starts, default=(100,), metavar="N[,N...]",
+                        help="the first held-out seed, or several (100,200: --seeds from each; default 100)")
     parser.add_argument("--budget", type=int, default=20, help="evaluations per search (default 20; the study: 100)")
     parser.add_argument("--out", type=Path, default=Path("results/bench-rl"), help="results folder (resumable)")
     args = parser.parse_args(argv)
@@ -231,7 +243,7 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     policy = train(args, args.out)
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
-    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    seeds = [start + i for start in args.first_seed for i in range(args.seeds)]
     records = []
     for seed in seeds:
         for agent in agents:
@@ -242,7 +254,8 @@ def main(argv=None) -> int:
     table = summarise(records, agents)
     head = (f"{args.mission}: PPO trained for {args.steps} steps; {agents[0]} against "
             f"{', '.join(agents[1:])}"
-            f"; {args.seeds} held-out seeds from {args.first_seed}, budget {args.budget} single-run evaluations")
+            f"; held-out seeds {', '.join(f'{s}-{s + args.seeds - 1}' for s in args.first_seed)}, "
+            f"budget {args.budget} single-run evaluations")
     print(head)
     print(table)
     (args.out / "summary.md").write_text(f"{head}\n\n{table}\n")
