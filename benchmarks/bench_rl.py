@@ -58,9 +58,11 @@ def hyper_setting(text: str) -> tuple[str, object]:
     """``KEY=VALUE`` of ``--hyper``: the value read as JSON (``gamma=0`` -> 0, ``n_steps=128`` -> 128)."""
     key, sep, value = text.partition("=")
     try:
-        return key.strip(), json.loads(value)
+        if sep and key.strip():
+            return key.strip(), json.loads(value)
     except json.JSONDecodeError:
-        raise argparse.ArgumentTypeError(f"expected KEY=VALUE with a number or JSON value, got {text!r}") from None
+        pass
+    raise argparse.ArgumentTypeError(f"expected KEY=VALUE with a number or JSON value, got {text!r}")
 
 
 def seed_starts(text: str) -> tuple[int, ...]:
@@ -113,7 +115,7 @@ def train(args, out: Path) -> Path:
     its ``.json``) and started from the weights of the one before (``train_policy(init=...)``): a rerun reads back
     the parts trained with the same settings and goes on after the last. Part k flies with noise seed k - 1, which
     stays below the held-out seeds."""
-    from search.rl import train_policy
+    from search.rl import algorithm_settings, recorded_settings, train_policy
 
     parts = -(-args.steps // args.part)
     if parts > min(args.first_seed):
@@ -124,12 +126,12 @@ def train(args, out: Path) -> Path:
         steps = min(args.part, args.steps - k * args.part)
         policy = out / (f"ppo-{args.steps}.zip" if parts == 1 else f"ppo-{args.steps}-part{k + 1}of{parts}.zip")
         settings = {"case_study": case_study(args.mission), "steps": steps, "budget": args.episode_budget,
-                    "envs": args.envs, "seed": k, "init": None if previous is None else str(previous)}
+                    "envs": args.envs, "seed": k, "init": None if previous is None else str(previous),
+                    "hyper": recorded_settings(algorithm_settings("ppo", steps, args.envs, **args.hyper))}
         record = policy.with_suffix(".json")
         if policy.is_file() and record.is_file():
             saved = json.loads(record.read_text())
-            if ({key: saved.get(key) for key in settings} == settings
-                    and all(saved.get("hyper", {}).get(key) == value for key, value in args.hyper.items())):
+            if {key: saved.get(key) for key in settings} == settings:
                 previous, total = policy, total + saved["wall_seconds"]
                 print(f"policy part {k + 1}/{parts}: {policy} (read back)")
                 continue
@@ -229,6 +231,13 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("results/bench-rl"), help="results folder (resumable)")
     args = parser.parse_args(argv)
     args.hyper = dict(args.hyper)
+    if args.hyper:
+        import inspect
+
+        from stable_baselines3 import PPO
+        known = inspect.signature(PPO).parameters
+        if unknown := sorted(set(args.hyper) - set(known)):
+            parser.error(f"--hyper {unknown[0]}: not a setting of stable_baselines3.PPO")
     warnings.simplefilter("ignore")
 
     figures = action_space_figures(args.mission, args.samples)

@@ -240,8 +240,7 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
         envs: envs stepped together; more than 1 runs them in SB3's ``SubprocVecEnv`` (one process each).
         init: a policy file of :func:`train_policy` whose weights the new policy starts from (its optimiser starts
             afresh): training in parts, each saved, resumes after the last part saved.
-        **hyper: keyword arguments of the SB3 algorithm; PPO defaults suit short runs
-            (``n_steps=64, batch_size=32, n_epochs=5``; fewer steps per rollout when ``steps`` is smaller).
+        **hyper: keyword arguments of the SB3 algorithm, over :func:`algorithm_settings`' defaults.
 
     Returns:
         The path of the saved policy.
@@ -267,11 +266,7 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     else:
         env = training_env(config, sim_config, seed)
         env.reset(seed=seed)
-    if Algorithm(algorithm) is Algorithm.PPO:
-        rollout = max(2, min(64, -(-int(steps) // envs)))  # a tiny run trains on what it collects
-        hyper = {"n_steps": rollout, "batch_size": min(32, rollout * envs), "n_epochs": 5, "gamma": 0.95, **hyper}
-    else:
-        hyper = {"learning_starts": min(100, steps // 4), "buffer_size": 50_000, **hyper}
+    hyper = algorithm_settings(algorithm, steps, envs, **hyper)
     model = cls("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **hyper)
     if init is not None:
         try:
@@ -306,7 +301,7 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     settings = {"problem": config.problem.value, "algorithm": Algorithm(algorithm).value, "steps": int(steps),
                 "budget": budget, "runs": runs, "seed": seed, "envs": envs,
                 "init": None if init is None else str(init),
-                "hyper": {k: v for k, v in hyper.items() if isinstance(v, (int, float, str, bool))}}
+                "hyper": recorded_settings(hyper)}
     if config.problem is Problem.CASE_STUDY:
         settings.update(case_study=str(case_study), obstacles=obstacles)
     else:
@@ -319,6 +314,21 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     if interrupted:
         raise KeyboardInterrupt(f"{path}: trained {model.num_timesteps} of {steps} steps")
     return path
+
+
+def algorithm_settings(algorithm: Algorithm | str, steps: int, envs: int = 1, **overrides) -> dict:
+    """The keyword arguments :func:`train_policy` gives the SB3 algorithm: its defaults for ``steps`` env steps on
+    ``envs`` envs, then ``overrides``. PPO's suit short runs (``n_steps=64, batch_size=32, n_epochs=5,
+    gamma=0.95``; fewer steps per rollout when ``steps`` is smaller, so a tiny run trains on what it collects)."""
+    if Algorithm(algorithm) is Algorithm.PPO:
+        rollout = max(2, min(64, -(-int(steps) // envs)))
+        return {"n_steps": rollout, "batch_size": min(32, rollout * envs), "n_epochs": 5, "gamma": 0.95, **overrides}
+    return {"learning_starts": min(100, steps // 4), "buffer_size": 50_000, **overrides}
+
+
+def recorded_settings(settings: dict) -> dict:
+    """The settings a policy's ``.json`` records (``hyper``): the plain values among them."""
+    return {k: v for k, v in settings.items() if isinstance(v, (int, float, str, bool))}
 
 
 def load_policy(path, algorithm: Algorithm | str = "ppo"):

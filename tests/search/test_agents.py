@@ -111,6 +111,18 @@ def test_registry_names_hints_and_custom_agents(tmp_path):
         make_agent(f"{source}:Missing")
 
 
+def test_a_policy_records_the_settings_it_was_trained_with(policy):
+    """A policy's .json records algorithm_settings (defaults, then the caller's), so a rerun can tell its parts."""
+    import json
+
+    from search.rl import algorithm_settings, recorded_settings
+
+    saved = json.loads(policy.with_suffix(".json").read_text())["hyper"]
+    assert saved == {"n_steps": 8, "batch_size": 8, "n_epochs": 1, "gamma": 0.95}
+    assert saved == recorded_settings(algorithm_settings("ppo", 16, n_steps=8, batch_size=8, n_epochs=1))
+    assert algorithm_settings("ppo", 16)["n_steps"] == 16 and algorithm_settings("ppo", 5000, envs=2)["n_steps"] == 64
+
+
 def test_a_sampled_rollout_draws_every_action_from_the_policy(policy):
     """``ppo:`` acts on the policy's mean until a memo hit or a refusal; ``ppo-sample:`` samples every step."""
     from surrealist_gym.envs.wrapper import SurrealistWrapper
