@@ -114,7 +114,9 @@ def _import_agent(module: str, attr: str):
             mod = importlib.import_module(module)
         factory = getattr(mod, attr)
     except (ImportError, FileNotFoundError, AttributeError) as err:
-        raise UnknownAgent(f"agent '{module}:{attr}': cannot import it ({type(err).__name__}: {err})") from err
+        close = difflib.get_close_matches(module, POLICY_PREFIXES, n=1)
+        hint = f"; did you mean {close[0]}:{attr}?" if close else ""
+        raise UnknownAgent(f"agent '{module}:{attr}': cannot import it ({type(err).__name__}: {err}){hint}") from err
     if not callable(factory):
         raise UnknownAgent(f"agent '{module}:{attr}': not a class or factory")
     return factory

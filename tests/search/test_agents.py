@@ -88,6 +88,8 @@ def test_policy_for_other_mutators_is_rejected(policy):
 def test_registry_names_hints_and_custom_agents(tmp_path):
     assert agent_label("ppo:some/where.zip") == "ppo" and agent_label("pkg.mod:Mine") == "Mine"
     assert agent_label("ppo-sample:some/where.zip") == "ppo-sample"
+    with pytest.raises(UnknownAgent, match="did you mean ppo-sample:x.zip"):
+        make_agent("ppo-sampel:x.zip")
     with pytest.raises(UnknownAgent, match="did you mean 'cmaes'"):
         make_agent("cmaess")
     with pytest.raises(UnknownAgent, match="ppo:POLICY.zip"):
