@@ -29,8 +29,9 @@ Usage::
 
     python benchmarks/bench_rl.py --sample-only                     # part 1 only (~5 s)
     python benchmarks/bench_rl.py                                   # short study: 256 steps, 3 seeds, budget 20
-    python benchmarks/bench_rl.py --steps 50000 --seeds 5 --first-seed 100,200 --budget 100 --envs 2 --out results/rl
-    python benchmarks/bench_rl.py --steps 50000 --seeds 5 --budget 100 --envs 2 --hyper gamma=0 --out results/rl-gamma0
+    python benchmarks/bench_rl.py --steps 50000 --seeds 5 --first-seed 300 --agents ppo-sample,random --budget 100 \
+        --envs 2 --out results/rl                                   # the study
+    python benchmarks/bench_rl.py ... --hyper gamma=0.95 --out results/rl-discounted   # another SB3 setting
 """
 from __future__ import annotations
 
@@ -127,7 +128,8 @@ def train(args, out: Path) -> Path:
         policy = out / (f"ppo-{args.steps}.zip" if parts == 1 else f"ppo-{args.steps}-part{k + 1}of{parts}.zip")
         settings = {"case_study": case_study(args.mission), "steps": steps, "budget": args.episode_budget,
                     "envs": args.envs, "seed": k, "init": None if previous is None else str(previous),
-                    "hyper": recorded_settings(algorithm_settings("ppo", steps, args.envs, **args.hyper))}
+                    "hyper": recorded_settings(algorithm_settings("ppo", steps, args.envs, "case-study",
+                                                                  **args.hyper))}
         record = policy.with_suffix(".json")
         if policy.is_file() and record.is_file():
             saved = json.loads(record.read_text())
@@ -219,7 +221,7 @@ def main(argv=None) -> int:
     parser.add_argument("--episode-budget", type=int, default=15, help="evaluations per training episode (15)")
     parser.add_argument("--envs", type=int, default=1, help="training envs in SubprocVecEnv (default 1)")
     parser.add_argument("--hyper", type=hyper_setting, action="append", default=[], metavar="KEY=VALUE",
-                        help="a setting of SB3's PPO (repeatable), e.g. gamma=0; a part is read back only when it "
+                        help="a setting of SB3's PPO (repeatable), e.g. gamma=0.95; a part is read back only when it "
                              "was trained with the same")
     parser.add_argument("--part", type=int, default=5000, help="training steps per saved part (default 5000)")
     parser.add_argument("--agents", default="ppo-sample,ppo,random",

@@ -266,7 +266,7 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     else:
         env = training_env(config, sim_config, seed)
         env.reset(seed=seed)
-    hyper = algorithm_settings(algorithm, steps, envs, **hyper)
+    hyper = algorithm_settings(algorithm, steps, envs, config.problem, **hyper)
     model = cls("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **hyper)
     if init is not None:
         try:
@@ -316,14 +316,22 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     return path
 
 
-def algorithm_settings(algorithm: Algorithm | str, steps: int, envs: int = 1, **overrides) -> dict:
+def algorithm_settings(algorithm: Algorithm | str, steps: int, envs: int = 1,
+                       problem: Problem | str = Problem.REPLICATE, **overrides) -> dict:
     """The keyword arguments :func:`train_policy` gives the SB3 algorithm: its defaults for ``steps`` env steps on
-    ``envs`` envs, then ``overrides``. PPO's suit short runs (``n_steps=64, batch_size=32, n_epochs=5,
-    gamma=0.95``; fewer steps per rollout when ``steps`` is smaller, so a tiny run trains on what it collects)."""
+    ``envs`` envs of ``problem``, then ``overrides``. PPO's suit short runs (``n_steps=64, batch_size=32,
+    n_epochs=5``; fewer steps per rollout when ``steps`` is smaller, so a tiny run trains on what it collects).
+
+    The discount follows the problem. A replicate or generate action mutates the current test, so it shapes the
+    steps after it: ``gamma=0.95``. A case-study action is the whole layout and its reward depends on it alone, so
+    a discount would only add the unrelated rewards of later layouts to each return: ``gamma=0`` (SAC too)."""
+    bandit = Problem(problem) is Problem.CASE_STUDY
     if Algorithm(algorithm) is Algorithm.PPO:
         rollout = max(2, min(64, -(-int(steps) // envs)))
-        return {"n_steps": rollout, "batch_size": min(32, rollout * envs), "n_epochs": 5, "gamma": 0.95, **overrides}
-    return {"learning_starts": min(100, steps // 4), "buffer_size": 50_000, **overrides}
+        return {"n_steps": rollout, "batch_size": min(32, rollout * envs), "n_epochs": 5,
+                "gamma": 0.0 if bandit else 0.95, **overrides}
+    return {"learning_starts": min(100, steps // 4), "buffer_size": 50_000, **({"gamma": 0.0} if bandit else {}),
+            **overrides}
 
 
 def recorded_settings(settings: dict) -> dict:

@@ -123,6 +123,11 @@ def test_a_policy_records_the_settings_it_was_trained_with(policy):
     assert saved == {"n_steps": 8, "batch_size": 8, "n_epochs": 1, "gamma": 0.95}
     assert saved == recorded_settings(algorithm_settings("ppo", 16, n_steps=8, batch_size=8, n_epochs=1))
     assert algorithm_settings("ppo", 16)["n_steps"] == 16 and algorithm_settings("ppo", 5000, envs=2)["n_steps"] == 64
+    # a case-study action is a whole layout whose reward depends on it alone: no discount, for PPO and SAC alike
+    assert algorithm_settings("ppo", 5000, 2, "case-study")["gamma"] == 0.0
+    assert algorithm_settings("sac", 5000, 1, "case-study")["gamma"] == 0.0
+    assert "gamma" not in algorithm_settings("sac", 5000, 1, "generate")
+    assert algorithm_settings("ppo", 5000, 2, "case-study", gamma=0.5)["gamma"] == 0.5
 
 
 def test_a_sampled_rollout_draws_every_action_from_the_policy(policy):
