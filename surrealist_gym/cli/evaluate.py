@@ -172,8 +172,9 @@ def run(args: argparse.Namespace) -> int:
                        any_layout=options.any_layout or scored)
     tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
     flight_configs(tests, [resolve_uav(uav, test=test) for _, test in tests])  # uav.* settings the UAV takes
+    rules = edition(options.competition).rules if scored else None
     invalid = {path: broken for path, test in tests if scored and not options.any_layout
-               and (broken := rule_broken(test))}
+               and (broken := rule_broken(test, rules))}
     if scored and len(invalid) == len(tests):
         raise SurrealistError(f"every drawn test breaks the competition's rules ({tests[0][0]}: "
                               f"{invalid[tests[0][0]]}): each would score 0; --any-layout flies them anyway")
@@ -304,9 +305,7 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict, da
 
 def _board(options: EvaluateOptions, ev, tests: dict, invalid: dict):
     """The folders' draws scored as the edition did and ranked per case study."""
-    from ..competition.scoring import edition, score_suite, standings
+    from ..competition.scoring import edition, score_draws
 
-    ed = edition(options.competition)
-    runs = {t.file: t.runs for t in ev.tests}
-    return standings([score_suite(ed, d, [(tests[Path(f)], runs.get(f, ()), invalid.get(Path(f), ""))
-                                          for f in d.drawn]) for d in options.draws])
+    return score_draws(edition(options.competition), options.draws, tests, {t.file: t.runs for t in ev.tests},
+                       invalid)

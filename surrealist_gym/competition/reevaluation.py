@@ -62,19 +62,49 @@ if TYPE_CHECKING:
     from .suite import Suite
 
 __all__ = ["CONFIDENCE", "Evaluation", "TestStats", "evaluate", "evaluation_identity", "find_tests", "load_tests",
-           "regroup", "stored_runs", "summarise_test", "write_report"]
+           "regroup", "stored_runs", "summarise_test", "tool_output", "write_report"]
 
 CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
+COMPETE_SUMMARY = "summary.json"  # what ``surrealist compete`` writes beside the tool's folder
 _SUFFIXES = (".yaml", ".yml")
 
 
 # --- input ---------------------------------------------------------------------------------------------------------
+def tool_output(folder) -> Path:
+    """The folder of tests that ``folder`` stands for: a ``surrealist compete`` output folder (its ``summary.json``
+    names the tool's output folder, inside its ``tool/``) stands for the tool's output folder; any other folder for
+    itself. A compete folder whose tool named no output folder, or whose output folder is gone, is a one-line
+    error."""
+    import json
+
+    path = Path(os.fspath(folder))
+    try:
+        summary = json.loads((path / COMPETE_SUMMARY).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return path
+    if not isinstance(summary, dict) or not {"tool", "budget", "output_folder"} <= summary.keys():
+        return path  # another command's summary
+    named = summary["output_folder"]
+    if not named:
+        raise SurrealistError(f"{path}: a compete output folder whose tool wrote no output folder "
+                              f"({summary.get('problem') or 'no tests'})")
+    named = Path(str(named))
+    parts = named.parts
+    candidates = [named] + [path.joinpath(*parts[i:]) for i, part in enumerate(parts) if part == "tool"]
+    found = next((c for c in candidates if c.is_dir()), None)
+    if found is None:
+        raise SurrealistError(f"{path}: the tool's output folder its {COMPETE_SUMMARY} names ({named}) is gone")
+    return found
+
+
 def find_tests(paths: Sequence) -> list[Path]:
-    """The YAML files named by ``paths``: files as given, folders' ``*.yaml``/``*.yml`` (not recursive), each once."""
+    """The YAML files named by ``paths``: files as given, folders' ``*.yaml``/``*.yml`` (not recursive), each once; a
+    ``surrealist compete`` output folder's are those of the tool's output folder (:func:`tool_output`)."""
     out, seen = [], set()
     for given in paths:
         path = Path(os.fspath(given))
         if path.is_dir():
+            path = tool_output(path)
             found = sorted(p for p in path.iterdir() if p.suffix.lower() in _SUFFIXES and p.is_file())
             if not found:
                 raise SurrealistError(f"{os.fspath(given)}: no test YAML (*.yaml, *.yml) in this folder")
@@ -123,11 +153,12 @@ def flight_configs(tests: Sequence[tuple[Path, TestCase]], profiles: Sequence) -
     return configs
 
 
-def rule_broken(test: TestCase) -> str:
-    """The first of the competition's rules the test breaks (and how many more), or "" when it keeps them all."""
-    from .rules import violations
+def rule_broken(test: TestCase, rules=None) -> str:
+    """The first of the competition's rules (``rules``, default :data:`~surrealist_gym.competition.rules.RULES`) the
+    test breaks (and how many more), or "" when it keeps them all."""
+    from .rules import RULES, violations
 
-    broken = violations(test)
+    broken = violations(test, rules or RULES)
     return broken[0] + (f" (and {len(broken) - 1} more)" if len(broken) > 1 else "") if broken else ""
 
 

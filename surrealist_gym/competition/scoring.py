@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Sequence
 
@@ -39,20 +39,38 @@ from ..errors import SurrealistError
 
 __all__ = ["EDITIONS", "SIMILAR_FLIGHT_M", "Draw", "Edition", "ScoredTest", "Standing", "SuiteScore",
            "area_diversity", "area_similarity", "case_study_of", "draw", "draw_folder", "duplicates", "edition",
-           "ranks", "rest_score", "score_suite", "similar_flights", "standings", "test_score", "writing_order"]
+           "ranks", "rest_score", "score_draws", "score_suite", "similar_flights", "standings", "test_score",
+           "writing_order"]
 
 
 @dataclass(frozen=True, slots=True)
 class Edition:
-    """What an edition evaluates of a suite: ``tests`` drawn (``draw``: ``random`` or ``first``), ``runs`` each."""
+    """An edition's rules: the ``budget`` of simulations a tool had per case study, the most boxes a test may hold,
+    the ``tests`` it evaluated of a suite (``draw``: ``random`` or ``first``), ``runs`` each, and whether each suite
+    was evaluated twice, with the case study's wind and without (``wind``: 2026)."""
 
     name: str
     tests: int
     runs: int
     draw: str
+    budget: int = 100
+    max_obstacles: int = 3
+    wind: bool = False
+
+    @property
+    def rules(self):
+        """The competition's rules on obstacles with this edition's most boxes."""
+        from .rules import RULES
+
+        return replace(RULES, max_obstacles=self.max_obstacles)
 
 
-EDITIONS = {"2024": Edition("2024", 20, 5, "random"), "2025": Edition("2025", 20, 3, "first")}
+#: 2024 (SBFT): budget 200, up to 4 boxes, 20 tests drawn at random, 5 runs each; 2025 (ICST, SBFT): budget 100, up to
+#: 3 boxes, the first 20 tests, 3 runs each; 2026: the 2025 rules, each suite evaluated with and without wind
+#: (``shared/COMPETITION.md`` sections 3, 5 and 6).
+EDITIONS = {"2024": Edition("2024", 20, 5, "random", budget=200, max_obstacles=4),
+            "2025": Edition("2025", 20, 3, "first"),
+            "2026": Edition("2026", 20, 3, "first", wind=True)}
 
 #: [m] 2024: two tests are similar when the DBA averages of their runs are closer than this on average along DTW's
 #: path (x-y). Measured on CAMBA's 21 tests x 10 runs: two 5-run averages of the same test are 0.07-0.35 m apart
@@ -62,12 +80,12 @@ SIMILAR_FLIGHT_M = 0.4
 _SAME_AREA = 1.0 - 1e-9  # area similarity counted as 1 (floating error of the footprints' union and intersection)
 
 
-def edition(name) -> Edition:
-    """The edition named (``2024`` or ``2025``), or a one-line error."""
+def edition(name, flag: str = "--competition") -> Edition:
+    """The edition named (``2024``, ``2025`` or ``2026``), or a one-line error naming ``flag``."""
     try:
         return EDITIONS[str(name)]
     except KeyError:
-        raise SurrealistError(f"--competition: expected one of {', '.join(EDITIONS)}, got {name!r}") from None
+        raise SurrealistError(f"{flag}: expected one of {', '.join(EDITIONS)}, got {name!r}") from None
 
 
 # --- which tests ---------------------------------------------------------------------------------------------------
@@ -291,9 +309,15 @@ def score_suite(ed: Edition, d: Draw, tests: Sequence[tuple[object, Sequence, st
                       area_diversity([layout for layout, s in zip(layouts, same) if s is None]))
 
 
-def _with_same(t: ScoredTest, same: int | None) -> ScoredTest:
-    from dataclasses import replace
+def score_draws(ed: Edition, draws: Sequence[Draw], tests, runs, invalid) -> tuple["Standing", ...]:
+    """Each folder's draw scored as the edition did (:func:`score_suite`), ranked per case study (:func:`standings`).
+    ``tests``: each drawn file's TestCase by its Path; ``runs``: its runs flown by its file name as drawn (str);
+    ``invalid``: the rule a drawn test breaks by its Path (not flown, scores 0)."""
+    return standings([score_suite(ed, d, [(tests[Path(f)], runs.get(f, ()), invalid.get(Path(f), ""))
+                                          for f in d.drawn]) for d in draws])
 
+
+def _with_same(t: ScoredTest, same: int | None) -> ScoredTest:
     return replace(t, same_as=same)
 
 

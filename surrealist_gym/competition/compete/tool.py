@@ -227,16 +227,17 @@ def _check_imports(source: AerialistSource) -> None:
                 own.add(top)
 
 
-def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs: int) -> dict[str, str]:
-    """The environment of the tool's process: the shim, then Aerialist's folder first on its PYTHONPATH, and the
-    server's address and key."""
+def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs: int, seed: int = 0) -> dict[str, str]:
+    """The environment of the tool's process: the shim, then Aerialist's folder first on its PYTHONPATH, the
+    server's address and key, and the seed of the tool's global random generators (and of its hashes)."""
     env = dict(os.environ)
     paths = [str(SHIM)] + ([str(source.path)] if source.path is not None else [])
     if env.get("PYTHONPATH"):
         paths.append(env["PYTHONPATH"])
     env.update({"PYTHONPATH": os.pathsep.join(paths), "PYTHONUNBUFFERED": "1",
                 "SURREALIST_COMPETE_ADDRESS": address, "SURREALIST_COMPETE_AUTHKEY": authkey.hex(),
-                "SURREALIST_COMPETE_RUNS": str(runs)})
+                "SURREALIST_COMPETE_RUNS": str(runs), "SURREALIST_COMPETE_SEED": str(seed),
+                "PYTHONHASHSEED": str(seed % 4294967296)})
     env.setdefault("MPLBACKEND", "Agg")
     return env
 
@@ -257,7 +258,7 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     command = [sys.executable, "cli.py", "generate", plan.case_study, str(plan.budget)]
     with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight) as server, \
             open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
-        env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test)
+        env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
         process = subprocess.Popen(command, cwd=work, env=env, stdout=out_file, stderr=err_file,
                                    stdin=subprocess.DEVNULL)
         try:

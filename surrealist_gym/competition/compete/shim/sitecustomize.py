@@ -1,6 +1,6 @@
 """Run at the tool's interpreter start (``surrealist compete`` puts this folder first on ``PYTHONPATH``): make every
-Aerialist agent fly surrealist-gym's simulator (:mod:`surrealist_compete_shim`), then run the ``sitecustomize`` this
-one shadows, if any."""
+Aerialist agent fly surrealist-gym's simulator and seed the tool's global random generators
+(:mod:`surrealist_compete_shim`), then run the ``sitecustomize`` this one shadows, if any."""
 import importlib.machinery
 import importlib.util
 import os
@@ -9,6 +9,7 @@ import sys
 import surrealist_compete_shim
 
 surrealist_compete_shim.install()
+surrealist_compete_shim.seed_generators()
 
 
 def _shadowed() -> None:

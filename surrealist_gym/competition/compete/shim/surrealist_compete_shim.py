@@ -30,6 +30,7 @@ import threading
 ADDRESS_ENV = "SURREALIST_COMPETE_ADDRESS"
 AUTHKEY_ENV = "SURREALIST_COMPETE_AUTHKEY"
 RUNS_ENV = "SURREALIST_COMPETE_RUNS"
+SEED_ENV = "SURREALIST_COMPETE_SEED"
 LOCAL_AGENT_MODULE = "aerialist.px4.local_agent"
 
 _notes: list = []  # what was added to or changed in Aerialist in this process, sent with every flight
@@ -283,6 +284,24 @@ class _Finder(importlib.abc.MetaPathFinder):
                 spec.loader = _PatchingLoader(spec.loader, name)
                 return spec
         return None
+
+
+def seed_generators() -> None:
+    """Seed the tool's global random generators (Python's ``random``, and ``numpy.random`` where numpy is installed)
+    from ``SURREALIST_COMPETE_SEED``: a tool that draws from them unseeded (the reference generator's
+    ``random.uniform``) writes the same tests for the same seed. A tool that seeds them itself (from the clock) still
+    does."""
+    value = os.environ.get(SEED_ENV)
+    if value is None:
+        return
+    import random
+
+    random.seed(int(value))
+    try:
+        import numpy
+    except ImportError:
+        return
+    numpy.random.seed(int(value) % 2 ** 32)
 
 
 def install() -> None:

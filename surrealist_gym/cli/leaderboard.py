@@ -1,0 +1,118 @@
+"""``surrealist leaderboard TOOL_DIR... --case-study NAME...``: the competition's leaderboard on our simulator.
+
+Every (tool, case study, repetition) cell runs through ``surrealist compete`` (the tool's own ``cli.py``, unedited),
+then each case study and repetition is scored as the ``--edition`` did: 2024 (budget 200, up to 4 boxes, 20 tests
+drawn at random, 5 runs each, the similarity penalty, ranked by suite score), 2025 (budget 100, up to 3 boxes, the
+first 20 tests, 3 runs each, duplicates, diversity, R = 0.75 R_F + 0.25 R_D) or 2026 (2025's rules, scored with and
+without the case study's wind). Writes ``leaderboard.csv`` (one row per cell), ``leaderboard.png`` and ``report.md``
+(with PX4's published figures beside ours where the tools and case studies are the reports'); every cell and every
+run is kept as it completes, and the same command resumes.
+
+Example::
+
+    surrealist leaderboard ../shared/third_party/peers/{ambiegen,camba}/snippets \\
+        ../shared/third_party/peers/deephyperion-uav/DeepHyperion --case-study mission2 mission3 --edition 2024 \\
+        --repetitions 3 --workers 2 --out results/board-2024
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``surrealist leaderboard``."""
+    from ..competition.scoring import EDITIONS
+    from .options import add_dask_argument, add_out_argument, add_random_seed_argument
+
+    parser.add_argument("tools", metavar="TOOL_DIR", nargs="+",
+                        help="competition tools' folders (each with its cli.py), named on the board by their folder "
+                             "(a folder called snippets by its parent's)")
+    parser.add_argument("--case-study", dest="case_studies", metavar="NAME", nargs="+", required=True,
+                        help="case studies: mission1, mission2, mission3 or Aerialist YAMLs")
+    parser.add_argument("--edition", required=True, choices=list(EDITIONS),
+                        help="score as this edition did; its defaults: " + "; ".join(
+                            f"{e.name}: budget {e.budget}, {e.runs} runs of {e.tests} tests drawn "
+                            f"{'at random' if e.draw == 'random' else 'first'}, up to {e.max_obstacles} boxes"
+                            + (", with and without wind" if e.wind else "") for e in EDITIONS.values()))
+    parser.add_argument("--budget", type=int, default=None,
+                        help="simulations per tool and case study (default: the edition's)")
+    parser.add_argument("--repetitions", type=int, default=3, help="runs of each tool on each case study (default 3)")
+    parser.add_argument("--runs", type=int, default=None,
+                        help="runs per evaluated test in the scoring (default: the edition's)")
+    add_random_seed_argument(parser, "base seed: repetition k runs the tools and scores with seed S + k (default 0)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="cells run at once, and processes flying the scoring's runs (default: all cores, at "
+                             "most 8)")
+    add_dask_argument(parser)
+    parser.add_argument("--uav", metavar="NAME_OR_YAML", default="px4-v1.12-sitl-iris",
+                        help="UAV profile flown (default px4-v1.12-sitl-iris, the competition's PX4 SITL)")
+    add_out_argument(parser, "leaderboard", "output folder: new, or one holding this board (then it resumes)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check everything, run the missing cells, score, write the board; returns the exit code."""
+    import os
+
+    from ..competition import leaderboard as lb
+    from ..competition.leaderboard_report import write_report
+    from ..errors import SurrealistError
+    from .options import check_at_least, check_writable, default_out
+
+    check_at_least(args, workers=1)
+    if args.workers is not None and args.dask_scheduler:
+        raise SurrealistError("--workers: not with --dask-scheduler (the cluster's workers run the cells)")
+    out = args.out or default_out("leaderboard")
+    check_writable(out, "--out")
+    board = lb.plan(args.tools, args.case_studies, args.edition, budget=args.budget, repetitions=args.repetitions,
+                    runs=args.runs, seed=args.random_seed, uav=args.uav, out=out)
+    workers = args.workers or min(8, os.cpu_count() or 1)
+    executor = None
+    if args.dask_scheduler:
+        from ..executors import DaskExecutor
+
+        executor = DaskExecutor(args.dask_scheduler)
+    print(f"leaderboard: {len(board.tools)} tools ({', '.join(t.name for t in board.tools)}) x "
+          f"{len(board.case_studies)} case studies x {board.repetitions} repetitions, edition {board.edition.name}: "
+          f"budget {board.budget}, {board.runs} runs of up to {board.edition.tests} tests; UAV {board.uav}; "
+          f"{'Dask ' + args.dask_scheduler if executor else f'{workers} workers'}; {board.out}", flush=True)
+    lb.start(board)
+    started = time.perf_counter()
+    try:
+        summaries = lb.run_cells(board, workers, executor and executor.client,
+                                 done=lambda cell, values: _cell_line(cell, values, board, started))
+        rows = []
+        for repetition in range(board.repetitions):
+            for case in board.case_studies:
+                for wind in board.variants:
+                    cells = {t.name: summaries[lb.Cell(t, case, repetition)] for t in board.tools}
+                    group = lb.score_group(board, case, repetition, cells, wind, workers=workers,
+                                           executor=executor)
+                    rows += group
+                    print(f"scored {lb.case_label(case)} rep {repetition}" + (f" {wind} wind" if wind else "")
+                          + ": " + ", ".join(f"{r.tool} #{r.rank} ({r.failing_tests}/{r.evaluated_tests} failing)"
+                                             for r in sorted(group, key=lambda r: r.rank)), flush=True)
+    except KeyboardInterrupt:
+        print(f"interrupted: every finished cell and scored run is kept in {board.out}; the same command resumes",
+              file=sys.stderr)
+        return 130
+    except SurrealistError as err:
+        raise SurrealistError(f"{err}; what is done is kept in {board.out}: the same command resumes") from None
+    finally:
+        if executor is not None:
+            executor.close()
+    paths = write_report(board, rows)
+    print(paths["text"])
+    print(f"leaderboard: {paths['csv']}; figure: {paths['png']}; report: {paths['report']} "
+          f"({time.perf_counter() - started:.0f} s)")
+    return 0
+
+
+def _cell_line(cell, values: dict, board, started: float) -> None:
+    tests = values.get("tests") or []
+    failing = sum(1 for t in tests if t.get("points"))
+    print(f"[{time.perf_counter() - started:5.0f} s] {cell.tool.name} on {cell.label} rep {cell.repetition}: "
+          f"{len(tests)} tests written ({failing} under 1.5 m in their run), {values.get('simulations')} of "
+          f"{board.budget} simulations" + (f", {values['refused']} refused" if values.get("refused") else "")
+          + (f"; {values['problem']}" if values.get("problem") else ""), flush=True)

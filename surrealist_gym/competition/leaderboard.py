@@ -1,0 +1,378 @@
+"""A competition leaderboard on our simulator: every (tool, case study, repetition) cell run through ``surrealist
+compete``, then each case study and repetition scored as an edition did.
+
+A :class:`Board` is checked whole before anything runs (:func:`plan`: every tool and case study through
+:func:`~surrealist_gym.competition.compete.prepare`). Then:
+
+1. **Cells** (:func:`run_cell`): ``surrealist compete TOOL CASE_STUDY BUDGET --random-seed SEED`` in a process of its
+   own, into ``OUT/cells/TOOL/CASE_STUDY-repK``; repetition k's seed is ``--random-seed + k`` (the tool's runs draw
+   their noise from it, and the tool's own ``random`` and ``numpy.random`` are seeded from it). A cell is done when its
+   ``summary.json`` is there; an interrupted cell's folder is kept beside, renamed ``*.interrupted-N``, and run again.
+   Cells run at once on local worker threads (each a process of its own) or as tasks of a Dask cluster.
+2. **Scores** (:func:`score_group`): per case study and repetition, every cell's output folder drawn and flown as the
+   edition did (:func:`~surrealist_gym.competition.reevaluation.evaluate` into
+   ``OUT/scores/CASE_STUDY-repK/evaluations.sqlite``: each run stored as it completes, read back on a rerun), scored
+   (:func:`~surrealist_gym.competition.scoring.score_draws`) and ranked with the cells that wrote no test (score 0,
+   no diversity). 2026 scores twice: with the case study's wind blowing on every test, and without wind.
+
+Rows (:class:`BoardRow`) go to ``leaderboard.csv``; :mod:`~surrealist_gym.competition.leaderboard_report` writes the
+report and the figure.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Callable, Sequence
+
+from ..errors import SurrealistError
+from .scoring import EDITIONS, Edition, SuiteScore, edition, standings
+
+__all__ = ["BOARD_FILE", "Board", "BoardRow", "Cell", "Tool", "cell_folder", "name_tools", "plan", "run_cell",
+           "score_group"]
+
+BOARD_FILE = "leaderboard.json"  # the board's settings: a rerun into the same folder must have the same
+_GENERIC = {"snippets", "src", "tool"}  # folder names that say nothing of the tool: its parent's name is taken
+
+
+@dataclass(frozen=True, slots=True)
+class Tool:
+    """A tool on the board: its name (its folder's) and folder."""
+
+    name: str
+    folder: Path
+
+
+def name_tools(folders: Sequence) -> tuple[Tool, ...]:
+    """Name each tool by its folder, lower case (``peers/camba/snippets`` is ``camba``: a folder called
+    ``snippets``, ``src`` or ``tool`` takes its parent's name); names that would repeat get ``-2``, ``-3``. A folder
+    given twice is a one-line error."""
+    tools: list[Tool] = []
+    seen: dict[Path, str] = {}
+    for given in folders:
+        folder = Path(os.fspath(given)).absolute()
+        if folder.resolve() in seen:
+            raise SurrealistError(f"TOOL_DIR {os.fspath(given)}: given twice (as {seen[folder.resolve()]})")
+        base = (folder.parent.name if folder.name.lower() in _GENERIC else folder.name).lower() or "tool"
+        name, k = base, 1
+        while any(t.name == name for t in tools):
+            k += 1
+            name = f"{base}-{k}"
+        seen[folder.resolve()] = name
+        tools.append(Tool(name, folder))
+    return tuple(tools)
+
+
+@dataclass(frozen=True, slots=True)
+class Cell:
+    """One tool on one case study in one repetition."""
+
+    tool: Tool
+    case_study: str  # as given: a name (mission2) or an Aerialist YAML
+    repetition: int
+
+    @property
+    def label(self) -> str:
+        """The case study's name in the board (a YAML's stem)."""
+        return case_label(self.case_study)
+
+
+def case_label(case_study: str) -> str:
+    """A case study's name on the board: ``mission2`` as it is, a YAML by its stem."""
+    path = Path(case_study)
+    return path.stem if path.suffix in (".yaml", ".yml") else case_study
+
+
+def cell_folder(out: Path, cell: Cell) -> Path:
+    """Where a cell's ``compete`` writes."""
+    return out / "cells" / cell.tool.name / f"{cell.label}-rep{cell.repetition}"
+
+
+@dataclass(frozen=True, slots=True)
+class Board:
+    """A checked leaderboard: the tools, case studies, the edition and its settings, the UAV and the folder."""
+
+    tools: tuple[Tool, ...]
+    case_studies: tuple[str, ...]
+    edition: Edition
+    budget: int
+    repetitions: int
+    runs: int
+    seed: int
+    uav: str
+    out: Path
+    winds: tuple = ()  # per case study, its wind (a Wind or None): 2026 blows it on every test
+
+    @property
+    def cells(self) -> tuple[Cell, ...]:
+        """Every cell, repetition by repetition, case study by case study, tool by tool."""
+        return tuple(Cell(t, c, k) for k in range(self.repetitions) for c in self.case_studies for t in self.tools)
+
+    @property
+    def variants(self) -> tuple[str, ...]:
+        """How each case study is scored: ``""`` (the tests as written), or 2026's ``with`` and ``without`` wind."""
+        return ("with", "without") if self.edition.wind else ("",)
+
+    def settings(self) -> dict:
+        """What makes the board's figures (``leaderboard.json``): a rerun into the folder must have the same."""
+        return {"command": "leaderboard", "tools": [[t.name, str(t.folder)] for t in self.tools],
+                "case_studies": list(self.case_studies), "edition": self.edition.name, "budget": self.budget,
+                "repetitions": self.repetitions, "runs": self.runs, "random_seed": self.seed, "uav": self.uav}
+
+
+def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: int | None = None,
+         repetitions: int = 3, runs: int | None = None, seed: int = 0, uav: str = "px4-v1.12-sitl-iris",
+         out) -> Board:
+    """Check every input before anything runs (one-line SurrealistError): the edition, the numbers, each tool on each
+    case study (:func:`~surrealist_gym.competition.compete.prepare`), and the folder: new, or holding this very board
+    (then the run resumes)."""
+    from .compete import prepare
+    from .rules import load_competition_test
+
+    ed = edition(edition_name, "--edition")
+    budget = ed.budget if budget is None else budget
+    runs = ed.runs if runs is None else runs
+    for flag, value, least in (("--budget", budget, 1), ("--repetitions", repetitions, 1), ("--runs", runs, 1),
+                               ("--random-seed", seed, 0)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < least:
+            raise SurrealistError(f"{flag}: expected a whole number >= {least}, got {value!r}")
+    if not tools:
+        raise SurrealistError("TOOL_DIR: give at least one competition tool's folder")
+    if not case_studies:
+        raise SurrealistError("--case-study: give at least one case study (mission1, mission2, mission3 or a YAML)")
+    labels = [case_label(c) for c in case_studies]
+    if len(set(labels)) < len(labels):
+        raise SurrealistError(f"--case-study: {next(x for x in labels if labels.count(x) > 1)} given twice")
+    named = name_tools(tools)
+    out = Path(out).absolute()
+    probe = out / ".probe-not-written"
+    winds = []
+    for case in case_studies:
+        for tool in named:
+            checked = prepare(tool.folder, case, budget, probe, seed=seed, uav=uav)
+        winds.append(load_competition_test(checked.case_study_file).wind)
+    board = Board(named, tuple(case_studies), ed, budget, repetitions, runs, seed, uav, out, tuple(winds))
+    _check_folder(board)
+    return board
+
+
+def _check_folder(board: Board) -> None:
+    out = board.out
+    if out.exists() and not out.is_dir():
+        raise SurrealistError(f"--out {out}: exists and is not a folder")
+    settings = out / BOARD_FILE
+    if settings.is_file():
+        try:
+            before = json.loads(settings.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError) as err:
+            raise SurrealistError(f"--out {out}: {BOARD_FILE} is not readable ({type(err).__name__})") from None
+        now = board.settings()
+        differ = [k for k in now if before.get(k) != now[k]]
+        if differ:
+            raise SurrealistError(f"--out {out}: holds a leaderboard with other settings ({differ[0]}: "
+                                  f"{before.get(differ[0])!r}); resume it with the same, or choose another folder")
+    elif out.is_dir() and any(p.name != ".lock" for p in out.iterdir()):
+        raise SurrealistError(f"--out {out}: not empty and holds no leaderboard; choose a new folder")
+
+
+def start(board: Board) -> None:
+    """Make the folder and record the board's settings (once)."""
+    board.out.mkdir(parents=True, exist_ok=True)
+    settings = board.out / BOARD_FILE
+    if not settings.is_file():
+        settings.write_text(json.dumps(board.settings(), indent=2) + "\n", encoding="utf-8")
+
+
+# --- cells ----------------------------------------------------------------------------------------------------------
+def cell_command(board: Board, cell: Cell) -> list[str]:
+    """The ``surrealist compete`` command of a cell."""
+    return [sys.executable, "-m", "surrealist_gym.cli", "compete", str(cell.tool.folder), cell.case_study,
+            str(board.budget), "--out", str(cell_folder(board.out, cell)), "--random-seed",
+            str(board.seed + cell.repetition), "--uav", board.uav]
+
+
+def run_cell(command: Sequence[str], folder: str) -> dict:
+    """Run a cell's ``compete`` (unless its ``summary.json`` is there) and return that summary. An earlier,
+    interrupted attempt's folder is kept beside, renamed. Picklable, so a Dask worker runs it as it is."""
+    folder_path = Path(folder)
+    summary = folder_path / "summary.json"
+    if not summary.is_file():
+        if folder_path.exists():
+            set_aside(folder_path)
+        folder_path.parent.mkdir(parents=True, exist_ok=True)
+        log = folder_path.with_name(folder_path.name + ".log")
+        with open(log, "w", encoding="utf-8") as f:
+            subprocess.call(list(command), stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+        if not summary.is_file():
+            lines = [x for x in log.read_text(encoding="utf-8", errors="replace").splitlines() if x.strip()]
+            raise SurrealistError(f"cell {folder}: compete wrote no summary ({lines[-1] if lines else 'no output'}; "
+                                  f"see {log})")
+    return json.loads(summary.read_text(encoding="utf-8"))
+
+
+def set_aside(folder: Path) -> Path:
+    """Keep an interrupted attempt's folder beside, under a new name (nothing is deleted)."""
+    k = 1
+    while folder.with_name(f"{folder.name}.interrupted-{k}").exists():
+        k += 1
+    target = folder.with_name(f"{folder.name}.interrupted-{k}")
+    folder.rename(target)
+    return target
+
+
+def run_cells(board: Board, workers: int, client=None, done: Callable[[Cell, dict], None] | None = None
+              ) -> dict[Cell, dict]:
+    """Run every cell not done yet (``workers`` at once, or as tasks of the Dask ``client``); each cell's summary."""
+    from concurrent.futures import ThreadPoolExecutor, as_completed
+
+    summaries: dict[Cell, dict] = {}
+    jobs = {cell: (cell_command(board, cell), str(cell_folder(board.out, cell))) for cell in board.cells}
+    if client is not None:
+        from distributed import as_completed as dask_completed
+
+        futures = {client.submit(run_cell, *job, pure=False): cell for cell, job in jobs.items()}
+        finished = dask_completed(futures)
+    else:
+        pool = ThreadPoolExecutor(max(1, workers))
+        futures = {pool.submit(run_cell, *job): cell for cell, job in jobs.items()}
+        finished = as_completed(futures)
+    try:
+        for future in finished:
+            cell = futures[future]
+            summaries[cell] = future.result()
+            if done is not None:
+                done(cell, summaries[cell])
+    finally:
+        if client is None:
+            pool.shutdown(wait=True, cancel_futures=True)
+    return summaries
+
+
+# --- scores ---------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True)
+class BoardRow:
+    """One cell as scored: tests the tool reported (wrote), evaluated (drawn) and failing (at least one run under
+    1.5 m), its scores and rank among the tools on the case study in this repetition (and wind: 2026)."""
+
+    tool: str
+    case_study: str
+    repetition: int
+    wind: str
+    reported_tests: int
+    evaluated_tests: int
+    failing_tests: int
+    suite_score: float
+    failure_score: float
+    diversity: float
+    r: float
+    rank: int
+    simulations: int
+    refused: int
+    problem: str
+
+    def to_row(self, ed: Edition) -> dict:
+        """The row of ``leaderboard.csv`` for the edition (2024: the suite score; later: failure score, diversity,
+        R; 2026: the wind column)."""
+        row: dict = {"tool": self.tool, "case_study": self.case_study, "repetition": self.repetition}
+        if ed.wind:
+            row["wind"] = self.wind
+        row.update(reported_tests=self.reported_tests, evaluated_tests=self.evaluated_tests,
+                   failing_tests=self.failing_tests)
+        if ed.name == "2024":
+            row["suite_score"] = _round(self.suite_score)
+        else:
+            row.update(failure_score=_round(self.failure_score), diversity=_round(self.diversity), R=_round(self.r))
+        row.update(rank=self.rank, simulations=self.simulations, refused=self.refused, problem=self.problem)
+        return row
+
+
+def _round(value: float, digits: int = 6):
+    return "" if value is None or (isinstance(value, float) and math.isnan(value)) else round(float(value), digits)
+
+
+def score_folder(board: Board, label: str, repetition: int, wind: str) -> Path:
+    """Where a case study's repetition is scored (its runs' store)."""
+    return board.out / "scores" / (f"{label}-rep{repetition}" + (f"-{wind}-wind" if wind else ""))
+
+
+def score_group(board: Board, case_study: str, repetition: int, summaries: dict[str, dict], wind: str = "",
+                workers: int | None = None, executor=None,
+                progress: Callable[[int, int], None] | None = None) -> list[BoardRow]:
+    """Score one case study's cells of one repetition as the edition did (``summaries``: each tool's compete
+    summary, by tool name). A cell whose tests cannot be read is scored 0, with the reason in ``problem``."""
+    from .reevaluation import evaluate, load_tests, rule_broken
+    from .scoring import draw_folder, score_draws
+
+    ed, seed, label = board.edition, board.seed + repetition, case_label(case_study)
+    draws, problems, reported = [], {}, {}
+    for tool in board.tools:
+        folder = cell_folder(board.out, Cell(tool, case_study, repetition))
+        values = summaries[tool.name]
+        reported[tool.name] = len(values.get("tests") or [])
+        problems[tool.name] = values.get("problem") or ""
+        if not values.get("output_folder") or not reported[tool.name]:
+            continue
+        try:
+            draws.append(draw_folder(folder, ed, seed))
+        except SurrealistError as err:
+            problems[tool.name] = f"not scored: {err}"
+    files = [f for d in draws for f in d.drawn]
+    tests = [(path.absolute(), _blown(board, case_study, test, wind))
+             for path, test in load_tests(files, any_layout=True)] if files else []
+    invalid = {path: broken for path, test in tests if (broken := rule_broken(test, ed.rules))}
+    flying = [(path, test) for path, test in tests if path not in invalid]
+    runs: dict = {}
+    if flying:
+        store = score_folder(board, label, repetition, wind) / "evaluations.sqlite"
+        store.parent.mkdir(parents=True, exist_ok=True)
+        ev = evaluate(flying, runs=board.runs, seed=seed, uav=board.uav, workers=workers, progress=progress,
+                      store=store, executor=executor, identity={"competition": ed.name, "wind": wind})
+        runs = {t.file: t.runs for t in ev.tests}
+    scored = {s.suite.folder: s.suite for s in score_draws(ed, draws, dict(tests), runs, invalid)}
+    folders = {tool.name: str(cell_folder(board.out, Cell(tool, case_study, repetition))) for tool in board.tools}
+    suites = [scored.get(folders[t.name]) or _nothing(board, folders[t.name], label) for t in board.tools]
+    rows = []
+    for place in standings(suites):
+        s = place.suite
+        name = next(name for name, folder in folders.items() if folder == s.folder)
+        values = summaries[name]
+        rows.append(BoardRow(name, label, repetition, wind, reported[name], len(s.drawn), s.failing, s.score,
+                             s.failure, s.diversity, place.r, place.rank, int(values.get("simulations") or 0),
+                             int(values.get("refused") or 0), problems[name]))
+    return sorted(rows, key=lambda row: [t.name for t in board.tools].index(row.tool))
+
+
+def _nothing(board: Board, folder: str, label: str) -> SuiteScore:
+    """The score of a cell with no test to score: 0, no diversity."""
+    return SuiteScore(folder, label, board.edition.name, 0, (), 0.0, 0.0, 1.0, 0.0, math.nan)
+
+
+def _blown(board: Board, case_study: str, test, wind: str):
+    """The test as scored: as written, or (2026) with the case study's wind on it, or with no wind."""
+    if wind == "with":
+        return replace(test, wind=board.winds[board.case_studies.index(case_study)])
+    if wind == "without":
+        return replace(test, wind=None)
+    return test
+
+
+def write_csv(board: Board, rows: Sequence[BoardRow], path: Path) -> Path:
+    """``leaderboard.csv``: one row per cell (and wind), in the board's order; written whole, then moved into
+    place."""
+    import csv
+
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", newline="", encoding="utf-8") as f:
+        dict_rows = [row.to_row(board.edition) for row in rows]
+        writer = csv.DictWriter(f, fieldnames=list(dict_rows[0]) if dict_rows else ["tool"])
+        writer.writeheader()
+        writer.writerows(dict_rows)
+    os.replace(tmp, path)
+    return path
+
+
+EDITION_NAMES = tuple(EDITIONS)
