@@ -10,8 +10,9 @@ A :class:`Board` is checked whole before anything runs (:func:`plan`: every tool
    ``summary.json`` is there; an interrupted cell's folder is kept beside, renamed ``*.interrupted-N``, and run again.
    Cells run at once on local worker threads (each a process of its own) or as tasks of a Dask cluster.
 2. **Scores** (:func:`score_group`): per case study and repetition, every cell's output folder drawn and flown as the
-   edition did (:func:`~surrealist_gym.competition.reevaluation.evaluate` into
-   ``OUT/scores/CASE_STUDY-repK/evaluations.sqlite``: each run stored as it completes, read back on a rerun), scored
+   edition did (every drawn test, as the competition's platform flew them: it did not check the rules on boxes;
+   :func:`~surrealist_gym.competition.reevaluation.evaluate` into ``OUT/scores/CASE_STUDY-repK/evaluations.sqlite``:
+   each run stored as it completes, read back on a rerun), scored
    (:func:`~surrealist_gym.competition.scoring.score_draws`) and ranked with the cells that wrote no test (score 0,
    no diversity). 2026 scores twice: with the case study's wind blowing on every test, and without wind.
 
@@ -195,9 +196,19 @@ def cell_command(board: Board, cell: Cell) -> list[str]:
             str(board.seed + cell.repetition), "--uav", board.uav]
 
 
-def run_cell(command: Sequence[str], folder: str) -> dict:
-    """Run a cell's ``compete`` (unless its ``summary.json`` is there) and return that summary. An earlier,
-    interrupted attempt's folder is kept beside, renamed. Picklable, so a Dask worker runs it as it is."""
+def cell_environment() -> dict[str, str]:
+    """What a cell's process takes from the leaderboard's environment wherever it runs (on a Dask worker too): the
+    Aerialist folders (``SURREALIST_AERIALIST``) and the case-study look-up (``SURREALIST_CASE_STUDIES``)."""
+    from .compete import AERIALIST_ENV
+    from .rules import CASE_STUDY_ENV
+
+    return {k: os.environ[k] for k in (AERIALIST_ENV, CASE_STUDY_ENV) if k in os.environ}
+
+
+def run_cell(command: Sequence[str], folder: str, env: dict | None = None) -> dict:
+    """Run a cell's ``compete`` (unless its ``summary.json`` is there), with ``env`` over the process's own
+    environment, and return that summary. An earlier, interrupted attempt's folder is kept beside, renamed.
+    Picklable, so a Dask worker runs it as it is."""
     folder_path = Path(folder)
     summary = folder_path / "summary.json"
     if not summary.is_file():
@@ -206,7 +217,8 @@ def run_cell(command: Sequence[str], folder: str) -> dict:
         folder_path.parent.mkdir(parents=True, exist_ok=True)
         log = folder_path.with_name(folder_path.name + ".log")
         with open(log, "w", encoding="utf-8") as f:
-            subprocess.call(list(command), stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+            subprocess.call(list(command), stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                            env={**os.environ, **(env or {})})
         if not summary.is_file():
             lines = [x for x in log.read_text(encoding="utf-8", errors="replace").splitlines() if x.strip()]
             raise SurrealistError(f"cell {folder}: compete wrote no summary ({lines[-1] if lines else 'no output'}; "
@@ -230,7 +242,8 @@ def run_cells(board: Board, workers: int, client=None, done: Callable[[Cell, dic
     from concurrent.futures import ThreadPoolExecutor, as_completed
 
     summaries: dict[Cell, dict] = {}
-    jobs = {cell: (cell_command(board, cell), str(cell_folder(board.out, cell))) for cell in board.cells}
+    env = cell_environment()
+    jobs = {cell: (cell_command(board, cell), str(cell_folder(board.out, cell)), env) for cell in board.cells}
     if client is not None:
         from distributed import as_completed as dask_completed
 
@@ -304,7 +317,7 @@ def score_group(board: Board, case_study: str, repetition: int, summaries: dict[
                 progress: Callable[[int, int], None] | None = None) -> list[BoardRow]:
     """Score one case study's cells of one repetition as the edition did (``summaries``: each tool's compete
     summary, by tool name). A cell whose tests cannot be read is scored 0, with the reason in ``problem``."""
-    from .reevaluation import evaluate, load_tests, rule_broken
+    from .reevaluation import evaluate, load_tests
     from .scoring import draw_folder, score_draws
 
     ed, seed, label = board.edition, board.seed + repetition, case_label(case_study)
@@ -323,8 +336,7 @@ def score_group(board: Board, case_study: str, repetition: int, summaries: dict[
     files = [f for d in draws for f in d.drawn]
     tests = [(path.absolute(), _blown(board, case_study, test, wind))
              for path, test in load_tests(files, any_layout=True)] if files else []
-    invalid = {path: broken for path, test in tests if (broken := rule_broken(test, ed.rules))}
-    flying = [(path, test) for path, test in tests if path not in invalid]
+    flying = tests  # every drawn test, as the competition's platform flew them: it did not check the rules
     runs: dict = {}
     if flying:
         store = score_folder(board, label, repetition, wind) / "evaluations.sqlite"
@@ -332,7 +344,7 @@ def score_group(board: Board, case_study: str, repetition: int, summaries: dict[
         ev = evaluate(flying, runs=board.runs, seed=seed, uav=board.uav, workers=workers, progress=progress,
                       store=store, executor=executor, identity={"competition": ed.name, "wind": wind})
         runs = {t.file: t.runs for t in ev.tests}
-    scored = {s.suite.folder: s.suite for s in score_draws(ed, draws, dict(tests), runs, invalid)}
+    scored = {s.suite.folder: s.suite for s in score_draws(ed, draws, dict(tests), runs, {})}
     folders = {tool.name: str(cell_folder(board.out, Cell(tool, case_study, repetition))) for tool in board.tools}
     suites = [scored.get(folders[t.name]) or _nothing(board, folders[t.name], label) for t in board.tools]
     rows = []
