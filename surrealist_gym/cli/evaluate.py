@@ -105,9 +105,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"runs per test (default {DEFAULT_RUNS}; with --competition the edition's: "
                              + ", ".join(f"{e.name} {e.runs}" for e in EDITIONS.values()) + ")")
     parser.add_argument("--competition", metavar="EDITION", default=None,
-                        help="score each folder (a tool's output, one case study) as the 2024 or 2025 edition did: "
-                             "its tests drawn, test scores, 2024's rest score and similarity penalty, 2025's "
-                             "duplicates and diversity, and the folders ranked per case study")
+                        help="score each folder (a tool's output or a compete folder, one case study) as the 2024, "
+                             "2025 or 2026 edition did: its tests drawn, test scores, 2024's rest score and "
+                             "similarity penalty, 2025's duplicates and diversity, and the folders ranked per case "
+                             "study (2026 as 2025, each test with its own wind; surrealist leaderboard scores with and "
+                             "without it)")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
     add_dask_argument(parser)
     parser.add_argument("--random-seed", type=int, default=0, metavar="S",

@@ -199,7 +199,7 @@ def test_two_folders_on_one_case_study_are_ranked(camba, tmp_path, capsys):
 def test_unknown_edition(camba, tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["evaluate", str(camba / "mission3"), "--competition", "2023", "--out", str(out)]) == 2
-    assert _one_line(capsys) == "error: --competition: expected one of 2024, 2025, got '2023'"
+    assert _one_line(capsys) == "error: --competition: expected one of 2024, 2025, 2026, got '2023'"
     assert not out.exists()
 
 

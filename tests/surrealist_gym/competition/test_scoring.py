@@ -88,7 +88,7 @@ def test_writing_order_by_modification_time_without_numbers(tmp_path):
 
 
 def test_unknown_edition_is_one_line():
-    with pytest.raises(SurrealistError, match=r"^--competition: expected one of 2024, 2025, got '2023'$"):
+    with pytest.raises(SurrealistError, match=r"^--competition: expected one of 2024, 2025, 2026, got '2023'$"):
         edition("2023")
 
 
