@@ -194,3 +194,13 @@ def test_the_2024_agreement_compares_our_cells_with_table_1():
                                        "report_best_first": True}
     assert agree["studies"]["CS3"]["report_best_first"] is False  # CAMBA leads CS3 on PX4, last here
     assert -1 <= agree["spearman"] < 0.6
+
+
+def test_evaluate_scores_a_compete_folder_as_the_tool_s_output(local_board, tmp_path):
+    cell = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0"
+    assert main(["evaluate", str(cell), "--competition", "2025", "--runs", "1", "--any-layout", "--workers", "1",
+                 "--out", str(tmp_path / "ev")]) == 0
+    rows = _rows(tmp_path / "ev" / "leaderboard.csv")
+    assert [(r["folder"], r["tests"], r["drawn"]) for r in rows] == [(str(cell), "3", "3")]
+    flown = {r["file"] for r in _rows(tmp_path / "ev" / "runs.csv")}
+    assert len(flown) == 3 and all("/tool/generated_tests/" in f for f in flown)  # not the flights/ copies
