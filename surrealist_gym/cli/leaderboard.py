@@ -82,17 +82,16 @@ def run(args: argparse.Namespace) -> int:
     try:
         summaries = lb.run_cells(board, workers, executor and executor.client,
                                  done=lambda cell, values: _cell_line(cell, values, board, started))
-        rows = []
-        for repetition in range(board.repetitions):
-            for case in board.case_studies:
-                for wind in board.variants:
-                    cells = {t.name: summaries[lb.Cell(t, case, repetition)] for t in board.tools}
-                    group = lb.score_group(board, case, repetition, cells, wind, workers=workers,
-                                           executor=executor)
-                    rows += group
-                    print(f"scored {lb.case_label(case)} rep {repetition}" + (f" {wind} wind" if wind else "")
-                          + ": " + ", ".join(f"{r.tool} #{r.rank} ({r.failing_tests}/{r.evaluated_tests} failing)"
-                                             for r in sorted(group, key=lambda r: r.rank)), flush=True)
+        scores = []
+        for cell in board.cells:
+            for wind in board.variants:
+                scores.append(lb.score_cell(board, cell, summaries[cell], wind, workers=workers, executor=executor))
+                s = scores[-1]
+                print(f"scored {cell.tool.name} on {cell.label} rep {cell.repetition}"
+                      + (f", {wind} wind" if wind else "") + f": {s.suite.failing} of {len(s.suite.drawn)} evaluated "
+                      f"tests failing, score {s.suite.score:.2f}" + (f"; {s.problem}" if s.problem else ""),
+                      flush=True)
+        rows = lb.rank(board, scores)
     except KeyboardInterrupt:
         print(f"interrupted: every finished cell and scored run is kept in {board.out}; the same command resumes",
               file=sys.stderr)

@@ -9,12 +9,17 @@ A :class:`Board` is checked whole before anything runs (:func:`plan`: every tool
    their noise from it, and the tool's own ``random`` and ``numpy.random`` are seeded from it). A cell is done when its
    ``summary.json`` is there; an interrupted cell's folder is kept beside, renamed ``*.interrupted-N``, and run again.
    Cells run at once on local worker threads (each a process of its own) or as tasks of a Dask cluster.
-2. **Scores** (:func:`score_group`): per case study and repetition, every cell's output folder drawn and flown as the
-   edition did (every drawn test, as the competition's platform flew them: it did not check the rules on boxes;
-   :func:`~surrealist_gym.competition.reevaluation.evaluate` into ``OUT/scores/CASE_STUDY-repK/evaluations.sqlite``:
-   each run stored as it completes, read back on a rerun), scored
-   (:func:`~surrealist_gym.competition.scoring.score_draws`) and ranked with the cells that wrote no test (score 0,
-   no diversity). 2026 scores twice: with the case study's wind blowing on every test, and without wind.
+2. **Scores** (:func:`score_cell`): each cell's output folder drawn and flown as the edition did (every drawn test, as
+   the competition's platform flew them: it did not check the rules on boxes;
+   :func:`~surrealist_gym.competition.reevaluation.evaluate` into
+   ``OUT/scores/TOOL/CASE_STUDY-repK/evaluations.sqlite``: each run stored as it completes, read back on a rerun) and
+   scored; a cell that wrote no test scores 0, with no
+   diversity. 2026 scores twice: with the case study's wind blowing on every test, and without wind.
+3. **Ranks** (:func:`rank`): per case study, repetition (and wind), the cells ranked as the edition ranked tools.
+
+A cell's figures depend on its tool, case study, repetition and the board's settings (edition, budget, runs, seed,
+UAV), not on the other tools: a board grows (more tools, case studies or repetitions) into the same folder, and
+what it holds is reused.
 
 Rows (:class:`BoardRow`) go to ``leaderboard.csv``; :mod:`~surrealist_gym.competition.leaderboard_report` writes the
 report and the figure.
@@ -34,7 +39,7 @@ from ..errors import SurrealistError
 from .scoring import EDITIONS, Edition, SuiteScore, edition, standings
 
 __all__ = ["BOARD_FILE", "Board", "BoardRow", "Cell", "Tool", "cell_folder", "name_tools", "plan", "run_cell",
-           "score_group"]
+           "rank", "score_cell"]
 
 BOARD_FILE = "leaderboard.json"  # the board's settings: a rerun into the same folder must have the same
 _GENERIC = {"snippets", "src", "tool"}  # folder names that say nothing of the tool: its parent's name is taken
@@ -119,10 +124,11 @@ class Board:
         return ("with", "without") if self.edition.wind else ("",)
 
     def settings(self) -> dict:
-        """What makes the board's figures (``leaderboard.json``): a rerun into the folder must have the same."""
-        return {"command": "leaderboard", "tools": [[t.name, str(t.folder)] for t in self.tools],
-                "case_studies": list(self.case_studies), "edition": self.edition.name, "budget": self.budget,
-                "repetitions": self.repetitions, "runs": self.runs, "random_seed": self.seed, "uav": self.uav}
+        """What makes a cell's figures (``leaderboard.json``): a board into the same folder must have the same; its
+        tools, case studies and repetitions may grow."""
+        return {"command": "leaderboard", "edition": self.edition.name, "budget": self.budget, "runs": self.runs,
+                "random_seed": self.seed, "uav": self.uav,
+                "tools": {t.name: str(t.folder) for t in self.tools}}
 
 
 def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: int | None = None,
@@ -172,20 +178,27 @@ def _check_folder(board: Board) -> None:
         except (OSError, UnicodeDecodeError, ValueError) as err:
             raise SurrealistError(f"--out {out}: {BOARD_FILE} is not readable ({type(err).__name__})") from None
         now = board.settings()
-        differ = [k for k in now if before.get(k) != now[k]]
+        differ = [k for k in now if k != "tools" and before.get(k) != now[k]]
         if differ:
             raise SurrealistError(f"--out {out}: holds a leaderboard with other settings ({differ[0]}: "
                                   f"{before.get(differ[0])!r}); resume it with the same, or choose another folder")
-    elif out.is_dir() and any(p.name != ".lock" for p in out.iterdir()):
+        known = before.get("tools") or {}
+        clash = next((name for name, folder in now["tools"].items() if known.get(name, folder) != folder), None)
+        if clash:
+            raise SurrealistError(f"--out {out}: its tool {clash!r} is the folder {known[clash]}, not "
+                                  f"{now['tools'][clash]}; choose another folder")
+    elif out.is_dir() and any(out.iterdir()):
         raise SurrealistError(f"--out {out}: not empty and holds no leaderboard; choose a new folder")
 
 
 def start(board: Board) -> None:
-    """Make the folder and record the board's settings (once)."""
+    """Make the folder and record the board's settings, with every tool it has held."""
     board.out.mkdir(parents=True, exist_ok=True)
-    settings = board.out / BOARD_FILE
-    if not settings.is_file():
-        settings.write_text(json.dumps(board.settings(), indent=2) + "\n", encoding="utf-8")
+    path = board.out / BOARD_FILE
+    settings = board.settings()
+    if path.is_file():
+        settings["tools"] = {**json.loads(path.read_text(encoding="utf-8")).get("tools", {}), **settings["tools"]}
+    path.write_text(json.dumps(settings, indent=2) + "\n", encoding="utf-8")
 
 
 # --- cells ----------------------------------------------------------------------------------------------------------
@@ -307,60 +320,72 @@ def _round(value: float, digits: int = 6):
     return "" if value is None or (isinstance(value, float) and math.isnan(value)) else round(float(value), digits)
 
 
-def score_folder(board: Board, label: str, repetition: int, wind: str) -> Path:
-    """Where a case study's repetition is scored (its runs' store)."""
-    return board.out / "scores" / (f"{label}-rep{repetition}" + (f"-{wind}-wind" if wind else ""))
+def score_folder(board: Board, cell: Cell, wind: str) -> Path:
+    """Where a cell is scored (its runs' store)."""
+    return board.out / "scores" / cell.tool.name / (f"{cell.label}-rep{cell.repetition}"
+                                                    + (f"-{wind}-wind" if wind else ""))
 
 
-def score_group(board: Board, case_study: str, repetition: int, summaries: dict[str, dict], wind: str = "",
-                workers: int | None = None, executor=None,
-                progress: Callable[[int, int], None] | None = None) -> list[BoardRow]:
-    """Score one case study's cells of one repetition as the edition did (``summaries``: each tool's compete
-    summary, by tool name). A cell whose tests cannot be read is scored 0, with the reason in ``problem``."""
+@dataclass(frozen=True, slots=True)
+class CellScore:
+    """A cell scored as the edition did: its suite's score, the tests its tool reported, and why it scores 0 if so."""
+
+    cell: Cell
+    wind: str
+    suite: SuiteScore
+    reported: int
+    simulations: int
+    refused: int
+    problem: str
+
+
+def score_cell(board: Board, cell: Cell, summary: dict, wind: str = "", workers: int | None = None, executor=None,
+               progress: Callable[[int, int], None] | None = None) -> CellScore:
+    """Draw a cell's tests and fly them as the edition did (``summary``: its compete summary): every drawn test, as
+    the competition's platform flew them, since it did not check the rules on boxes. A cell with no test, or whose
+    tests cannot be read, scores 0, with the reason in ``problem``."""
     from .reevaluation import evaluate, load_tests
-    from .scoring import draw_folder, score_draws
+    from .scoring import draw_folder, score_suite
 
-    ed, seed, label = board.edition, board.seed + repetition, case_label(case_study)
-    draws, problems, reported = [], {}, {}
-    for tool in board.tools:
-        folder = cell_folder(board.out, Cell(tool, case_study, repetition))
-        values = summaries[tool.name]
-        reported[tool.name] = len(values.get("tests") or [])
-        problems[tool.name] = values.get("problem") or ""
-        if not values.get("output_folder") or not reported[tool.name]:
-            continue
-        try:
-            draws.append(draw_folder(folder, ed, seed))
+    ed, seed, folder = board.edition, board.seed + cell.repetition, cell_folder(board.out, cell)
+    reported, problem = len(summary.get("tests") or []), summary.get("problem") or ""
+    suite, tests = None, []
+    if summary.get("output_folder") and reported:
+        try:  # the tool's tests: what cannot be read scores 0
+            drawn = draw_folder(folder, ed, seed)
+            tests = [(path.absolute(), _blown(board, cell.case_study, test, wind))
+                     for path, test in load_tests(drawn.drawn, any_layout=True)]
         except SurrealistError as err:
-            problems[tool.name] = f"not scored: {err}"
-    files = [f for d in draws for f in d.drawn]
-    tests = [(path.absolute(), _blown(board, case_study, test, wind))
-             for path, test in load_tests(files, any_layout=True)] if files else []
-    flying = tests  # every drawn test, as the competition's platform flew them: it did not check the rules
-    runs: dict = {}
-    if flying:
-        store = score_folder(board, label, repetition, wind) / "evaluations.sqlite"
+            problem = f"not scored: {err}"
+    if tests:
+        store = score_folder(board, cell, wind) / "evaluations.sqlite"
         store.parent.mkdir(parents=True, exist_ok=True)
-        ev = evaluate(flying, runs=board.runs, seed=seed, uav=board.uav, workers=workers, progress=progress,
+        ev = evaluate(tests, runs=board.runs, seed=seed, uav=board.uav, workers=workers, progress=progress,
                       store=store, executor=executor, identity={"competition": ed.name, "wind": wind})
         runs = {t.file: t.runs for t in ev.tests}
-    scored = {s.suite.folder: s.suite for s in score_draws(ed, draws, dict(tests), runs, {})}
-    folders = {tool.name: str(cell_folder(board.out, Cell(tool, case_study, repetition))) for tool in board.tools}
-    suites = [scored.get(folders[t.name]) or _nothing(board, folders[t.name], label) for t in board.tools]
+        suite = replace(score_suite(ed, drawn, [(test, runs.get(str(path), ()), "") for path, test in tests]),
+                        case_study=cell.label)
+    suite = suite or SuiteScore(str(folder.absolute()), cell.label, ed.name, 0, (), 0.0, 0.0, 1.0, 0.0, math.nan)
+    return CellScore(cell, wind, suite, reported, int(summary.get("simulations") or 0),
+                     int(summary.get("refused") or 0), problem)
+
+
+def rank(board: Board, scores: Sequence[CellScore]) -> list[BoardRow]:
+    """The rows of the board: per case study, repetition and wind, the cells ranked as the edition ranked tools; in
+    the board's order (repetition, case study, wind, tool)."""
     rows = []
-    for place in standings(suites):
-        s = place.suite
-        name = next(name for name, folder in folders.items() if folder == s.folder)
-        values = summaries[name]
-        rows.append(BoardRow(name, label, repetition, wind, reported[name], len(s.drawn), s.failing, s.score,
-                             s.failure, s.diversity, place.r, place.rank, int(values.get("simulations") or 0),
-                             int(values.get("refused") or 0), problems[name]))
-    return sorted(rows, key=lambda row: [t.name for t in board.tools].index(row.tool))
-
-
-def _nothing(board: Board, folder: str, label: str) -> SuiteScore:
-    """The score of a cell with no test to score: 0, no diversity."""
-    return SuiteScore(folder, label, board.edition.name, 0, (), 0.0, 0.0, 1.0, 0.0, math.nan)
+    for k in range(board.repetitions):
+        for case in board.case_studies:
+            for wind in board.variants:
+                group = [s for s in scores if (s.cell.case_study, s.cell.repetition, s.wind) == (case, k, wind)]
+                by_folder = {s.suite.folder: s for s in group}
+                placed = {by_folder[p.suite.folder].cell.tool.name: p for p in standings([s.suite for s in group])}
+                for s in group:
+                    p = placed[s.cell.tool.name]
+                    rows.append(BoardRow(s.cell.tool.name, s.cell.label, k, wind, s.reported, len(s.suite.drawn),
+                                         s.suite.failing, s.suite.score, s.suite.failure, s.suite.diversity, p.r,
+                                         p.rank, s.simulations, s.refused, s.problem))
+    return rows
 
 
 def _blown(board: Board, case_study: str, test, wind: str):

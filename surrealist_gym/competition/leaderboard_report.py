@@ -200,9 +200,8 @@ def write_report(board: Board, rows: Sequence[BoardRow]) -> dict:
     write_csv(board, rows, paths["csv"])
     plot_board(board, rows, paths["png"])
     lines = report_lines(board, rows)
-    settings = board.settings()
     head = [f"# Leaderboard, {board.edition.name} edition, on our simulator ({board.uav})", "",
-            f"Tools: {', '.join(f'{name} ({folder})' for name, folder in settings['tools'])}. Case studies: "
+            f"Tools: {', '.join(f'{t.name} ({t.folder})' for t in board.tools)}. Case studies: "
             f"{', '.join(board.case_studies)}. Budget {board.budget} per tool and case study; {board.runs} runs of "
             f"up to {board.edition.tests} tests evaluated; {board.repetitions} repetitions, seeds "
             f"{board.seed}-{board.seed + board.repetitions - 1}. One row per cell: leaderboard.csv.", ""]

@@ -86,8 +86,9 @@ def test_a_board_runs_each_cell_through_compete_and_scores_with_and_without_wind
         assert row["rank"] == "1" and 0 < float(row["diversity"]) <= 1
     summary = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0" / "summary.json"
     assert summary.is_file()
-    with_wind = local_board / "scores" / "mission1-wind-rep0-with-wind" / "evaluations.sqlite"
-    without = local_board / "scores" / "mission1-wind-rep0-without-wind" / "evaluations.sqlite"
+    scores = local_board / "scores" / "uav-testing-competition"
+    with_wind = scores / "mission1-wind-rep0-with-wind" / "evaluations.sqlite"
+    without = scores / "mission1-wind-rep0-without-wind" / "evaluations.sqlite"
     from surrealist_gym.store import EvaluationStore
 
     def distances(path):
@@ -159,6 +160,21 @@ def test_a_folder_holding_another_board_is_refused(local_board, windy, capsys, a
     assert main(["leaderboard", str(SNIPPETS), "--case-study", str(windy), "--edition", "2025", "--budget", "3",
                  "--repetitions", "1", "--out", str(local_board)]) == 2
     assert "other settings (edition: '2026')" in _one_line(capsys)
+
+
+def test_a_board_grows_into_its_folder_reusing_its_cells(local_board, windy, aerialist):
+    """A second tool joins the board: the first tool's cell is not run again, and both are ranked."""
+    log = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0.log"
+    before = log.stat().st_mtime_ns
+    ambiegen = THIRD_PARTY / "peers" / "ambiegen" / "snippets"
+    pytest.importorskip("pymoo", reason="AmbieGen's pymoo: pip install -e '.[compete-tools]'")
+    assert main(["leaderboard", str(SNIPPETS), str(ambiegen), "--case-study", str(windy), "--edition", "2026",
+                 "--budget", "3", "--repetitions", "1", "--runs", "2", "--random-seed", "5", "--workers", "2",
+                 "--out", str(local_board)]) == 0
+    assert log.stat().st_mtime_ns == before
+    rows = _rows(local_board / "leaderboard.csv")
+    assert sorted({r["tool"] for r in rows}) == ["ambiegen", "uav-testing-competition"] and len(rows) == 4
+    assert {r["rank"] for r in rows} <= {"1", "2"}
 
 
 def test_tools_are_named_by_their_folder():
