@@ -28,9 +28,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("tools", metavar="TOOL_DIR", nargs="+",
                         help="competition tools' folders (each with its cli.py), named on the board by their folder "
-                             "(a folder called snippets by its parent's)")
-    parser.add_argument("--case-study", dest="case_studies", metavar="NAME", nargs="+", required=True,
-                        help="case studies: mission1, mission2, mission3 or Aerialist YAMLs")
+                             "(a folder called snippets by its parent's); or surrealist compete output folders, "
+                             "each a cell run before (its tool's repetitions 0, 1, ... in the order given)")
+    parser.add_argument("--case-study", dest="case_studies", metavar="NAME", nargs="+", default=(),
+                        help="case studies: mission1, mission2, mission3 or Aerialist YAMLs (default: those of the "
+                             "compete output folders given)")
     parser.add_argument("--edition", required=True, choices=list(EDITIONS),
                         help="score as this edition did; its defaults: " + "; ".join(
                             f"{e.name}: budget {e.budget}, {e.runs} runs of {e.tests} tests drawn "

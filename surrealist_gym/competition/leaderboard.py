@@ -94,7 +94,7 @@ def case_label(case_study: str) -> str:
 
 
 def cell_folder(out: Path, cell: Cell) -> Path:
-    """Where a cell's ``compete`` writes."""
+    """Where a cell's ``compete`` writes on the board."""
     return out / "cells" / cell.tool.name / f"{cell.label}-rep{cell.repetition}"
 
 
@@ -112,11 +112,19 @@ class Board:
     uav: str
     out: Path
     winds: tuple = ()  # per case study, its wind (a Wind or None): 2026 blows it on every test
+    given: tuple[tuple[Cell, Path], ...] = ()  # cells run before: compete output folders given as TOOL_DIR
 
     @property
     def cells(self) -> tuple[Cell, ...]:
-        """Every cell, repetition by repetition, case study by case study, tool by tool."""
-        return tuple(Cell(t, c, k) for k in range(self.repetitions) for c in self.case_studies for t in self.tools)
+        """Every cell: those to run, repetition by repetition, case study by case study, tool by tool; then those
+        given."""
+        ran = {cell.tool for cell, _ in self.given}
+        return tuple(Cell(t, c, k) for k in range(self.repetitions) for c in self.case_studies for t in self.tools
+                     if t not in ran) + tuple(cell for cell, _ in self.given)
+
+    def folder(self, cell: Cell) -> Path:
+        """The cell's compete output folder: the one given, or where the board runs it."""
+        return next((folder for given, folder in self.given if given == cell), None) or cell_folder(self.out, cell)
 
     @property
     def variants(self) -> tuple[str, ...]:
@@ -138,6 +146,7 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     case study (:func:`~surrealist_gym.competition.compete.prepare`), and the folder: new, or holding this very board
     (then the run resumes)."""
     from .compete import prepare
+    from .reevaluation import compete_summary
     from .rules import load_competition_test
 
     ed = edition(edition_name, "--edition")
@@ -149,22 +158,61 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
             raise SurrealistError(f"{flag}: expected a whole number >= {least}, got {value!r}")
     if not tools:
         raise SurrealistError("TOOL_DIR: give at least one competition tool's folder")
+    out = Path(out).absolute()
+    ran = _given_cells(tools, budget, uav)
+    folders = [Path(os.fspath(t)) for t in tools if compete_summary(t) is None]
+    named = name_tools(folders + list(dict.fromkeys(Path(tool) for tool, _, _ in ran)))  # a folder twice: refused
+    case_studies = list(case_studies) + [file for _, file, _ in ran if case_label(file) not in
+                                         {case_label(c) for c in case_studies}]
+    case_studies = list(dict.fromkeys(case_studies))
     if not case_studies:
         raise SurrealistError("--case-study: give at least one case study (mission1, mission2, mission3 or a YAML)")
     labels = [case_label(c) for c in case_studies]
     if len(set(labels)) < len(labels):
         raise SurrealistError(f"--case-study: {next(x for x in labels if labels.count(x) > 1)} given twice")
-    named = name_tools(tools)
-    out = Path(out).absolute()
     probe = out / ".probe-not-written"
     winds = []
     for case in case_studies:
-        for tool in named:
-            checked = prepare(tool.folder, case, budget, probe, seed=seed, uav=uav)
-        winds.append(load_competition_test(checked.case_study_file).wind)
-    board = Board(named, tuple(case_studies), ed, budget, repetitions, runs, seed, uav, out, tuple(winds))
+        for tool in named[:len(folders)]:
+            prepare(tool.folder, case, budget, probe, seed=seed, uav=uav)
+        winds.append(load_competition_test(_case_file(case)).wind)
+    by_folder = {t.folder: t for t in named}
+    given, count = [], {}
+    for tool, file, folder in ran:
+        case = next(c for c in case_studies if case_label(c) == case_label(file))
+        key = (tool, case)
+        count[key] = count.get(key, -1) + 1
+        given.append((Cell(by_folder[Path(tool).absolute()], case, count[key]), folder))
+    board = Board(named, tuple(case_studies), ed, budget, repetitions, runs, seed, uav, out, tuple(winds),
+                  tuple(given))
     _check_folder(board)
     return board
+
+
+def _case_file(case: str) -> Path:
+    """A case study's file: a YAML as given, else the look-up of ``compete`` (:func:`~.rules.case_study_path`)."""
+    from .rules import case_study_path
+
+    return Path(case) if Path(case).suffix in (".yaml", ".yml") else case_study_path(case)
+
+
+def _given_cells(tools: Sequence, budget: int, uav: str) -> list[tuple[str, str, Path]]:
+    """The compete output folders among TOOL_DIR: (the tool's folder, the case study's file, the folder) each,
+    checked to have run with the board's budget and UAV."""
+    from .reevaluation import compete_summary
+
+    out = []
+    for given in tools:
+        summary = compete_summary(given)
+        if summary is None:
+            continue
+        folder = Path(os.fspath(given)).absolute()
+        for key, board_value, flag in (("budget", budget, "--budget"), ("uav", uav, "--uav")):
+            if summary.get(key) != board_value:
+                raise SurrealistError(f"TOOL_DIR {os.fspath(given)}: a compete folder run with {key} "
+                                      f"{summary.get(key)!r}, not the board's {board_value!r} ({flag})")
+        out.append((str(Path(summary["tool"]).absolute()), str(summary["case_study"]), folder))
+    return out
 
 
 def _check_folder(board: Board) -> None:
@@ -205,7 +253,7 @@ def start(board: Board) -> None:
 def cell_command(board: Board, cell: Cell) -> list[str]:
     """The ``surrealist compete`` command of a cell."""
     return [sys.executable, "-m", "surrealist_gym.cli", "compete", str(cell.tool.folder), cell.case_study,
-            str(board.budget), "--out", str(cell_folder(board.out, cell)), "--random-seed",
+            str(board.budget), "--out", str(board.folder(cell)), "--random-seed",
             str(board.seed + cell.repetition), "--uav", board.uav]
 
 
@@ -256,7 +304,11 @@ def run_cells(board: Board, workers: int, client=None, done: Callable[[Cell, dic
 
     summaries: dict[Cell, dict] = {}
     env = cell_environment()
-    jobs = {cell: (cell_command(board, cell), str(cell_folder(board.out, cell)), env) for cell in board.cells}
+    given = {cell for cell, _ in board.given}
+    jobs = {cell: (cell_command(board, cell), str(board.folder(cell)), env) for cell in board.cells
+            if cell not in given}
+    for cell in given:
+        summaries[cell] = run_cell((), str(board.folder(cell)))  # run before: its summary
     if client is not None:
         from distributed import as_completed as dask_completed
 
@@ -347,7 +399,7 @@ def score_cell(board: Board, cell: Cell, summary: dict, wind: str = "", workers:
     from .reevaluation import evaluate, load_tests
     from .scoring import draw_folder, score_suite
 
-    ed, seed, folder = board.edition, board.seed + cell.repetition, cell_folder(board.out, cell)
+    ed, seed, folder = board.edition, board.seed + cell.repetition, board.folder(cell)
     reported, problem = len(summary.get("tests") or []), summary.get("problem") or ""
     suite, tests = None, []
     if summary.get("output_folder") and reported:
@@ -374,7 +426,7 @@ def rank(board: Board, scores: Sequence[CellScore]) -> list[BoardRow]:
     """The rows of the board: per case study, repetition and wind, the cells ranked as the edition ranked tools; in
     the board's order (repetition, case study, wind, tool)."""
     rows = []
-    for k in range(board.repetitions):
+    for k in sorted({s.cell.repetition for s in scores}):
         for case in board.case_studies:
             for wind in board.variants:
                 group = [s for s in scores if (s.cell.case_study, s.cell.repetition, s.wind) == (case, k, wind)]

@@ -62,7 +62,8 @@ if TYPE_CHECKING:
     from .suite import Suite
 
 __all__ = ["CONFIDENCE", "Evaluation", "TestStats", "evaluate", "evaluation_identity", "find_tests", "load_tests",
-           "regroup", "stored_runs", "summarise_test", "tool_output", "write_report"]
+           "compete_summary", "regroup", "stored_runs", "summarise_test", "tool_output",
+           "write_report"]
 
 CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
 COMPETE_SUMMARY = "summary.json"  # what ``surrealist compete`` writes beside the tool's folder
@@ -70,20 +71,28 @@ _SUFFIXES = (".yaml", ".yml")
 
 
 # --- input ---------------------------------------------------------------------------------------------------------
+def compete_summary(folder) -> dict | None:
+    """The ``summary.json`` of a ``surrealist compete`` output folder (the tool, case study, budget, output folder,
+    ...), or None when the folder is not one."""
+    import json
+
+    try:
+        summary = json.loads((Path(os.fspath(folder)) / COMPETE_SUMMARY).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    keys = {"tool", "case_study", "budget", "output_folder"}
+    return summary if isinstance(summary, dict) and keys <= summary.keys() else None
+
+
 def tool_output(folder) -> Path:
     """The folder of tests that ``folder`` stands for: a ``surrealist compete`` output folder (its ``summary.json``
     names the tool's output folder, inside its ``tool/``) stands for the tool's output folder; any other folder for
     itself. A compete folder whose tool named no output folder, or whose output folder is gone, is a one-line
     error."""
-    import json
-
     path = Path(os.fspath(folder))
-    try:
-        summary = json.loads((path / COMPETE_SUMMARY).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
+    summary = compete_summary(path)
+    if summary is None:
         return path
-    if not isinstance(summary, dict) or not {"tool", "budget", "output_folder"} <= summary.keys():
-        return path  # another command's summary
     named = summary["output_folder"]
     if not named:
         raise SurrealistError(f"{path}: a compete output folder whose tool wrote no output folder "

@@ -220,3 +220,16 @@ def test_evaluate_scores_a_compete_folder_as_the_tool_s_output(local_board, tmp_
     assert [(r["folder"], r["tests"], r["drawn"]) for r in rows] == [(str(cell), "3", "3")]
     flown = {r["file"] for r in _rows(tmp_path / "ev" / "runs.csv")}
     assert len(flown) == 3 and all("/tool/generated_tests/" in f for f in flown)  # not the flights/ copies
+
+
+def test_a_compete_folder_is_a_cell_run_before(local_board, tmp_path, aerialist):
+    """The local board's compete folder, given as TOOL_DIR, is scored as it is: no tool runs, the same figures."""
+    cell = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0"
+    assert main(["leaderboard", str(cell), "--edition", "2026", "--budget", "3", "--runs", "2", "--random-seed", "5",
+                 "--workers", "1", "--out", str(tmp_path / "again")]) == 0
+    assert not (tmp_path / "again" / "cells").exists()
+    mine = [{k: v for k, v in r.items() if k != "case_study"} for r in _rows(tmp_path / "again" / "leaderboard.csv")]
+    theirs = [{k: v for k, v in r.items() if k != "case_study"} for r in _rows(local_board / "leaderboard.csv")
+              if r["tool"] == "uav-testing-competition"]
+    assert mine == [{**r, "rank": "1"} for r in theirs]
+    assert main(["leaderboard", str(cell), "--edition", "2026", "--budget", "4", "--out", str(tmp_path / "b")]) == 2
