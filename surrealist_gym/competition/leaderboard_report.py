@@ -117,7 +117,8 @@ def report_lines(board: Board, rows: Sequence[BoardRow]) -> list[str]:
                 lines.append(f"| {label} | " + (f"{wind} | " if board.edition.wind else "") + f"{s.tool} | {place} | "
                              + (f"{_f(s.score)} | " if year == "2024" else
                                 f"{_f(s.score)} | {_f(s.diversity)} | {_f(s.r)} | ")
-                             + f"{s.reported:.1f} | {s.failing}/{s.evaluated} ({_f(100 * s.rerun, 0)}%) |")
+                             + f"{s.reported:.1f} | {s.failing}/{s.evaluated}"
+                             + (f" ({100 * s.rerun:.0f}%) |" if s.evaluated else " |"))
     lines += ["", "## Overall", ""]
     for wind in board.variants:
         totals = {t.name: sum(s.score if year == "2024" else s.r for s in summaries
@@ -158,8 +159,8 @@ def _px4_lines(board: Board, summaries: Sequence[Summary]) -> list[str]:
         failing, evaluated = sum(s.failing for s in mine), sum(s.evaluated for s in mine)
         name = published_name(tool.name)
         px4 = (f"{_f(100 * rerun_share(table[name]), 0)}% ({name})" if name in table else "-")
-        lines.append(f"| {tool.name} | {failing}/{evaluated} | {_f(100 * failing / evaluated, 0) if evaluated else '-'}"
-                     f"% | {px4} |")
+        share = f"{100 * failing / evaluated:.0f}%" if evaluated else "-"
+        lines.append(f"| {tool.name} | {failing}/{evaluated} | {share} | {px4} |")
     return lines
 
 
@@ -203,8 +204,8 @@ def write_report(board: Board, rows: Sequence[BoardRow]) -> dict:
     head = [f"# Leaderboard, {board.edition.name} edition, on our simulator ({board.uav})", "",
             f"Tools: {', '.join(f'{t.name} ({t.folder})' for t in board.tools)}. Case studies: "
             f"{', '.join(board.case_studies)}. Budget {board.budget} per tool and case study; {board.runs} runs of "
-            f"up to {board.edition.tests} tests evaluated; {board.repetitions} repetitions, seeds "
-            f"{board.seed}-{board.seed + board.repetitions - 1}. One row per cell: leaderboard.csv.", ""]
+            f"up to {board.edition.tests} tests evaluated; {board.repetitions} repetitions (repetition k: seed "
+            f"{board.seed} + k). One row per cell: leaderboard.csv.", ""]
     paths["report"].write_text("\n".join(head + lines) + "\n", encoding="utf-8")
     paths["text"] = "\n".join(lines)
     return paths
