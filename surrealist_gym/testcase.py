@@ -179,7 +179,8 @@ class Wind:
     Checked against a physical range (one-line :class:`InvalidTestCase` naming the field): every number finite and
     >= 0; speeds at most :data:`MAX_WIND_SPEED_MS`; speed variances at most :data:`MAX_WIND_SPEED_VARIANCE`,
     direction variances at most :data:`MAX_WIND_DIRECTION_VARIANCE`; directions not all zero (the plugin normalises
-    them); a maximum speed, when given (non-zero), at least its mean. A maximum of 0 means "not given" (the default,
+    them), except that of a wind (or gust) whose speeds are all 0, which blows nothing (Aerialist master's own ``Wind``
+    writes a gust it lacks as ``gust_direction: [0, 0, 0]``; it is read as the default direction); a maximum speed, when given (non-zero), at least its mean. A maximum of 0 means "not given" (the default,
     as when an Aerialist file leaves it out): the simulator then caps the speed at its mean. Gazebo itself would
     take an explicit 0 literally and blow no wind at all.
     """
@@ -204,7 +205,11 @@ class Wind:
                 if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(_finite(c) for c in v)):
                     raise InvalidTestCase(f"wind field {f.name!r}: expected 3 finite numbers, got {v!r}")
                 if not any(c != 0 for c in v):
-                    raise InvalidTestCase(f"wind field {f.name!r}: expected a direction (not all zero), got {v!r}")
+                    prefix = f.name[:-len("direction")]
+                    if any(getattr(self, prefix + k) for k in ("velocity_mean", "velocity_max", "velocity_variance")):
+                        raise InvalidTestCase(f"wind field {f.name!r}: expected a direction (not all zero), got "
+                                              f"{v!r}")
+                    v = (1.0, 0.0, 0.0)  # no wind this way: Aerialist master writes a gust it lacks as [0, 0, 0]
                 object.__setattr__(self, f.name, tuple(float(c) for c in v))
                 continue
             if not _finite(v) or v < 0:

@@ -9,8 +9,8 @@ A :class:`Board` is checked whole before anything runs (:func:`plan`: every tool
    their noise from it, and the tool's own ``random`` and ``numpy.random`` are seeded from it). A cell is done when its
    ``summary.json`` is there; an interrupted cell's folder is kept beside, renamed ``*.interrupted-N``, and run again.
    Cells run at once on local worker threads (each a process of its own) or as tasks of a Dask cluster.
-2. **Scores** (:func:`score_cell`): each cell's output folder drawn and flown as the edition did (every drawn test, as
-   the competition's platform flew them: it did not check the rules on boxes;
+2. **Scores** (:func:`score_cell`): each cell's output folder drawn and flown as the edition did (a drawn test that
+   breaks the edition's rules on boxes is not flown and scores 0, as the organisers checked them;
    :func:`~surrealist_gym.competition.reevaluation.evaluate` into
    ``OUT/scores/TOOL/CASE_STUDY-repK/evaluations.sqlite``: each run stored as it completes, read back on a rerun) and
    scored; a cell that wrote no test scores 0, with no
@@ -393,10 +393,11 @@ class CellScore:
 
 def score_cell(board: Board, cell: Cell, summary: dict, wind: str = "", workers: int | None = None, executor=None,
                progress: Callable[[int, int], None] | None = None) -> CellScore:
-    """Draw a cell's tests and fly them as the edition did (``summary``: its compete summary): every drawn test, as
-    the competition's platform flew them, since it did not check the rules on boxes. A cell with no test, or whose
-    tests cannot be read, scores 0, with the reason in ``problem``."""
-    from .reevaluation import evaluate, load_tests
+    """Draw a cell's tests and fly them as the edition did (``summary``: its compete summary): a drawn test that
+    breaks the edition's rules on boxes is not flown and scores 0, as the organisers checked each for compliance
+    before running it. A cell with no test, or whose tests cannot be read, scores 0, with the reason in
+    ``problem``."""
+    from .reevaluation import evaluate, load_tests, rule_broken
     from .scoring import draw_folder, score_suite
 
     ed, seed, folder = board.edition, board.seed + cell.repetition, board.folder(cell)
@@ -410,13 +411,17 @@ def score_cell(board: Board, cell: Cell, summary: dict, wind: str = "", workers:
         except SurrealistError as err:
             problem = f"not scored: {err}"
     if tests:
-        store = score_folder(board, cell, wind) / "evaluations.sqlite"
-        store.parent.mkdir(parents=True, exist_ok=True)
-        ev = evaluate(tests, runs=board.runs, seed=seed, uav=board.uav, workers=workers, progress=progress,
-                      store=store, executor=executor, identity={"competition": ed.name, "wind": wind})
-        runs = {t.file: t.runs for t in ev.tests}
-        suite = replace(score_suite(ed, drawn, [(test, runs.get(str(path), ()), "") for path, test in tests]),
-                        case_study=cell.label)
+        invalid = {path: broken for path, test in tests if (broken := rule_broken(test, ed.rules))}
+        flying = [(path, test) for path, test in tests if path not in invalid]
+        runs: dict = {}
+        if flying:
+            store = score_folder(board, cell, wind) / "evaluations.sqlite"
+            store.parent.mkdir(parents=True, exist_ok=True)
+            ev = evaluate(flying, runs=board.runs, seed=seed, uav=board.uav, workers=workers, progress=progress,
+                          store=store, executor=executor, identity={"competition": ed.name, "wind": wind})
+            runs = {t.file: t.runs for t in ev.tests}
+        suite = replace(score_suite(ed, drawn, [(test, runs.get(str(path), ()), invalid.get(path, ""))
+                                                for path, test in tests]), case_study=cell.label)
     suite = suite or SuiteScore(str(folder.absolute()), cell.label, ed.name, 0, (), 0.0, 0.0, 1.0, 0.0, math.nan)
     return CellScore(cell, wind, suite, reported, int(summary.get("simulations") or 0),
                      int(summary.get("refused") or 0), problem)

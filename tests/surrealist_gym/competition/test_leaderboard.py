@@ -32,6 +32,36 @@ WIND = {"velocity_mean": 4.0, "velocity_max": 6.0, "direction": [0, 1, 0], "velo
         "gust_direction": [1, 0, 0]}
 
 
+#: A small competition tool: boxes drawn with Python's random, unseeded (compete seeds it), within the rules and
+#: near mission1's path, each flown once by Aerialist master's DockerAgent and written as the snippet writes tests.
+TOOL = '''\
+import os, random, shutil, sys
+from aerialist.px4.aerialist_test import AerialistTest
+from aerialist.px4.docker_agent import DockerAgent
+from aerialist.px4.obstacle import Obstacle
+
+out = "generated_tests/boxes"
+os.makedirs(out, exist_ok=True)
+for i in range(int(sys.argv[3])):
+    test = AerialistTest.from_yaml(sys.argv[2])
+    size = Obstacle.Size(random.uniform(4, 12), random.uniform(2, 5), 20)
+    test.simulation.obstacles = [Obstacle(size, Obstacle.Position(random.uniform(-5, 10), random.uniform(12, 25), 0,
+                                                                  random.uniform(0, 90)))]
+    results = DockerAgent(test).run()
+    test.to_yaml(f"{out}/test_{i}.yaml")
+    shutil.copy2(results[0].log_file, f"{out}/test_{i}.ulg")
+print(f"output folder: {out}")
+'''
+
+
+@pytest.fixture(scope="module")
+def boxes(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("tools") / "boxes"
+    folder.mkdir()
+    (folder / "cli.py").write_text(TOOL)
+    return folder
+
+
 @pytest.fixture(scope="module")
 def windy(tmp_path_factory) -> Path:
     """mission1 with a 2026 wind (every key of Aerialist's wind.py that sets speeds, directions and a gust), its files
@@ -58,8 +88,8 @@ def aerialist():
         os.environ[AERIALIST_ENV] = old
 
 
-def _board(out: Path, windy: Path, *extra: str) -> int:
-    return main(["leaderboard", str(SNIPPETS), "--case-study", str(windy), "--edition", "2026", "--budget", "3",
+def _board(out: Path, tool: Path, windy: Path, *extra: str) -> int:
+    return main(["leaderboard", str(tool), "--case-study", str(windy), "--edition", "2026", "--budget", "3",
                  "--repetitions", "1", "--runs", "2", "--random-seed", "5", "--out", str(out), *extra])
 
 
@@ -69,24 +99,24 @@ def _rows(path: Path) -> list[dict]:
 
 
 @pytest.fixture(scope="module")
-def local_board(tmp_path_factory, windy, aerialist) -> Path:
+def local_board(tmp_path_factory, boxes, windy, aerialist) -> Path:
     out = tmp_path_factory.mktemp("board") / "local"
-    assert _board(out, windy, "--workers", "2") == 0
+    assert _board(out, boxes, windy, "--workers", "2") == 0
     return out
 
 
 def test_a_board_runs_each_cell_through_compete_and_scores_with_and_without_wind(local_board):
     rows = _rows(local_board / "leaderboard.csv")
     assert [(r["tool"], r["case_study"], r["wind"]) for r in rows] == [
-        ("uav-testing-competition", "mission1-wind", "with"), ("uav-testing-competition", "mission1-wind", "without")]
+        ("boxes", "mission1-wind", "with"), ("boxes", "mission1-wind", "without")]
     assert list(rows[0])[:12] == ["tool", "case_study", "repetition", "wind", "reported_tests", "evaluated_tests",
                                   "failing_tests", "failure_score", "diversity", "R", "rank", "simulations"]
     for row in rows:
         assert row["reported_tests"] == row["evaluated_tests"] == "3" and row["simulations"] == "3"
         assert row["rank"] == "1" and 0 < float(row["diversity"]) <= 1
-    summary = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0" / "summary.json"
+    summary = local_board / "cells" / "boxes" / "mission1-wind-rep0" / "summary.json"
     assert summary.is_file()
-    scores = local_board / "scores" / "uav-testing-competition"
+    scores = local_board / "scores" / "boxes"
     with_wind = scores / "mission1-wind-rep0-with-wind" / "evaluations.sqlite"
     without = scores / "mission1-wind-rep0-without-wind" / "evaluations.sqlite"
     from surrealist_gym.store import EvaluationStore
@@ -106,22 +136,22 @@ def test_a_board_runs_each_cell_through_compete_and_scores_with_and_without_wind
     assert (local_board / "leaderboard.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_a_board_resumes_without_running_a_cell_again(local_board, windy, aerialist):
-    log = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0.log"
+def test_a_board_resumes_without_running_a_cell_again(local_board, boxes, windy, aerialist):
+    log = local_board / "cells" / "boxes" / "mission1-wind-rep0.log"
     before = (log.stat().st_mtime_ns, (local_board / "leaderboard.csv").read_bytes())
-    assert _board(local_board, windy, "--workers", "1") == 0
+    assert _board(local_board, boxes, windy, "--workers", "1") == 0
     assert log.stat().st_mtime_ns == before[0]
     assert (local_board / "leaderboard.csv").read_bytes() == before[1]
     assert not list((local_board / "cells").rglob("*.interrupted-*"))
 
 
-def test_a_dask_cluster_gives_the_same_board_as_local_workers(local_board, windy, aerialist, tmp_path):
+def test_a_dask_cluster_gives_the_same_board_as_local_workers(local_board, boxes, windy, aerialist, tmp_path):
     distributed = pytest.importorskip("distributed")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                       dashboard_address=None) as cluster:
-            assert _board(tmp_path / "dask", windy, "--dask-scheduler", cluster.scheduler_address) == 0
+            assert _board(tmp_path / "dask", boxes, windy, "--dask-scheduler", cluster.scheduler_address) == 0
     assert (tmp_path / "dask" / "leaderboard.csv").read_bytes() == (local_board / "leaderboard.csv").read_bytes()
 
 
@@ -156,24 +186,24 @@ def test_a_folder_without_cli_py_or_given_twice_is_refused(capsys, tmp_path, aer
     assert "given twice" in _one_line(capsys)
 
 
-def test_a_folder_holding_another_board_is_refused(local_board, windy, capsys, aerialist):
-    assert main(["leaderboard", str(SNIPPETS), "--case-study", str(windy), "--edition", "2025", "--budget", "3",
+def test_a_folder_holding_another_board_is_refused(local_board, boxes, windy, capsys, aerialist):
+    assert main(["leaderboard", str(boxes), "--case-study", str(windy), "--edition", "2025", "--budget", "3",
                  "--repetitions", "1", "--out", str(local_board)]) == 2
     assert "other settings (edition: '2026')" in _one_line(capsys)
 
 
-def test_a_board_grows_into_its_folder_reusing_its_cells(local_board, windy, aerialist):
+def test_a_board_grows_into_its_folder_reusing_its_cells(local_board, boxes, windy, aerialist):
     """A second tool joins the board: the first tool's cell is not run again, and both are ranked."""
-    log = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0.log"
+    log = local_board / "cells" / "boxes" / "mission1-wind-rep0.log"
     before = log.stat().st_mtime_ns
     ambiegen = THIRD_PARTY / "peers" / "ambiegen" / "snippets"
     pytest.importorskip("pymoo", reason="AmbieGen's pymoo: pip install -e '.[compete-tools]'")
-    assert main(["leaderboard", str(SNIPPETS), str(ambiegen), "--case-study", str(windy), "--edition", "2026",
+    assert main(["leaderboard", str(boxes), str(ambiegen), "--case-study", str(windy), "--edition", "2026",
                  "--budget", "3", "--repetitions", "1", "--runs", "2", "--random-seed", "5", "--workers", "2",
                  "--out", str(local_board)]) == 0
     assert log.stat().st_mtime_ns == before
     rows = _rows(local_board / "leaderboard.csv")
-    assert sorted({r["tool"] for r in rows}) == ["ambiegen", "uav-testing-competition"] and len(rows) == 4
+    assert sorted({r["tool"] for r in rows}) == ["ambiegen", "boxes"] and len(rows) == 4
     assert {r["rank"] for r in rows} <= {"1", "2"}
 
 
@@ -213,7 +243,7 @@ def test_the_2024_agreement_compares_our_cells_with_table_1():
 
 
 def test_evaluate_scores_a_compete_folder_as_the_tool_s_output(local_board, tmp_path):
-    cell = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0"
+    cell = local_board / "cells" / "boxes" / "mission1-wind-rep0"
     assert main(["evaluate", str(cell), "--competition", "2025", "--runs", "1", "--any-layout", "--workers", "1",
                  "--out", str(tmp_path / "ev")]) == 0
     rows = _rows(tmp_path / "ev" / "leaderboard.csv")
@@ -224,12 +254,12 @@ def test_evaluate_scores_a_compete_folder_as_the_tool_s_output(local_board, tmp_
 
 def test_a_compete_folder_is_a_cell_run_before(local_board, tmp_path, aerialist):
     """The local board's compete folder, given as TOOL_DIR, is scored as it is: no tool runs, the same figures."""
-    cell = local_board / "cells" / "uav-testing-competition" / "mission1-wind-rep0"
+    cell = local_board / "cells" / "boxes" / "mission1-wind-rep0"
     assert main(["leaderboard", str(cell), "--edition", "2026", "--budget", "3", "--runs", "2", "--random-seed", "5",
                  "--workers", "1", "--out", str(tmp_path / "again")]) == 0
     assert not (tmp_path / "again" / "cells").exists()
     mine = [{k: v for k, v in r.items() if k != "case_study"} for r in _rows(tmp_path / "again" / "leaderboard.csv")]
     theirs = [{k: v for k, v in r.items() if k != "case_study"} for r in _rows(local_board / "leaderboard.csv")
-              if r["tool"] == "uav-testing-competition"]
+              if r["tool"] == "boxes"]
     assert mine == [{**r, "rank": "1"} for r in theirs]
     assert main(["leaderboard", str(cell), "--edition", "2026", "--budget", "4", "--out", str(tmp_path / "b")]) == 2
