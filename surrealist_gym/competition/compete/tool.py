@@ -282,7 +282,7 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
         flights, spent, refused, notes = server.flights, server.spent, server.refused, server.notes
     output, found_by = find_output_folder(stdout, work)
     tests = _written_tests(output, flights) if output is not None else ()
-    problem = _problem(plan, returncode, stopped, output, stdout, stderr)
+    problem = _problem(plan, returncode, stopped, output, found_by, stdout, stderr)
     result = CompeteResult(plan, returncode, output, tests, flights, spent, refused, notes,
                            time.perf_counter() - start, problem, found_by, tool_env)
     _write_records(result)
@@ -339,7 +339,7 @@ def _newest_test_folder(root: Path) -> Path | None:
     return max(latest, key=lambda folder: (latest[folder], str(folder))) if latest else None
 
 
-def _problem(plan, returncode, stopped, output, stdout, stderr) -> str | None:
+def _problem(plan, returncode, stopped, output, found_by, stdout, stderr) -> str | None:
     """Why the run does not count (None when it does). Simulations refused over the budget are not a problem: the
     tool saw them fail, as PX4 runs past a budget would not have been given, and its output is scored as usual."""
     where = f"what it wrote is kept in {plan.out}"
@@ -350,8 +350,7 @@ def _problem(plan, returncode, stopped, output, stdout, stderr) -> str | None:
         last = f": {one_line(lines[-1], 120)}" if lines else ""
         return f"the tool crashed (exit code {returncode}){last} (see {stderr}); {where}"
     if output is None:
-        return f"no output folder: the tool printed no 'output folder: PATH' that exists and wrote no test YAML " \
-               f"under generated_tests/ (see {stdout}); {where}"
+        return f"no output folder: {found_by} (see {stdout}); {where}"
     return None
 
 
