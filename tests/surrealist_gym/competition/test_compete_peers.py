@@ -42,7 +42,7 @@ def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
 @pytest.fixture(scope="module", params=sorted(TOOLS))
 def peer_run(request, tmp_path_factory):
     """One tool on its case study, budget 10, through ``surrealist compete`` (AGENT unset, as by default): the exit
-    code, what it printed, its summary.json, and its own folder before and after."""
+    code, what it printed, its summary.json, its own folder before and after, and the output folder."""
     name = request.param
     folder, mission, _ = TOOLS[name]
     out = tmp_path_factory.mktemp(name) / "out"
@@ -54,14 +54,14 @@ def peer_run(request, tmp_path_factory):
         with contextlib.redirect_stdout(printed):
             code = main(["compete", str(folder), mission, str(BUDGET), "--out", str(out)])
     summary = json.loads((out / "summary.json").read_text())
-    return name, code, printed.getvalue(), summary, before, _snapshot(folder)
+    return name, code, printed.getvalue(), summary, before, _snapshot(folder), out
 
 
 @pytest.mark.slow
 def test_peer_tool_runs_unchanged(peer_run):
     """Exit code 0, every test the tool wrote (its printed output folder) has its yaml, ULog and PNG, each ULog one
     we flew, judged by the competition's distance; the budget spent; the tool's own folder untouched."""
-    name, code, printed, summary, before, after = peer_run
+    name, code, printed, summary, before, after, _ = peer_run
     assert code == 0 and summary["problem"] is None, (name, summary["problem"])
     assert summary["tool_env"]["kind"] == "ours"
     assert summary["output_folder_found_by"].startswith("printed by the tool")
@@ -72,8 +72,7 @@ def test_peer_tool_runs_unchanged(peer_run):
         assert Path(test["png"]).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert test["flight"] is not None and test["competition_distance"] is not None
         assert test["points"] in (0, 1, 2, 5)
-    assert summary["simulations"] == BUDGET
-    assert f"simulations: {BUDGET} of budget {BUDGET} flown" in printed
+    assert f"simulations: {summary['simulations']} of budget {BUDGET} flown" in printed
     assert before == after  # nothing of theirs written
 
 
@@ -81,12 +80,15 @@ def test_peer_tool_runs_unchanged(peer_run):
 def test_peer_tool_overspending_is_reported(peer_run):
     """A tool that asks past its budget has the excess refused (it sees failed executions), reported in the summary
     line and summary.json, and is scored as usual (exit code 0)."""
-    name, code, printed, summary, _, _ = peer_run
-    expected = TOOLS[name][2]
-    assert summary["refused"] == expected and code == 0
-    assert summary["requests"] == BUDGET + expected
-    line = f"budget: the tool asked for {expected} simulations past its budget of {BUDGET}; they were refused"
-    assert (line in printed) == (expected > 0)
+    name, code, printed, summary, _, _, out = peer_run
+    rows = (out / "flights.csv").read_text().splitlines()[1:]
+    unflyable = sum(1 for row in rows if "the test cannot be flown" in row)  # e.g. overlapping boxes (TGen-UQ)
+    assert summary["requests"] == len(rows) == summary["simulations"] + summary["refused"] + unflyable
+    assert BUDGET - unflyable <= summary["simulations"] <= BUDGET and code == 0
+    if not unflyable:
+        assert summary["refused"] == TOOLS[name][2]
+    line = f"budget: the tool asked for {summary['refused']} simulations past its budget of {BUDGET}; they were refused"
+    assert (line in printed) == (summary["refused"] > 0)
 
 
 def test_auto_runs_every_public_tool_here():
