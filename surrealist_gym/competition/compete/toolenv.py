@@ -39,13 +39,16 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ...errors import DependencyNotInstalled, SurrealistError
+from ...errors import DependencyNotInstalled, SurrealistError, one_line
 
 TOOL_ENV_MODES = ("auto", "own", "ours")
 CACHE_ENV = "SURREALIST_TOOL_ENVS"
 #: What Aerialist's test-case, obstacle, trajectory, plot and agent modules import (0.2.x and master), as pip names.
 AERIALIST_NEEDS = ("munch", "python-decouple", "pyyaml", "shapely", "matplotlib", "numpy", "pandas",
                    "similaritymeasures", "ruptures", "tslearn", "pyulog", "requests", "webdav4", "webdavclient3")
+#: The modules Aerialist's modules import, tried in a new environment before it is kept (with the tool's imports).
+AERIALIST_MODULES = ("munch", "decouple", "yaml", "shapely.geometry", "matplotlib.pyplot", "numpy", "pandas",
+                     "similaritymeasures", "ruptures", "tslearn", "pyulog", "requests")
 #: Never installed in a tool's environment: Aerialist comes from a folder; bagpy is the shim's stand-in.
 NOT_INSTALLED = ("aerialist", "bagpy")
 _SKIPPED_FOLDERS = {"__pycache__", "venv", ".venv", "node_modules"}
@@ -60,6 +63,7 @@ class EnvChoice:
     reason: str
     requirements: Path | None = None
     cache: Path | None = None
+    imports: tuple[str, ...] = ()  # the tool's imports, tried in its own environment before it is kept
 
 
 @dataclass(frozen=True, slots=True)
@@ -155,7 +159,8 @@ def choose_env(tool, mode: str = "auto", cache=None) -> EnvChoice:
                               f"not installed here)")
     reason = "--tool-env own" if mode == "own" else \
         "it imports " + ", ".join(f"{m} ({f})" for m, f in missing.items()) + ", not installed here"
-    return EnvChoice("own", reason, requirements.resolve(), Path(cache).expanduser() if cache else default_cache())
+    return EnvChoice("own", reason, requirements.resolve(), Path(cache).expanduser() if cache else default_cache(),
+                     tuple(tool_imports(tool)))
 
 
 # --- an environment of its own ---------------------------------------------------------------------------------------
@@ -200,6 +205,7 @@ def own_env(choice: EnvChoice, log=None) -> ToolEnv:
     folder.parent.mkdir(parents=True, exist_ok=True)
     _call([sys.executable, "-m", "venv", str(folder)], log, "could not make a virtual environment")
     substitutions = _install(python, text, log)
+    substitutions += _repair(python, (*AERIALIST_MODULES, *choice.imports), log)
     marker.write_text(json.dumps({"requirements": str(choice.requirements), "substitutions": list(substitutions)},
                                  indent=2) + "\n", encoding="utf-8")  # last: the environment is complete
     return ToolEnv("own", python, choice.reason, folder, substitutions, round(time.perf_counter() - start, 1))
@@ -225,6 +231,44 @@ def _install(python: Path, text: str, log) -> tuple[str, ...]:
                  "installed together; took the versions the index offers for all")
     _call(pip + names, log, "pip could not install the tool's requirements, even unpinned")
     return tuple(notes)
+
+
+_TRY_IMPORTS = """
+import importlib, json, sys
+from importlib.metadata import packages_distributions
+dists, bad = packages_distributions(), {}
+for module in sys.argv[1:]:
+    try:
+        importlib.import_module(module)
+    except Exception as err:
+        bad[module] = [dists.get(module.split(".")[0], []), f"{type(err).__name__}: {err}"[:160]]
+print(json.dumps(bad))
+"""
+
+
+def _repair(python: Path, modules, log, rounds: int = 3) -> tuple[str, ...]:
+    """Import each module in the new environment; a package that installed but does not import on this Python (e.g.
+    Shapely 1.8 without its GEOS library) is replaced by the index's newest version. What was replaced, one line
+    each; a one-line error when a module still does not import."""
+    notes = []
+    for _ in range(rounds):
+        done = subprocess.run([str(python), "-c", _TRY_IMPORTS, *modules], capture_output=True, text=True,
+                              stdin=subprocess.DEVNULL, env={**os.environ, "MPLBACKEND": "Agg"})
+        bad = json.loads(done.stdout.strip().splitlines()[-1]) if done.returncode == 0 and done.stdout.strip() else \
+            {"?": [[], one_line(done.stderr or "the import check did not run", 160)]}
+        if not bad:
+            return tuple(notes)
+        fixable = {d for dists, _ in bad.values() for d in dists}
+        if not fixable:
+            break
+        pip = [str(python), "-m", "pip", "install", "--disable-pip-version-check", "-q", "--upgrade"]
+        if not _ok(pip + sorted(fixable), log):
+            break
+        notes.extend(f"{', '.join(dists) or module}: installed but does not import on this Python ({why}); took "
+                     f"the index's newest" for module, (dists, why) in bad.items() if dists)
+    module, (_, why) = next(iter(bad.items()))
+    raise SurrealistError(f"the tool's own environment {python.parent.parent}: {module} does not import ({why}); "
+                          f"see {log}")
 
 
 def _name(line: str) -> str | None:
