@@ -290,5 +290,5 @@ def _call(command, log, what: str) -> None:
         raise SurrealistError(f"{what} ({' '.join(command[:4])} ...; see {log})")
 
 
-__all__ = ["AERIALIST_NEEDS", "CACHE_ENV", "TOOL_ENV_MODES", "EnvChoice", "ToolEnv", "choose_env", "default_cache",
-           "env_key", "missing_here", "own_env", "requirement_lines", "tool_imports"]
+__all__ = ["AERIALIST_MODULES", "AERIALIST_NEEDS", "CACHE_ENV", "TOOL_ENV_MODES", "EnvChoice", "ToolEnv", "choose_env",
+           "default_cache", "env_key", "missing_here", "own_env", "requirement_lines", "tool_imports"]
