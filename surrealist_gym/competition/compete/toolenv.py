@@ -47,8 +47,9 @@ CACHE_ENV = "SURREALIST_TOOL_ENVS"
 AERIALIST_NEEDS = ("munch", "python-decouple", "pyyaml", "shapely", "matplotlib", "numpy", "pandas",
                    "similaritymeasures", "ruptures", "tslearn", "pyulog", "requests", "webdav4", "webdavclient3")
 #: The modules Aerialist's modules import, tried in a new environment before it is kept (with the tool's imports).
-AERIALIST_MODULES = ("munch", "decouple", "yaml", "shapely.geometry", "matplotlib.pyplot", "numpy", "pandas",
-                     "similaritymeasures", "ruptures", "tslearn", "pyulog", "requests")
+AERIALIST_MODULES = ("munch", "decouple", "yaml", "numpy", "pandas", "scipy.spatial", "shapely.geometry",
+                     "shapely.affinity", "matplotlib.pyplot", "matplotlib.patches", "similaritymeasures", "ruptures",
+                     "tslearn.barycenters", "pyulog", "requests", "webdav3.client", "webdav4.client")
 #: Never installed in a tool's environment: Aerialist comes from a folder; bagpy is the shim's stand-in.
 NOT_INSTALLED = ("aerialist", "bagpy")
 _SKIPPED_FOLDERS = {"__pycache__", "venv", ".venv", "node_modules"}
@@ -248,8 +249,9 @@ print(json.dumps(bad))
 
 def _repair(python: Path, modules, log, rounds: int = 3) -> tuple[str, ...]:
     """Import each module in the new environment; a package that installed but does not import on this Python (e.g.
-    Shapely 1.8 without its GEOS library) is replaced by the index's newest version. What was replaced, one line
-    each; a one-line error when a module still does not import."""
+    Shapely 1.8 without its GEOS library) is replaced by the newest version the index offers that goes with every
+    other package as installed (so numpy stays as pinned), else by its newest. What was replaced, one line each; a
+    one-line error when a module still does not import."""
     notes = []
     for _ in range(rounds):
         done = subprocess.run([str(python), "-c", _TRY_IMPORTS, *modules], capture_output=True, text=True,
@@ -262,10 +264,19 @@ def _repair(python: Path, modules, log, rounds: int = 3) -> tuple[str, ...]:
         if not fixable:
             break
         pip = [str(python), "-m", "pip", "install", "--disable-pip-version-check", "-q", "--upgrade"]
-        if not _ok(pip + sorted(fixable), log):
+        constraints = python.parent.parent / "surrealist-constraints.txt"
+        frozen = subprocess.run([str(python), "-m", "pip", "freeze"], capture_output=True, text=True).stdout
+        keep = {_name(d) for d in fixable}
+        constraints.write_text("\n".join(line for line in frozen.splitlines()
+                                         if "==" in line and _name(line) not in keep) + "\n", encoding="utf-8")
+        if _ok(pip + ["-c", str(constraints)] + sorted(fixable), log):
+            took = "the index's newest that goes with the other packages as installed"
+        elif _ok(pip + sorted(fixable), log):
+            took = "the index's newest"
+        else:
             break
         notes.extend(f"{', '.join(dists) or module}: installed but does not import on this Python ({why}); took "
-                     f"the index's newest" for module, (dists, why) in bad.items() if dists)
+                     f"{took}" for module, (dists, why) in bad.items() if dists)
     module, (_, why) = next(iter(bad.items()))
     raise SurrealistError(f"the tool's own environment {python.parent.parent}: {module} does not import ({why}); "
                           f"see {log}")

@@ -19,13 +19,14 @@ ROOT = Path(__file__).resolve().parents[3]
 THIRD_PARTY = ROOT.parent / "shared" / "third_party"
 PEERS = THIRD_PARTY / "peers"
 LEGACY = THIRD_PARTY / "aerialist-0.2.1"
-#: tool -> (its folder, the case study it runs on here, the simulations it asks for past a budget of 10)
+#: tool -> (its folder, the case study it runs on here, the simulations it asks for past a budget of 10, whether it
+#: writes every test it flew or only those it found closer than 1.5 m)
 TOOLS = {
-    "camba": (PEERS / "camba" / "snippets", "mission1", 0),
-    "deephyperion-uav": (PEERS / "deephyperion-uav" / "DeepHyperion", "mission2", 20),  # a first population of 30
-    "palm": (PEERS / "palm" / "snippets", "mission3", 1),  # simulates its root, then one test per unit of budget
-    "tgen-uq": (PEERS / "tgen-uq" / "snippets", "mission1", 0),
-    "optobstacles": (PEERS / "optobstacles" / "snippets", "mission3", 0),
+    "camba": (PEERS / "camba" / "snippets", "mission1", 0, "close"),
+    "deephyperion-uav": (PEERS / "deephyperion-uav" / "DeepHyperion", "mission2", 20, "close"),  # 30 first
+    "palm": (PEERS / "palm" / "snippets", "mission3", 1, "close"),  # its root, then one test per unit of budget
+    "tgen-uq": (PEERS / "tgen-uq" / "snippets", "mission1", 0, "all"),
+    "optobstacles": (PEERS / "optobstacles" / "snippets", "mission3", 0, "close"),
 }
 BUDGET = 10
 
@@ -44,7 +45,7 @@ def peer_run(request, tmp_path_factory):
     """One tool on its case study, budget 10, through ``surrealist compete`` (AGENT unset, as by default): the exit
     code, what it printed, its summary.json, its own folder before and after, and the output folder."""
     name = request.param
-    folder, mission, _ = TOOLS[name]
+    folder, mission, _, _ = TOOLS[name]
     out = tmp_path_factory.mktemp(name) / "out"
     before = _snapshot(folder)
     with pytest.MonkeyPatch.context() as patch:
@@ -60,18 +61,20 @@ def peer_run(request, tmp_path_factory):
 @pytest.mark.slow
 def test_peer_tool_runs_unchanged(peer_run):
     """Exit code 0, every test the tool wrote (its printed output folder) has its yaml, ULog and PNG, each ULog one
-    we flew, judged by the competition's distance; the budget spent; the tool's own folder untouched."""
+    we flew, judged by the competition's distance: all the tests it flew (TGen-UQ), or those below 1.5 m (the others
+    write only what they found that close, which may be none); the tool's own folder untouched."""
     name, code, printed, summary, before, after, _ = peer_run
     assert code == 0 and summary["problem"] is None, (name, summary["problem"])
     assert summary["tool_env"]["kind"] == "ours"
     assert summary["output_folder_found_by"].startswith("printed by the tool")
-    assert "/out/tool/generated_tests/" in summary["output_folder"]
-    assert summary["tests"], f"{name} wrote no test"
+    assert "/out/tool/generated_tests/" in summary["output_folder"] and Path(summary["output_folder"]).is_dir()
     for test in summary["tests"]:
         assert all(Path(test[k]).is_file() for k in ("yaml", "ulg", "png")), test
         assert Path(test["png"]).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert test["flight"] is not None and test["competition_distance"] is not None
-        assert test["points"] in (0, 1, 2, 5)
+        assert test["points"] in ((1, 2, 5) if TOOLS[name][3] == "close" else (0, 1, 2, 5)), test
+    if TOOLS[name][3] == "all":
+        assert len(summary["tests"]) == summary["simulations"]
     assert f"simulations: {summary['simulations']} of budget {BUDGET} flown" in printed
     assert before == after  # nothing of theirs written
 
@@ -93,7 +96,7 @@ def test_peer_tool_overspending_is_reported(peer_run):
 
 def test_auto_runs_every_public_tool_here():
     """The environment rule picks ours for every public tool: each module they import is installed here."""
-    folders = [folder for folder, _, _ in TOOLS.values()] + [PEERS / "ambiegen" / "snippets",
+    folders = [folder for folder, _, _, _ in TOOLS.values()] + [PEERS / "ambiegen" / "snippets",
                                                              THIRD_PARTY / "uav-testing-competition" / "snippets"]
     for folder in folders:
         assert missing_here(folder) == {}, folder
