@@ -164,7 +164,7 @@ def test_every_agent_flies_our_simulator(tmp_path, monkeypatch, capsys, agent, m
     assert main(["compete", str(SNIPPETS), mission, "1", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert f"output folder: {out.absolute() / 'tool' / 'generated_tests'}" in printed
-    assert "(the tool's: 1 tests, 1 with yaml, ulg and png)" in printed
+    assert "(the tool's: 1 tests, 1 with yaml, ulg and png; printed by the tool ('output folder: PATH'))" in printed
     assert "simulations: 1 of budget 1 flown" in printed and "failures by the competition's distance: " in printed
     summary = json.loads((out / "summary.json").read_text())
     assert summary["problem"] is None and summary["simulations"] == 1 and len(summary["tests"]) == 1
