@@ -101,3 +101,29 @@ def test_a_cached_environment_is_reused(tmp_path):
     assert env.kind == "own" and env.python == folder / "bin" / "python" and env.build_s is None
     assert env.substitutions == ("x==1: took x",) and not (tmp_path / "log.txt").exists()
     assert "reused" in env.describe()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.environ.get("SURREALIST_TEST_OWN_ENV"),
+                    reason="set SURREALIST_TEST_OWN_ENV=1: builds CAMBA's own environment from the package index "
+                           "(5-6 min on 2 cores the first time; kept in $SURREALIST_TOOL_ENVS or ~/.cache)")
+def test_camba_in_its_own_environment(tmp_path, monkeypatch):
+    """CAMBA with --tool-env own: its pins where this Python can install them (numpy 1.23.2, matplotlib 3.6.1), the
+    rest substituted and recorded; Aerialist 0.2.1 from its folder; the tool runs there unchanged."""
+    import subprocess
+
+    from surrealist_gym.competition.compete import prepare, run
+
+    monkeypatch.setenv("SURREALIST_AERIALIST", str(THIRD_PARTY / "aerialist-0.2.1"))
+    monkeypatch.delenv("AGENT", raising=False)
+    result = run(prepare(CAMBA, "mission1", 10, tmp_path / "out", tool_env="own"))
+    assert result.problem is None and result.tool_env.kind == "own", result.problem
+    versions = subprocess.run([str(result.tool_env.python), "-c", "import numpy, matplotlib; "
+                               "print(numpy.__version__, matplotlib.__version__)"], capture_output=True, text=True)
+    assert versions.stdout.split() == ["1.23.2", "3.6.1"]  # CAMBA's pins, not ours
+    notes = result.tool_env.substitutions
+    assert any(n.startswith("aerialist==0.2.2: not installed") for n in notes)
+    assert any(n.startswith("Shapely") and "does not import on this Python" in n for n in notes)
+    assert result.spent == 10 and all(t.ulg is not None and t.png is not None for t in result.tests)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["tool_env"]["substitutions"] == list(notes)
