@@ -160,8 +160,8 @@ def choose_env(tool, mode: str = "auto", cache=None) -> EnvChoice:
                               f"not installed here)")
     reason = "--tool-env own" if mode == "own" else \
         "it imports " + ", ".join(f"{m} ({f})" for m, f in missing.items()) + ", not installed here"
-    return EnvChoice("own", reason, requirements.resolve(), Path(cache).expanduser() if cache else default_cache(),
-                     tuple(tool_imports(tool)))
+    cache = (Path(cache).expanduser() if cache else default_cache()).absolute()  # the tool runs in another folder
+    return EnvChoice("own", reason, requirements.resolve(), cache, tuple(tool_imports(tool)))
 
 
 # --- an environment of its own ---------------------------------------------------------------------------------------

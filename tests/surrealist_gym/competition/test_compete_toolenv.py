@@ -37,7 +37,7 @@ def _tool(tmp_path, body: str, requirements: str | None = "surely-not-a-package-
     return folder
 
 
-def test_the_tools_imports_are_read_not_run(tmp_path):
+def test_the_tools_imports_are_read_not_run(tmp_path, monkeypatch):
     tool = _tool(tmp_path, "import os, json\nimport helpers\nfrom helpers import x\nimport numpy.linalg\n"
                            "from aerialist.px4.drone_test import DroneTest\nimport bagpy\n"
                            "def f():\n    import surely_not_installed_xyz\n")
@@ -46,6 +46,8 @@ def test_the_tools_imports_are_read_not_run(tmp_path):
     assert choice.kind == "own" and choice.cache == tmp_path / "cache"
     assert choice.reason == "it imports surely_not_installed_xyz (cli.py), not installed here"
     assert choose_env(tool, "own", tmp_path / "cache").reason == "--tool-env own"
+    monkeypatch.chdir(tmp_path)
+    assert choose_env(tool, "own", "envs").cache == tmp_path / "envs"  # absolute: the tool runs in another folder
     with pytest.raises(DependencyNotInstalled, match=r"its cli.py imports surely_not_installed_xyz, which is not "
                                                      r"installed here \(--tool-env ours\)"):
         choose_env(tool, "ours")
