@@ -38,7 +38,7 @@ from ...errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, 
 from ..scoring import writing_order
 from .locate import AerialistSource, find_aerialist, tool_apis
 from .server import Flight, SimulationServer
-from .toolenv import EnvChoice, ToolEnv, choose_env, own_env
+from .toolenv import EnvChoice, ToolEnv, choose_env, own_env, top_level_imports
 
 SHIM = Path(__file__).resolve().parent / "shim"
 DEFAULT_UAV = "px4-v1.12-sitl-iris"
@@ -227,16 +227,12 @@ def _check_imports(source: AerialistSource) -> None:
             tree = ast.parse(path.read_text(encoding="utf-8", errors="replace"))
         except SyntaxError as err:
             raise SurrealistError(f"{source.describe()}: {path.name} is not valid Python ({err.msg})") from None
-        for node in tree.body:
-            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
-                [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else []
-            for name in names:
-                top = name.split(".")[0]
-                if top not in own and top not in sys.stdlib_module_names and importlib.util.find_spec(top) is None:
-                    raise DependencyNotInstalled(
-                        f"{source.describe()}: its {path.name} imports {top}, which is not installed; install what "
-                        f"Aerialist's modules import with: {COMPAT_EXTRA}")
-                own.add(top)
+        for top in top_level_imports(tree.body):
+            if top not in own and top not in sys.stdlib_module_names and importlib.util.find_spec(top) is None:
+                raise DependencyNotInstalled(
+                    f"{source.describe()}: its {path.name} imports {top}, which is not installed; install what "
+                    f"Aerialist's modules import with: {COMPAT_EXTRA}")
+            own.add(top)
 
 
 def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs: int) -> dict[str, str]:

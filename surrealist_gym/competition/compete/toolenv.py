@@ -94,6 +94,14 @@ class ToolEnv:
 
 
 # --- the rule --------------------------------------------------------------------------------------------------------
+def top_level_imports(nodes):
+    """The top-level module of each absolute ``import`` among ``nodes`` (Python AST nodes), in order."""
+    for node in nodes:
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+            [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else []
+        yield from (name.split(".")[0] for name in names)
+
+
 def tool_imports(tool) -> dict[str, str]:
     """Top-level modules the tool's Python files import (not the standard library, the tool's own modules, Aerialist
     or the shim's stand-ins) -> the first file importing each, relative to the tool's folder."""
@@ -107,13 +115,9 @@ def tool_imports(tool) -> dict[str, str]:
             tree = ast.parse(path.read_text(encoding="utf-8", errors="replace"))
         except SyntaxError:
             continue
-        for node in ast.walk(tree):
-            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
-                [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else []
-            for name in names:
-                top = name.split(".")[0]
-                if top in own or top in NOT_INSTALLED or top in sys.stdlib_module_names or top == "__future__":
-                    continue
+        for top in top_level_imports(ast.walk(tree)):
+            if top not in own and top not in NOT_INSTALLED and top not in sys.stdlib_module_names \
+                    and top != "__future__":
                 found.setdefault(top, path.relative_to(tool).as_posix())
     return found
 
@@ -302,4 +306,5 @@ def _call(command, log, what: str) -> None:
 
 
 __all__ = ["AERIALIST_MODULES", "AERIALIST_NEEDS", "CACHE_ENV", "TOOL_ENV_MODES", "EnvChoice", "ToolEnv", "choose_env",
-           "default_cache", "env_key", "missing_here", "own_env", "requirement_lines", "tool_imports"]
+           "default_cache", "env_key", "missing_here", "own_env", "requirement_lines", "tool_imports",
+           "top_level_imports"]
