@@ -53,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from ..competition.compete import prepare, run as run_tool
+    from ..competition.compete.toolenv import CACHE_ENV
     from ..errors import SurrealistError
     from .options import check_at_least, check_writable, default_out
 
@@ -62,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
                    seed=args.random_seed, uav=args.uav, tool_env=args.tool_env,
                    tool_env_cache=args.tool_env_cache)
     check_writable(plan.out, "--out")
+    if plan.env.kind == "own":  # where its environment is kept (built there unless it is)
+        check_writable(plan.env.cache, "--tool-env-cache" if args.tool_env_cache else f"${CACHE_ENV} or the cache")
     print(f"tool: {plan.tool} ({', '.join(plan.apis) or 'no Aerialist test API found'}), case study "
           f"{plan.case_study_file}, budget {plan.budget}; {plan.aerialist.describe()}; UAV {plan.uav}", flush=True)
     if plan.env.kind == "own":

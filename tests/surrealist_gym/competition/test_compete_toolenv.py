@@ -79,7 +79,9 @@ def test_requirements_and_cache_key(tmp_path, monkeypatch):
     assert toolenv.default_cache() == tmp_path / "xdg" / "surrealist-gym" / "tool-envs"
 
 
-def test_ours_with_a_missing_import_is_a_one_line_error(tmp_path, capsys, monkeypatch):
+def test_one_line_errors_of_the_tool_environment(tmp_path, capsys, monkeypatch):
+    """--tool-env ours for a tool importing what is not here, and a cache that cannot be a folder: one line, exit
+    code 2, nothing written."""
     monkeypatch.setenv("SURREALIST_AERIALIST", str(THIRD_PARTY / "aerialist-master"))
     tool = _tool(tmp_path, "import surely_not_installed_xyz\n")
     out = tmp_path / "out"
@@ -88,6 +90,12 @@ def test_ours_with_a_missing_import_is_a_one_line_error(tmp_path, capsys, monkey
     assert "Traceback" not in err
     line = err.strip().splitlines()[-1]
     assert line.startswith(f"error: tool {tool}: its cli.py imports surely_not_installed_xyz, which is not installed")
+    assert not out.exists()
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    assert main(["compete", str(tool), "mission1", "1", "--out", str(out), "--tool-env-cache", str(blocker)]) == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == f"error: --tool-env-cache {blocker}: exists and is " \
+                                                               f"not a folder"
     assert not out.exists()
 
 
