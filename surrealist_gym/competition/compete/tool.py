@@ -268,6 +268,7 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight) as server, \
             open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
         env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test)
+        started = time.time()
         process = subprocess.Popen(command, cwd=work, env=env, stdout=out_file, stderr=err_file,
                                    stdin=subprocess.DEVNULL)
         try:
@@ -276,7 +277,7 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
             if process.poll() is None:  # Ctrl-C or any other exit: the tool does not outlive us
                 _stop(process)
         flights, spent, refused, notes = server.flights, server.spent, server.refused, server.notes
-    output, found_by = find_output_folder(stdout, work)
+    output, found_by = find_output_folder(stdout, work, started)
     tests = _written_tests(output, flights) if output is not None else ()
     problem = _problem(plan, returncode, stopped, output, found_by, stdout, stderr)
     result = CompeteResult(plan, returncode, output, tests, flights, spent, refused, notes,
@@ -305,11 +306,12 @@ def _stop(process: subprocess.Popen) -> None:
         process.wait()
 
 
-def find_output_folder(stdout: Path, work: Path) -> tuple[Path | None, str]:
+def find_output_folder(stdout: Path, work: Path, since: float = 0.0) -> tuple[Path | None, str]:
     """The tool's output folder and how it was found: the folder it named last in an ``output folder: PATH`` line
-    (relative to its working folder), when it exists; else, as the organisers collect a tool's tests, the folder under
-    its ``generated_tests/`` whose test YAMLs were written last (the folder itself included). (None, why) when
-    neither is there."""
+    (relative to its working folder), when it exists; else, as the organisers collect a tool's tests, the folder whose
+    test YAMLs were written last (after ``since``, a time stamp: not a folder the tool shipped) under its
+    ``generated_tests*/`` folders (``generated_tests/``; AmbieGen's ``generated_tests-01/``) or ``$TESTS_FOLDER``,
+    which the tools read. (None, why) when neither is there."""
     printed = None
     for line in stdout.read_text(encoding="utf-8", errors="replace").splitlines():
         if line.strip().startswith("output folder:"):
@@ -319,20 +321,18 @@ def find_output_folder(stdout: Path, work: Path) -> tuple[Path | None, str]:
     if named is not None and named.is_dir():
         return named, "printed by the tool ('output folder: PATH')"
     said = "it printed no 'output folder: PATH'" if named is None else f"the folder it printed, {named}, does not exist"
-    newest = _newest_test_folder(work / "generated_tests")
-    if newest is None:
-        return None, f"{said}, and wrote no test YAML under {work / 'generated_tests'}"
-    return newest, f"the newest folder of test YAMLs under generated_tests/ ({said})"
-
-
-def _newest_test_folder(root: Path) -> Path | None:
-    if not root.is_dir():
-        return None
-    latest = {}
-    for yaml_file in root.rglob("*.yaml"):
-        folder = yaml_file.parent
-        latest[folder] = max(latest.get(folder, 0.0), yaml_file.stat().st_mtime)
-    return max(latest, key=lambda folder: (latest[folder], str(folder))) if latest else None
+    roots = sorted(work.glob("generated_tests*")) + ([work / os.environ["TESTS_FOLDER"]]
+                                                     if os.environ.get("TESTS_FOLDER") else [])
+    latest: dict[Path, tuple[float, str]] = {}  # folder -> (when its last test YAML was written, its root's name)
+    for root in (r for r in roots if r.is_dir()):
+        for yaml_file in root.rglob("*.yaml"):
+            written = yaml_file.stat().st_mtime
+            if written >= since and written > latest.get(yaml_file.parent, (0.0, ""))[0]:
+                latest[yaml_file.parent] = (written, root.name)
+    if not latest:
+        return None, f"{said}, and wrote no test YAML under {work / 'generated_tests'}*/"
+    newest = max(latest, key=lambda folder: (latest[folder][0], str(folder)))
+    return newest, f"the newest folder of test YAMLs under {latest[newest][1]}/ ({said})"
 
 
 def _problem(plan, returncode, stopped, output, found_by, stdout, stderr) -> str | None:

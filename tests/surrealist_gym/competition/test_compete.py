@@ -222,10 +222,11 @@ print("output folder: ./")
 
 def test_the_output_folder_found_under_generated_tests(tmp_path, capsys):
     """A tool that prints no 'output folder: PATH' (or one that does not exist) is scored from the folder of test
-    YAMLs it wrote last under generated_tests/, as the organisers collect a tool's tests."""
+    YAMLs it wrote last under generated_tests*/ (AmbieGen writes generated_tests-01/), as the organisers collect a
+    tool's tests."""
     tool = _tool(tmp_path, '''
 import os, shutil
-for folder in ("generated_tests/old", "generated_tests/run/new"):
+for folder in ("generated_tests/old", "generated_tests-01/run/new"):
     os.makedirs(folder)
     result = DockerAgent(test).run()[0]
     test.to_yaml(folder + "/test_0.yaml")
@@ -234,9 +235,9 @@ print("done: tests in generated_tests")
 ''')
     assert main(["compete", str(tool), "mission1", "2", "--out", str(tmp_path / "out")]) == 0
     printed = capsys.readouterr().out
-    found = tmp_path / "out" / "tool" / "generated_tests" / "run" / "new"
+    found = tmp_path / "out" / "tool" / "generated_tests-01" / "run" / "new"
     assert f"output folder: {found} (the tool's: 1 tests, 0 with yaml, ulg and png; the newest folder of test " \
-           f"YAMLs under generated_tests/ (it printed no 'output folder: PATH'))" in printed
+           f"YAMLs under generated_tests-01/ (it printed no 'output folder: PATH'))" in printed
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["problem"] is None and summary["output_folder"] == str(found)
     assert summary["tests"][0]["flight"] == 2 and summary["tests"][0]["competition_distance"] is not None
@@ -306,9 +307,12 @@ def test_a_tool_that_crashes_or_names_no_output_folder(tmp_path, capsys):
     assert (tmp_path / "crash" / "tool-stderr.txt").is_file()
 
     (crash / "cli.py").write_text(TOOL_HEAD + 'print("done")\n', encoding="utf-8")
+    (crash / "generated_tests" / "shipped").mkdir(parents=True)  # YAMLs older than the run: not the tool's output
+    (crash / "generated_tests" / "shipped" / "test_0.yaml").write_bytes((crash / "case_studies" / "mission1.yaml")
+                                                                       .read_bytes())
     assert main(["compete", str(crash), "mission1", "3", "--out", str(tmp_path / "silent")]) == 2
     assert "no output folder: it printed no 'output folder: PATH', and wrote no test YAML under " \
-           f"{tmp_path / 'silent' / 'tool' / 'generated_tests'} (see " in _one_line(capsys)
+           f"{tmp_path / 'silent' / 'tool' / 'generated_tests'}*/ (see " in _one_line(capsys)
 
 
 def test_aerialist_lookup(tmp_path, monkeypatch):
