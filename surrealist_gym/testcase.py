@@ -180,9 +180,10 @@ class Wind:
     >= 0; speeds at most :data:`MAX_WIND_SPEED_MS`; speed variances at most :data:`MAX_WIND_SPEED_VARIANCE`,
     direction variances at most :data:`MAX_WIND_DIRECTION_VARIANCE`; directions not all zero (the plugin normalises
     them), except that of a wind (or gust) whose speeds are all 0, which blows nothing (Aerialist master's own ``Wind``
-    writes a gust it lacks as ``gust_direction: [0, 0, 0]``; it is read as the default direction); a maximum speed, when given (non-zero), at least its mean. A maximum of 0 means "not given" (the default,
-    as when an Aerialist file leaves it out): the simulator then caps the speed at its mean. Gazebo itself would
-    take an explicit 0 literally and blow no wind at all.
+    writes a gust it lacks as ``gust_direction: [0, 0, 0]``; it is read as the default direction); a maximum speed,
+    when given (non-zero), at least its mean. A maximum of 0 means "not given" (the default, as when an Aerialist
+    file leaves it out): the simulator then caps the speed at its mean. Gazebo itself would take an explicit 0
+    literally and blow no wind at all.
     """
 
     velocity_mean: float = 0.0

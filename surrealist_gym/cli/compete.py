@@ -3,8 +3,10 @@
 The tool's own ``cli.py generate CASE_STUDY BUDGET`` runs in a copy of its folder inside ``--out``; every Aerialist
 agent it reaches (Local, Docker, K8s; DroneTest or AerialistTest) flies surrealist-gym's simulator instead of PX4
 and returns Aerialist's own results from ULogs. Prints where the tool's output folder is and a summary: tests
-written, simulations flown, failures by the competition's distance. A tool that crashes, exceeds its budget or never
-prints ``output folder:`` gets one line and exit code 2, with what it wrote kept.
+written, simulations flown and refused past the budget, failures by the competition's distance. A tool that
+crashes, is stopped for asking on and on past its budget, or leaves no output folder (neither printed as
+``output folder: PATH`` nor a folder of test YAMLs under ``generated_tests/``) gets one line and exit code 2, with
+what it wrote kept. The tool runs with this Python, or in an environment of its own (``--tool-env``).
 
 Example::
 
@@ -37,6 +39,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_random_seed_argument(parser, "base seed of the runs' noise (default 0)")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default="px4-v1.12-sitl-iris",
                         help="UAV profile flown (default px4-v1.12-sitl-iris, the competition's PX4 SITL)")
+    parser.add_argument("--tool-env", choices=("auto", "own", "ours"), default="auto",
+                        help="which Python runs the tool: ours, or an environment of its own built from its "
+                             "requirements.txt and cached (default auto: ours when every module the tool imports is "
+                             "installed here, else its own)")
+    parser.add_argument("--tool-env-cache", metavar="DIR", default=None,
+                        help="where the tools' own environments are kept (default $SURREALIST_TOOL_ENVS, else "
+                             "~/.cache/surrealist-gym/tool-envs)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,16 +53,23 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from ..competition.compete import prepare, run as run_tool
+    from ..competition.compete.toolenv import CACHE_ENV
     from ..errors import SurrealistError
     from .options import check_at_least, check_writable, default_out
 
     check_at_least(args, budget=1, runs_per_test=1, workers=1, random_seed=0)
     plan = prepare(args.tool, args.case_study, args.budget, args.out or default_out("compete"),
                    runs_per_test=args.runs_per_test, workers=args.workers, aerialist=args.aerialist,
-                   seed=args.random_seed, uav=args.uav)
+                   seed=args.random_seed, uav=args.uav, tool_env=args.tool_env,
+                   tool_env_cache=args.tool_env_cache)
     check_writable(plan.out, "--out")
+    if plan.env.kind == "own":  # where its environment is kept (built there unless it is)
+        check_writable(plan.env.cache, "--tool-env-cache" if args.tool_env_cache else f"${CACHE_ENV} or the cache")
     print(f"tool: {plan.tool} ({', '.join(plan.apis) or 'no Aerialist test API found'}), case study "
           f"{plan.case_study_file}, budget {plan.budget}; {plan.aerialist.describe()}; UAV {plan.uav}", flush=True)
+    if plan.env.kind == "own":
+        print(f"tool environment: its own ({plan.env.reason}), from the cache {plan.env.cache} or built there "
+              f"(pip's output: {plan.out / 'tool-env.txt'})", flush=True)
     bar = tqdm(total=plan.budget, unit="sim", desc="simulations", file=sys.stderr, dynamic_ncols=True)
     failing = []
 
@@ -77,14 +93,19 @@ def run(args: argparse.Namespace) -> int:
 
 def _print_summary(result) -> None:
     plan = result.plan
+    if result.tool_env is not None:
+        print(result.tool_env.describe())
     if result.output_folder is not None:
         complete = sum(1 for t in result.tests if t.ulg is not None and t.png is not None)
         print(f"output folder: {result.output_folder} (the tool's: {len(result.tests)} tests, {complete} with yaml, "
-              f"ulg and png)")
+              f"ulg and png; {result.found_by})")
     flown = [f for f in result.flights if f.statuses]
     mean = sum(f.wall_s for f in flown) / max(1, sum(len(f.statuses) for f in flown))
     print(f"simulations: {result.spent} of budget {plan.budget} flown ({mean:.2f} s each), {result.refused} refused; "
           f"{len(result.flights)} agent runs in {result.wall_s:.1f} s")
+    if result.refused and not result.problem:
+        print(f"budget: the tool asked for {result.refused} simulations past its budget of {plan.budget}; they were "
+              f"refused (it saw each as a failed execution) and its output is scored as usual")
     judged = [t for t in result.tests if t.distance is not None]
     if judged:
         counts = {p: sum(1 for t in judged if t.points == p) for p in (5, 2, 1)}
@@ -96,4 +117,6 @@ def _print_summary(result) -> None:
         print(f"  {t.name}: not judged ({t.note})")
     for note in result.notes:
         print(f"compat: {note}")
+    for note in () if result.tool_env is None else result.tool_env.substitutions:
+        print(f"compat: tool environment: {note}")
     print(f"records: {plan.out / 'summary.json'}, {plan.out / 'flights.csv'}, flights in {plan.out / 'flights'}/")

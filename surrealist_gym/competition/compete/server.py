@@ -61,6 +61,13 @@ class Flight:
     error: str = ""
 
 
+def default_runaway_after(budget: int) -> int:
+    """Refused requests after which a tool counts as never stopping: ``max(100, 10 x budget)``. Tools overspend
+    honestly by up to a first population (DeepHyperion-UAV evaluates 30 whatever its budget, AmbieGen a generation);
+    a tool in a loop reaches this many refusals in a second or so, since a refusal costs nothing."""
+    return max(100, 10 * budget)
+
+
 class SimulationServer:
     """Flies the tool's tests (see the module docstring); a context manager that starts and stops the server.
 
@@ -71,7 +78,8 @@ class SimulationServer:
         seed: base seed of the runs' noise.
         workers: processes that fly the runs of one request (1: in this process).
         on_flight: called with each :class:`Flight` as it is recorded (from the server's thread).
-        runaway_after: refused requests after which :attr:`runaway` is set (a tool that keeps asking).
+        runaway_after: refused requests after which :attr:`runaway` is set (a tool that keeps asking; default
+            :func:`default_runaway_after`).
     """
 
     def __init__(self, folder, budget: int, config, seed: int = 0, workers: int = 1,
@@ -82,7 +90,7 @@ class SimulationServer:
         self.budget, self.config, self.seed = budget, config, seed
         self._executor = InlineExecutor() if workers <= 1 else LocalPoolExecutor(workers)
         self._on_flight = on_flight
-        self._runaway_after = max(10, budget) if runaway_after is None else runaway_after
+        self._runaway_after = default_runaway_after(budget) if runaway_after is None else runaway_after
         self.runaway = threading.Event()
         self.authkey = secrets.token_bytes(32)
         self._lock = threading.RLock()  # on_flight may read the server's properties

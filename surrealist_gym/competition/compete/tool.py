@@ -38,6 +38,7 @@ from ...errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, 
 from ..scoring import writing_order
 from .locate import AerialistSource, find_aerialist, tool_apis
 from .server import Flight, SimulationServer
+from .toolenv import EnvChoice, ToolEnv, choose_env, own_env, top_level_imports
 
 SHIM = Path(__file__).resolve().parent / "shim"
 DEFAULT_UAV = "px4-v1.12-sitl-iris"
@@ -66,6 +67,7 @@ class CompetePlan:
     workers: int = 1
     seed: int = 0
     uav: str = DEFAULT_UAV
+    env: EnvChoice = EnvChoice("ours", "every module its files import is installed here")
 
 
 @dataclass(frozen=True, slots=True)
@@ -85,8 +87,9 @@ class WrittenTest:
 
 @dataclass(frozen=True, slots=True)
 class CompeteResult:
-    """What a run of the tool gave: its output folder and tests, the simulations flown, and ``problem`` (a one-line
-    reason the run does not count: a crash, a budget exceeded, no output folder; None when it counts)."""
+    """What a run of the tool gave: its output folder (``found_by``: how it was found) and tests, the simulations
+    flown and refused, the environment it ran in, and ``problem`` (a one-line reason the run does not count: a crash,
+    a tool stopped for asking on and on past its budget, no output folder; None when it counts)."""
 
     plan: CompetePlan
     returncode: int
@@ -98,6 +101,8 @@ class CompeteResult:
     notes: tuple[str, ...]
     wall_s: float
     problem: str | None = None
+    found_by: str = ""
+    tool_env: ToolEnv | None = None
 
     @property
     def failures(self) -> tuple[WrittenTest, ...]:
@@ -114,6 +119,8 @@ class CompeteResult:
                           "path": str(plan.aerialist.path or plan.aerialist.package)},
             "returncode": self.returncode, "problem": self.problem, "wall_s": round(self.wall_s, 2),
             "output_folder": None if self.output_folder is None else str(self.output_folder),
+            "output_folder_found_by": self.found_by or None,
+            "tool_env": None if self.tool_env is None else self.tool_env.to_dict(),
             "simulations": self.spent, "refused": self.refused, "requests": len(self.flights),
             "compat": list(self.notes),
             "tests": [{"name": t.name, "yaml": str(t.yaml), "ulg": t.ulg and str(t.ulg), "png": t.png and str(t.png),
@@ -125,7 +132,7 @@ class CompeteResult:
 
 # --- checks ----------------------------------------------------------------------------------------------------------
 def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, workers: int = 1, aerialist=None,
-            seed: int = 0, uav: str = DEFAULT_UAV) -> CompetePlan:
+            seed: int = 0, uav: str = DEFAULT_UAV, tool_env: str = "auto", tool_env_cache=None) -> CompetePlan:
     """Check every input and find the Aerialist to use; nothing is written. One-line SurrealistError otherwise.
 
     Args:
@@ -139,6 +146,8 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         aerialist: an Aerialist folder (default: ``$SURREALIST_AERIALIST``, then the installed one).
         seed: base seed of the runs' noise.
         uav: the UAV profile flown (default the competition's PX4 v1.12 SITL Iris).
+        tool_env: which Python runs the tool: ``auto``, ``ours`` or ``own`` (``toolenv.choose_env``).
+        tool_env_cache: where the tools' own environments are kept (default ``toolenv.default_cache()``).
     """
     from ...sim.profiles import resolve_uav
 
@@ -159,8 +168,11 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
     if len(apis) > 1:
         raise SurrealistError(f"tool {tool}: imports both {' and '.join(apis)}; no Aerialist holds both")
     source = find_aerialist(apis, aerialist)
-    _check_imports(source)
-    return CompetePlan(tool.resolve(), argument, file, budget, out, source, apis, runs_per_test, workers, seed, uav)
+    env = choose_env(tool, tool_env, tool_env_cache)
+    if env.kind == "ours":  # an own environment gets Aerialist's imports installed
+        _check_imports(source)
+    return CompetePlan(tool.resolve(), argument, file, budget, out, source, apis, runs_per_test, workers, seed, uav,
+                       env)
 
 
 def _case_study(tool: Path, name) -> tuple[str, Path]:
@@ -215,19 +227,16 @@ def _check_imports(source: AerialistSource) -> None:
             tree = ast.parse(path.read_text(encoding="utf-8", errors="replace"))
         except SyntaxError as err:
             raise SurrealistError(f"{source.describe()}: {path.name} is not valid Python ({err.msg})") from None
-        for node in tree.body:
-            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
-                [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else []
-            for name in names:
-                top = name.split(".")[0]
-                if top not in own and top not in sys.stdlib_module_names and importlib.util.find_spec(top) is None:
-                    raise DependencyNotInstalled(
-                        f"{source.describe()}: its {path.name} imports {top}, which is not installed; install what "
-                        f"Aerialist's modules import with: {COMPAT_EXTRA}")
-                own.add(top)
+        for top in top_level_imports(tree.body):
+            if top not in own and top not in sys.stdlib_module_names and importlib.util.find_spec(top) is None:
+                raise DependencyNotInstalled(
+                    f"{source.describe()}: its {path.name} imports {top}, which is not installed; install what "
+                    f"Aerialist's modules import with: {COMPAT_EXTRA}")
+            own.add(top)
 
 
-def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs: int, seed: int = 0) -> dict[str, str]:
+def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs: int,
+                     seed: int = 0) -> dict[str, str]:
     """The environment of the tool's process: the shim, then Aerialist's folder first on its PYTHONPATH, the
     server's address and key, and the seed of the tool's global random generators (and of its hashes)."""
     env = dict(os.environ)
@@ -249,16 +258,19 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
 
     start = time.perf_counter()
     plan.out.mkdir(parents=True)
+    tool_env = own_env(plan.env, plan.out / "tool-env.txt") if plan.env.kind == "own" else \
+        ToolEnv("ours", Path(sys.executable), plan.env.reason)
     work = plan.out / "tool"
     shutil.copytree(plan.tool, work, ignore=_COPY_IGNORE)
     for folder in PREPARED_FOLDERS:  # as the competition's Dockerfile prepares the tool's working folder
         (work / folder).mkdir(exist_ok=True)
     stdout, stderr = plan.out / "tool-stdout.txt", plan.out / "tool-stderr.txt"
     config = resolve_uav(plan.uav).sim_config()
-    command = [sys.executable, "cli.py", "generate", plan.case_study, str(plan.budget)]
+    command = [str(tool_env.python), "cli.py", "generate", plan.case_study, str(plan.budget)]
     with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight) as server, \
             open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
         env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
+        started = time.time()
         process = subprocess.Popen(command, cwd=work, env=env, stdout=out_file, stderr=err_file,
                                    stdin=subprocess.DEVNULL)
         try:
@@ -267,11 +279,11 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
             if process.poll() is None:  # Ctrl-C or any other exit: the tool does not outlive us
                 _stop(process)
         flights, spent, refused, notes = server.flights, server.spent, server.refused, server.notes
-    output = _output_folder(stdout, work)
-    tests = _written_tests(output, flights) if output is not None and output.is_dir() else ()
-    problem = _problem(plan, returncode, stopped, refused, output, stdout, stderr)
+    output, found_by = find_output_folder(stdout, work, started)
+    tests = _written_tests(output, flights) if output is not None else ()
+    problem = _problem(plan, returncode, stopped, output, found_by, stdout, stderr)
     result = CompeteResult(plan, returncode, output, tests, flights, spent, refused, notes,
-                           time.perf_counter() - start, problem)
+                           time.perf_counter() - start, problem, found_by, tool_env)
     _write_records(result)
     return result
 
@@ -296,19 +308,38 @@ def _stop(process: subprocess.Popen) -> None:
         process.wait()
 
 
-def _output_folder(stdout: Path, work: Path) -> Path | None:
-    """The folder the tool named last in an ``output folder: PATH`` line (relative to its working folder)."""
-    found = None
+def find_output_folder(stdout: Path, work: Path, since: float = 0.0) -> tuple[Path | None, str]:
+    """The tool's output folder and how it was found: the folder it named last in an ``output folder: PATH`` line
+    (relative to its working folder), when it exists; else, as the organisers collect a tool's tests, the folder whose
+    test YAMLs were written last (after ``since``, a time stamp: not a folder the tool shipped) under its
+    ``generated_tests*/`` folders (``generated_tests/``; AmbieGen's ``generated_tests-01/``) or ``$TESTS_FOLDER``,
+    which the tools read. (None, why) when neither is there."""
+    printed = None
     for line in stdout.read_text(encoding="utf-8", errors="replace").splitlines():
         if line.strip().startswith("output folder:"):
-            found = line.strip()[len("output folder:"):].strip()
-    if not found:
-        return None
-    path = Path(found)
-    return Path(os.path.normpath(path if path.is_absolute() else work / path))
+            printed = line.strip()[len("output folder:"):].strip() or None
+    named = None if printed is None else Path(os.path.normpath(Path(printed) if Path(printed).is_absolute()
+                                                               else work / printed))
+    if named is not None and named.is_dir():
+        return named, "printed by the tool ('output folder: PATH')"
+    said = "it printed no 'output folder: PATH'" if named is None else f"the folder it printed, {named}, does not exist"
+    roots = sorted(work.glob("generated_tests*")) + ([work / os.environ["TESTS_FOLDER"]]
+                                                     if os.environ.get("TESTS_FOLDER") else [])
+    latest: dict[Path, tuple[float, str]] = {}  # folder -> (when its last test YAML was written, its root's name)
+    for root in (r for r in roots if r.is_dir()):
+        for yaml_file in root.rglob("*.yaml"):
+            written = yaml_file.stat().st_mtime
+            if written >= since and written > latest.get(yaml_file.parent, (0.0, ""))[0]:
+                latest[yaml_file.parent] = (written, root.name)
+    if not latest:
+        return None, f"{said}, and wrote no test YAML under {work / 'generated_tests'}*/"
+    newest = max(latest, key=lambda folder: (latest[folder][0], str(folder)))
+    return newest, f"the newest folder of test YAMLs under {latest[newest][1]}/ ({said})"
 
 
-def _problem(plan, returncode, stopped, refused, output, stdout, stderr) -> str | None:
+def _problem(plan, returncode, stopped, output, found_by, stdout, stderr) -> str | None:
+    """Why the run does not count (None when it does). Simulations refused over the budget are not a problem: the
+    tool saw them fail, as PX4 runs past a budget would not have been given, and its output is scored as usual."""
     where = f"what it wrote is kept in {plan.out}"
     if stopped:
         return (f"the tool kept asking for simulations past its budget of {plan.budget} and was stopped; {where}")
@@ -316,13 +347,8 @@ def _problem(plan, returncode, stopped, refused, output, stdout, stderr) -> str 
         lines = [line for line in stderr.read_text(encoding="utf-8", errors="replace").splitlines() if line.strip()]
         last = f": {one_line(lines[-1], 120)}" if lines else ""
         return f"the tool crashed (exit code {returncode}){last} (see {stderr}); {where}"
-    if refused:
-        return (f"the tool asked for more simulations than its budget of {plan.budget} ({refused} refused); "
-                f"{where}")
     if output is None:
-        return f"the tool never printed 'output folder: PATH' (see {stdout}); {where}"
-    if not output.is_dir():
-        return f"the tool's output folder {output} does not exist; {where}"
+        return f"no output folder: {found_by} (see {stdout}); {where}"
     return None
 
 

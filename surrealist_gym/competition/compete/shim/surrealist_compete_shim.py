@@ -136,13 +136,15 @@ def _agent_patch(name: str):
     return patch
 
 
-def _local_stand_in(module, err: ImportError) -> None:
-    """Aerialist's local_agent imports PX4's and ROS's Python modules (mavsdk, ...): without them, its module holds
-    our LocalAgent on Aerialist's TestAgent."""
+def _local_stand_in(module, err: Exception) -> None:
+    """Aerialist's local_agent imports PX4's and ROS's Python modules (mavsdk, ...) and, through its simulator module,
+    reads PX4's settings (``PX4_HOME``, ...) as it imports: without them, its module holds our LocalAgent on
+    Aerialist's TestAgent."""
     from aerialist.px4.test_agent import TestAgent
 
     module.LocalAgent = _agent_class(TestAgent, "LocalAgent", module.__name__)
-    _notes.append(f"LocalAgent: Aerialist's local_agent module needs what is not installed ({err}); a stand-in "
+    why = str(err) if isinstance(err, ImportError) else f"{type(err).__name__}: {err}"
+    _notes.append(f"LocalAgent: Aerialist's local_agent module needs what is not installed ({why}); a stand-in "
                   f"module holds the LocalAgent that flies our simulator")
 
 
@@ -257,7 +259,7 @@ class _PatchingLoader(importlib.abc.Loader):
     def exec_module(self, module) -> None:
         try:
             self._inner.exec_module(module)
-        except ImportError as err:
+        except Exception as err:  # the local agent: mavsdk or ROS missing, PX4's settings (PX4_HOME, ...) not set
             if self._name != LOCAL_AGENT_MODULE:
                 raise
             _local_stand_in(module, err)
