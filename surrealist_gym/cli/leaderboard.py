@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from ..competition import leaderboard as lb
     from ..competition.leaderboard_report import write_report
     from ..errors import SurrealistError
+    from ._search import _lock, _unlock
     from .options import check_at_least, check_writable, default_out
 
     check_at_least(args, workers=1)
@@ -80,6 +81,10 @@ def run(args: argparse.Namespace) -> int:
           f"budget {board.budget}, {board.runs} runs of up to {board.edition.tests} tests; UAV {board.uav}; "
           f"{'Dask ' + args.dask_scheduler if executor else f'{workers} workers'}; {board.out}", flush=True)
     lb.start(board)
+    try:
+        _lock(board.out)
+    except SurrealistError:
+        raise SurrealistError(f"--out {board.out}: another leaderboard is writing to this folder") from None
     started = time.perf_counter()
     try:
         summaries = lb.run_cells(board, workers, executor and executor.client,
@@ -101,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
     except SurrealistError as err:
         raise SurrealistError(f"{err}; what is done is kept in {board.out}: the same command resumes") from None
     finally:
+        _unlock(board.out)
         if executor is not None:
             executor.close()
     paths = write_report(board, rows)

@@ -263,3 +263,14 @@ def test_a_compete_folder_is_a_cell_run_before(local_board, tmp_path, aerialist)
               if r["tool"] == "boxes"]
     assert mine == [{**r, "rank": "1"} for r in theirs]
     assert main(["leaderboard", str(cell), "--edition", "2026", "--budget", "4", "--out", str(tmp_path / "b")]) == 2
+
+
+def test_one_writer_per_board(local_board, boxes, windy, capsys, aerialist):
+    from surrealist_gym.cli._search import _lock, _unlock
+
+    _lock(local_board)  # another leaderboard at work in the folder
+    try:
+        assert _board(local_board, boxes, windy, "--workers", "1") == 2
+    finally:
+        _unlock(local_board)
+    assert "another leaderboard is writing to this folder" in _one_line(capsys)
