@@ -16,8 +16,8 @@ A profile is saved as YAML (every key optional except ``name``)::
     obstacle_collision_scale: 0.8      # obstacles collide at this share of their footprint (Gazebo boxes: 0.8)
 
 Presets: :data:`PRESETS` (``px4-v1.12-sitl-iris``, ``px4-vision-case0``, ``px4-vision-sitl``). :func:`resolve_uav` is
-the one place that decides which UAV flies (the user's choice, else the log's vehicle, else the test's default); :func:`load_profile`
-reads a preset's name or a YAML path; :meth:`UavProfile.sim_config` turns a profile into a
+the one place that decides which UAV flies (the user's choice, else the log's vehicle, else the test's default);
+:func:`load_profile` reads a preset's name or a YAML path; :meth:`UavProfile.sim_config` turns a profile into a
 :class:`~surrealist_gym.sim.config.SimConfig`.
 """
 from __future__ import annotations
