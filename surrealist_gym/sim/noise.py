@@ -47,8 +47,9 @@ class NoiseSource:
     """Noise series of one run at the outer-loop period ``dt``, drawn in blocks as the flight needs them.
 
     ``at(k)`` gives the estimator position error (NED, m), velocity error (NED, m/s), heading error (rad) and the
-    wind (NED, m/s) of outer step ``k``; ``plans(k)`` whether a planner cycle starts at step ``k`` (every
-    ``plan_div`` steps, or after ``1 / planner rate + U(0, planner_jitter_s)`` with jitter, on the outer-step grid).
+    wind (NED, m/s) of outer step ``k``; ``plans(k)`` whether the planner plans at step ``k`` (every ``plan_div``
+    steps; with jitter, its cycles keep that period from a random phase and each plans U(0, planner_jitter_s) after
+    its cycle starts, on the outer-step grid).
     ``start_offset`` [s] is added to the mission start (N(0, start_jitter_s), never before arming). ``rng`` is the
     depth sensor's generator (None when sensor noise is off). Blocks are drawn in order from the run's own
     generators, so a run is reproduced exactly whatever its length.
@@ -65,7 +66,10 @@ class NoiseSource:
         self._turbulence = _OU(self._wnd, 3, c.turbulence_std, c.turbulence_tau_s, dt)
         self.rng = sens if c.sensor else None
         self._timing, self._plan_div = timing, int(plan_div)
-        self._next_plan = 0.0  # time of the next planner cycle, in outer steps
+        # the planner's cycles start every plan_div steps from a phase of their own; each plans after U(0, jitter)
+        jitter = c.planner_jitter_s / dt
+        self._cycle = float(timing.uniform(0.0, plan_div)) if jitter > 0 else 0.0  # start of the next cycle [steps]
+        self._next_plan = self._cycle + (timing.uniform(0.0, jitter) if jitter > 0 else 0.0)  # its planning instant
         self.start_offset = (max(-start_time, float(timing.normal(0.0, c.start_jitter_s)))
                              if c.start_jitter_s > 0 else 0.0)
         # plain lists: indexing them in the loop is several times cheaper than numpy rows
@@ -95,14 +99,16 @@ class NoiseSource:
         return np.concatenate((pos, vel, yaw[:, None], wind, plan[:, None]), axis=1)
 
     def _schedule(self, n: int) -> np.ndarray:
-        """The planner-cycle flags of the next ``n`` outer steps: a cycle lasts ``plan_div`` steps plus
-        U(0, planner_jitter_s), and starts at the first outer step at or after its time."""
+        """The planning flags of the next ``n`` outer steps: cycles every ``plan_div`` steps, each planning
+        U(0, planner_jitter_s) after its start, at the first outer step at or after that instant."""
         out = np.zeros(n)
         jitter = self.config.planner_jitter_s / self.dt  # in outer steps
         first = self._drawn
         while (step := int(math.ceil(self._next_plan - 1e-9))) < first + n:
             out[step - first] = 1.0
-            self._next_plan += self._plan_div + (self._timing.uniform(0.0, jitter) if jitter > 0 else 0.0)
+            self._cycle += self._plan_div
+            self._next_plan = max(self._next_plan + 1.0, self._cycle + (self._timing.uniform(0.0, jitter)
+                                                                         if jitter > 0 else 0.0))
         return out
 
     def _draw(self):

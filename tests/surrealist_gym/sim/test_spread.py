@@ -25,12 +25,16 @@ def test_without_jitter_the_planner_cycles_every_plan_div_steps():
     assert np.array_equal(_flags(NoiseConfig(), 1000), np.arange(0, 1000, 5))
 
 
-def test_planner_jitter_lengthens_cycles_within_its_bound():
-    """A cycle lasts 0.1 s + U(0, 0.05 s): 5 to 8 outer steps of 20 ms, 6.25 on average."""
-    gaps = np.diff(_flags(NoiseConfig(planner_jitter_s=0.05), 20_000))
-    assert gaps.min() >= 5 and gaps.max() <= 8
-    assert 6.1 < gaps.mean() < 6.4
+def test_planner_jitter_keeps_the_period_and_moves_each_planning_instant():
+    """Cycles every 0.1 s from a random phase, each planning 0-0.05 s after its start: gaps of
+    20 ms (2 to 8 outer steps), 5 on average, and the phase differs between runs."""
+    config = NoiseConfig(planner_jitter_s=0.05)
+    flags = _flags(config, 20_000)
+    gaps = np.diff(flags)
+    assert gaps.min() >= 2 and gaps.max() <= 8
+    assert abs(gaps.mean() - 5.0) < 0.01
     assert len(set(gaps.tolist())) >= 3
+    assert len({int(_flags(config, 10, seed=s)[0]) for s in range(20)}) >= 3
 
 
 def test_timing_is_reproduced_from_the_seed_and_differs_between_seeds():
@@ -61,7 +65,7 @@ def _spread(results) -> float:
 @pytest.mark.filterwarnings("ignore:.*is not supported")
 def test_repeated_sitl_runs_of_the_case0_seed_spread_reproducibly():
     """Six runs of the paper's RQ1 seed under px4-vision-sitl: the same runs again from the same seed; they spread
-    (mean pairwise DTW between runs) at least twice as far as the real drone's profile's and by at least 30; and the
+    (mean pairwise DTW between runs) at least 1.5 times as far as the real drone's profile's and by at least 30; and the
     planner's timing changes the flights."""
     test = load_test(sg.data_path("rq1-seed1.yaml"))
     config = VISION_SITL.sim_config()
@@ -70,7 +74,7 @@ def test_repeated_sitl_runs_of_the_case0_seed_spread_reproducibly():
     for a, b in zip(runs, again):
         assert np.array_equal(a.trajectory.xyz, b.trajectory.xyz)
     real = simulate(test, runs=6, seed=11, config=PRESETS["px4-vision-case0"].sim_config())
-    assert _spread(runs) >= max(30.0, 2.0 * _spread(real))
+    assert _spread(runs) >= max(30.0, 1.5 * _spread(real))
     fixed = replace(config, noise=replace(config.noise, planner_jitter_s=0.0, start_jitter_s=0.0))
     steady = simulate(test, runs=6, seed=11, config=fixed)
     assert all(dtw(a.trajectory.xyz, b.trajectory.xyz) > 1.0 for a, b in zip(runs, steady))
