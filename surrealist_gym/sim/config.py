@@ -96,8 +96,9 @@ class NoiseConfig:
         turbulence_std: std of the ambient wind turbulence added to the test's wind [m/s].
         turbulence_tau_s: correlation time of the turbulence [s].
         sensor: whether the depth sensor gets the run's random generator (its own noise model).
-        planner_jitter_s: each avoidance-planner cycle lasts ``1 / planner_hz`` plus U(0, planner_jitter_s) [s], on
-            the outer-loop grid (0: a cycle every ``1 / planner_hz``).
+        planner_jitter_s: the avoidance planner's cycles keep their period ``1 / planner_hz`` from a phase drawn per
+            run, and each plans U(0, planner_jitter_s) [s] after its start, on the outer-loop grid (0: at every
+            ``1 / planner_hz`` from the start).
         start_jitter_s: std of the mission start's offset from ``takeoff_delay_s`` [s] (never before arming).
     """
 

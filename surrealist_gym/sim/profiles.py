@@ -281,9 +281,9 @@ def _construct(cls, values: Mapping[str, Any], where: str, section: str):
 # it also sets the pace: ~1.4 m/s on the mission line, as PX4 SITL flies (docs/fidelity.md).
 SITL_ESTIMATOR = {"pos_noise_std": 0.003, "pos_drift_std": 0.03, "pos_drift_tau_s": 3.0, "vel_noise_std": 0.02,
                   "turbulence_std": 0.0}
-# The planner thread (local_planner_nodelet.cpp threadFunction) sleeps to a 0.1 s cycle (spin_dt_), then waits for the
-# next point cloud (the depth camera plugin publishes at updateRate 20 Hz: up to 0.05 s) and computes, on wall time
-# while the simulation runs on; PLANNER_JITTER_S is that wait plus the computation. The mission start: the 24 PX4
+# The planner thread (local_planner_nodelet.cpp threadFunction) starts a cycle, waits for the next point cloud (the
+# depth camera plugin publishes at updateRate 20 Hz: up to 0.05 s), computes on wall time while the simulation runs
+# on, and sleeps the rest of its 0.1 s cycle (spin_dt_); PLANNER_JITTER_S is that wait. The mission start: the 24 PX4
 # trajectories of rilast-mission1 leave the ground 15.0-18.0 s after their first sample, std 0.58 s.
 PLANNER_JITTER_S = 0.05
 SITL_TIMING = {"planner_jitter_s": PLANNER_JITTER_S, "start_jitter_s": 0.58}
