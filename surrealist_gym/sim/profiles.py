@@ -284,7 +284,10 @@ SITL_ESTIMATOR = {"pos_noise_std": 0.003, "pos_drift_std": 0.03, "pos_drift_tau_
 # The planner thread (local_planner_nodelet.cpp threadFunction) starts a cycle, waits for the next point cloud (the
 # depth camera plugin publishes at updateRate 20 Hz: up to 0.05 s), computes on wall time while the simulation runs
 # on, and sleeps the rest of its 0.1 s cycle (spin_dt_); PLANNER_JITTER_S is that wait. The mission start: the 24 PX4
-# trajectories of rilast-mission1 leave the ground 15.0-18.0 s after their first sample, std 0.58 s.
+# trajectories of rilast-mission1 leave the ground 15.0-18.0 s after their first sample, std 0.58 s. The presets fly
+# without SITL_TIMING (a profile YAML sets it as noise fields): with it, neither the noise floor nor rerun survival
+# came closer to PX4's, RQ2's best tests were safer than Gazebo's, and the rilast held-out AUC fell 0.807 to 0.799
+# (docs/results.md, "Run-to-run spread").
 PLANNER_JITTER_S = 0.05
 SITL_TIMING = {"planner_jitter_s": PLANNER_JITTER_S, "start_jitter_s": 0.58}
 SITL_CAMERA = {"fov_h_deg": 59.0, "fov_v_deg": 46.0, "range_min": 0.5, "range_max": 18.0, "rays_h": 30, "rays_v": 23,
@@ -296,7 +299,7 @@ SITL_IRIS = UavProfile(
     vehicle=VehicleModel.IRIS, avoidance_model=AvoidanceModel.PX4,
     params={"COM_OBS_AVOID": 1, "MPC_XY_CRUISE": 5.0},
     planner={"heading_offset_deg": -16.0},
-    sensor=SITL_CAMERA, noise={**SITL_ESTIMATOR, **SITL_TIMING},
+    sensor=SITL_CAMERA, noise=SITL_ESTIMATOR,
     takeoff_delay_s=15.0, timeout_s=500.0, obstacle_collision_scale=0.8)
 
 # The real PX4 Vision DevKit of case0.ulg (the paper's RQ1): the reactive planner calibrated on that flight
