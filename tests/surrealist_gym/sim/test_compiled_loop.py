@@ -80,6 +80,22 @@ def test_compiled_loop_equals_the_python_outer_loop(monkeypatch):
     assert total == 14
 
 
+@pytest.mark.filterwarnings("ignore:.*is not supported")
+def test_compiled_loop_equals_the_python_outer_loop_with_the_sitl_timing(monkeypatch):
+    """The SITL timing (planner cycles from a per-run phase, each planning late; the mission start moved): both loops
+    fly the same runs bit for bit, on every scenario with avoidance."""
+    from surrealist_gym.sim.profiles import SITL_TIMING
+
+    total = 0
+    for name, test in _scenarios().items():
+        config = resolve_uav(test=test).sim_config()
+        config = dataclasses.replace(config, noise=dataclasses.replace(config.noise, **SITL_TIMING))
+        old, new = _fly_both(test, 2, config, monkeypatch)
+        _assert_same(old, new, name)
+        total += len(new)
+    assert total == 14
+
+
 def test_compiled_loop_collision_timeout_and_stuck(monkeypatch):
     """Without avoidance into a box (noisy, and noiseless), a time limit in the middle of a PX4-Avoidance flight,
     and the stuck check: the same results bit for bit."""
