@@ -40,14 +40,14 @@ PAPER = {  # the paper's figures, by SearchMetrics name (eval_s: seconds per eva
 def paper_env(problem: str, rep: int, store=None, common_noise: bool = False, workers: int | None = None,
               executor=None, uav=None, search_uav: bool = False):
     """The env of a paper problem (case0 seeds: budget 100, 5 runs; RQ2: budget 50, 10 runs), noise of repetition
-    ``rep``; RQ1 flies ``uav`` (a profile: ``surrealist calibrate``) when given, and searches its settings with
-    ``search_uav``."""
+    ``rep``; it flies ``uav`` (a preset such as ``px4-vision-sitl``, or a profile: ``surrealist calibrate``) when
+    given, and RQ1 searches its settings with ``search_uav``."""
     options = dict(store=store, random_seed=rep, workers=workers, executor=executor,
                    sim_config=SimConfig(common_noise=common_noise))
-    if problem == "rq2":
-        return GenerateEnv(budget=50, runs=10, **options)
     if uav is not None:
         options.update(uav=uav, sim_config={"common_noise": common_noise})
+    if problem == "rq2":
+        return GenerateEnv(budget=50, runs=10, **options)
     return ReplicateEnv(seed_test=sg.data_path(f"{problem}.yaml"), budget=100, runs=5, uav_mutators=search_uav,
                         **options)
 
@@ -133,7 +133,8 @@ def main() -> None:
     parser.add_argument("--only", choices=["rq1-seed1", "rq1-seed2", "rq2"], action="append")
     parser.add_argument("--common-noise", action="store_true",
                         help="common random numbers: run i of every test flies with the same noise")
-    parser.add_argument("--uav", default=None, help="RQ1: fly this UAV profile (e.g. surrealist calibrate case0.ulg "
+    parser.add_argument("--uav", default=None, help="fly this UAV profile: a preset (px4-vision-sitl: the paper's "
+                                                    "Gazebo set-up) or a YAML (e.g. surrealist calibrate case0.ulg "
                                                     "--seed rq1-seed1.yaml --out case0-uav.yaml)")
     parser.add_argument("--search-uav", action="store_true", help="RQ1: search the UAV's settings too")
     args = parser.parse_args()

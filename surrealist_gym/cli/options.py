@@ -113,7 +113,7 @@ DASK_HELP = "run the simulations on a Dask cluster (tcp://host:port)"
 
 
 _UAV_HELP = ("UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), px4-vision-case0, "
-             "or a profile YAML (surrealist calibrate)")
+             "px4-vision-sitl (the paper's case0 tests as Gazebo flies them), or a profile YAML (surrealist calibrate)")
 _PRESET_HELP = "greedy hyper-parameters (--agent greedy): paper Table 1, or the authors' own run (default)"
 
 

@@ -160,7 +160,7 @@ def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
             plan_vec = (0.0, 0.0, 0.0)
             plan_yaw = 0.0
             if kind != NO_PLANNER and nav_phase(nav) == PH_CRUISE:  # nav.uses_planner
-                if k % plan_div == 0 or ls[L_PLANNED] == 0.0:
+                if noise[row, 10] != 0.0 or ls[L_PLANNED] == 0.0:  # NoiseSource.plans
                     if noisy:
                         at = int(ls[L_SENSOR_AT])
                         range_noise = sensor_noise[at:at + n_rays]
@@ -290,7 +290,6 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
     stuck_on = cfg.stuck_window_s is not None
     stuck_w = float(cfg.stuck_window_s) if stuck_on else 0.0
     mission_arr = mission_array(mission)
-    nav_params = param_vector(params, cfg.takeoff_delay_s, cfg.takeoff_hold_s)
     block = NoiseSource.BLOCK
     if sensor is not None:
         rays, boxes, cyls = sensor._rays, sensor._boxes, sensor._cyls
@@ -310,6 +309,7 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
         ls[L_Q_SP:L_Q_SP + 4] = r.q_sp
         ls[L_ARMED], ls[L_INTEG], ls[L_GROUND], ls[L_HELD] = float(r.armed), float(r.integ), float(r.ground), \
             float(r.held)
+        nav_params = param_vector(params, cfg.takeoff_delay_s + r.noise.start_offset, cfg.takeoff_hold_s)
         nav = initial_state(nav_params)
         planner = r.planner
         kind = NO_PLANNER if planner is None else SIMPLE_PLANNER if isinstance(planner, LocalPlanner) \

@@ -96,6 +96,10 @@ class NoiseConfig:
         turbulence_std: std of the ambient wind turbulence added to the test's wind [m/s].
         turbulence_tau_s: correlation time of the turbulence [s].
         sensor: whether the depth sensor gets the run's random generator (its own noise model).
+        planner_jitter_s: the avoidance planner's cycles keep their period ``1 / planner_hz`` from a phase drawn per
+            run, and each plans U(0, planner_jitter_s) [s] after its start, on the outer-loop grid (0: at every
+            ``1 / planner_hz`` from the start).
+        start_jitter_s: std of the mission start's offset from ``takeoff_delay_s`` [s] (never before arming).
     """
 
     pos_noise_std: float = 0.02
@@ -105,11 +109,13 @@ class NoiseConfig:
     turbulence_std: float = 0.3
     turbulence_tau_s: float = 2.0
     sensor: bool = True
+    planner_jitter_s: float = 0.0
+    start_jitter_s: float = 0.0
 
     @classmethod
     def off(cls) -> "NoiseConfig":
         """No noise at all: every seed gives the same flight."""
-        return cls(0.0, 0.0, 5.0, 0.0, 0.0, 2.0, False)
+        return cls(0.0, 0.0, 5.0, 0.0, 0.0, 2.0, False, 0.0, 0.0)
 
 
 @dataclass(frozen=True, slots=True)

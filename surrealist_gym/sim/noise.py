@@ -1,4 +1,5 @@
-"""Reproducible noise: per-run seeds, estimator errors and wind (Gazebo wind-plugin fields plus turbulence).
+"""Reproducible noise: per-run seeds, estimator errors, wind (Gazebo wind-plugin fields plus turbulence) and timing
+(when the planner's cycles run, when the mission starts).
 
 Run ``i`` of a test draws everything from ``run_seed_sequence(test.key(), base_seed, i)``, so a run is
 reproduced exactly from (test, base seed, index); with ``SimConfig.common_noise`` the key is empty, so run ``i``
@@ -46,38 +47,69 @@ class NoiseSource:
     """Noise series of one run at the outer-loop period ``dt``, drawn in blocks as the flight needs them.
 
     ``at(k)`` gives the estimator position error (NED, m), velocity error (NED, m/s), heading error (rad) and the
-    wind (NED, m/s) of outer step ``k``. ``rng`` is the depth sensor's generator (None when sensor noise is off).
-    Blocks are drawn in order from the run's own generators, so a run is reproduced exactly whatever its length.
+    wind (NED, m/s) of outer step ``k``; ``plans(k)`` whether the planner plans at step ``k`` (every ``plan_div``
+    steps; with jitter, its cycles keep that period from a random phase and each plans U(0, planner_jitter_s) after
+    its cycle starts, on the outer-step grid).
+    ``start_offset`` [s] is added to the mission start (N(0, start_jitter_s), never before arming). ``rng`` is the
+    depth sensor's generator (None when sensor noise is off). Blocks are drawn in order from the run's own
+    generators, so a run is reproduced exactly whatever its length.
     """
 
     BLOCK = 250  # outer steps per block (5 s at 50 Hz); a multiple of the 0.1 s wind-plugin hold
 
-    def __init__(self, seed: np.random.SeedSequence, config: NoiseConfig, wind, dt: float):
-        self._est, self._wnd, sens = (np.random.default_rng(s) for s in seed.spawn(3))
+    def __init__(self, seed: np.random.SeedSequence, config: NoiseConfig, wind, dt: float, plan_div: int = 5,
+                 start_time: float = 0.0):
+        self._est, self._wnd, sens, timing = (np.random.default_rng(s) for s in seed.spawn(4))
         self.config, self.plugin, self.dt = config, wind, dt
         c = config
         self._drift = _OU(self._est, 3, c.pos_drift_std, c.pos_drift_tau_s, dt)
         self._turbulence = _OU(self._wnd, 3, c.turbulence_std, c.turbulence_tau_s, dt)
         self.rng = sens if c.sensor else None
+        self._timing, self._plan_div = timing, int(plan_div)
+        # the planner's cycles start every plan_div steps from a phase of their own; each plans after U(0, jitter)
+        jitter = c.planner_jitter_s / dt
+        self._cycle = float(timing.uniform(0.0, plan_div)) if jitter > 0 else 0.0  # start of the next cycle [steps]
+        self._next_plan = self._cycle + (timing.uniform(0.0, jitter) if jitter > 0 else 0.0)  # its planning instant
+        self.start_offset = (max(-start_time, float(timing.normal(0.0, c.start_jitter_s)))
+                             if c.start_jitter_s > 0 else 0.0)
         # plain lists: indexing them in the loop is several times cheaper than numpy rows
-        self.pos_list, self.vel_list, self.yaw_list, self.wind_list = [], [], [], []
+        self.pos_list, self.vel_list, self.yaw_list, self.wind_list, self.plan_list = [], [], [], [], []
         self._drawn = 0  # steps drawn so far
 
     def at(self, k: int):
         """Step ``k``'s position and velocity estimate errors, yaw error and wind (blocks drawn as needed)."""
         while k >= len(self.pos_list):
-            pos, vel, yaw, wind = self._draw()
+            pos, vel, yaw, wind, plan = self._draw()
             self.pos_list += pos.tolist()
             self.vel_list += vel.tolist()
             self.yaw_list += yaw.tolist()
             self.wind_list += [tuple(w) for w in wind.tolist()]
+            self.plan_list += (plan != 0.0).tolist()
         return self.pos_list[k], self.vel_list[k], self.yaw_list[k], self.wind_list[k]
 
+    def plans(self, k: int) -> bool:
+        """Whether a planner cycle starts at outer step ``k`` (after :meth:`at` of the same step)."""
+        return self.plan_list[k]
+
     def block(self) -> np.ndarray:
-        """The next ``BLOCK`` steps as one (BLOCK, 10) array (the compiled loop's form of :meth:`at`): position
-        error (3), velocity error (3), yaw error, wind (3). Do not mix with :meth:`at` on one source."""
-        pos, vel, yaw, wind = self._draw()
-        return np.concatenate((pos, vel, yaw[:, None], wind), axis=1)
+        """The next ``BLOCK`` steps as one (BLOCK, 11) array (the compiled loop's form of :meth:`at` and
+        :meth:`plans`): position error (3), velocity error (3), yaw error, wind (3), planner cycle (1.0 or 0.0). Do
+        not mix with :meth:`at` on one source."""
+        pos, vel, yaw, wind, plan = self._draw()
+        return np.concatenate((pos, vel, yaw[:, None], wind, plan[:, None]), axis=1)
+
+    def _schedule(self, n: int) -> np.ndarray:
+        """The planning flags of the next ``n`` outer steps: cycles every ``plan_div`` steps, each planning
+        U(0, planner_jitter_s) after its start, at the first outer step at or after that instant."""
+        out = np.zeros(n)
+        jitter = self.config.planner_jitter_s / self.dt  # in outer steps
+        first = self._drawn
+        while (step := int(math.ceil(self._next_plan - 1e-9))) < first + n:
+            out[step - first] = 1.0
+            self._cycle += self._plan_div
+            self._next_plan = max(self._next_plan + 1.0, self._cycle + (self._timing.uniform(0.0, jitter)
+                                                                         if jitter > 0 else 0.0))
+        return out
 
     def _draw(self):
         """The next block's series, drawn from the run's generators in their fixed order."""
@@ -91,8 +123,9 @@ class NoiseSource:
         wind[:, 2] *= 0.3  # vertical turbulence is weaker near the ground
         if self.plugin is not None:
             wind += _plugin_wind(self._wnd, self.plugin, n, self.dt, self._drawn * self.dt)
+        plan = self._schedule(n)
         self._drawn += n
-        return pos, vel, yaw, wind
+        return pos, vel, yaw, wind, plan
 
 
 def _plugin_wind(rng: np.random.Generator, wind, n: int, dt: float, t0: float = 0.0) -> np.ndarray:

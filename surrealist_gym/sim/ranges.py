@@ -148,6 +148,7 @@ RANGES = FrozenDict({
     "noise.vel_noise_std": Range(0.0, 10.0, unit="m/s"),
     "noise.turbulence_std": Range(0.0, 30.0, unit="m/s"),  # the wind bound of testcase.MAX_WIND_SPEED_MS
     "noise.pos_drift_tau_s": _TAU, "noise.turbulence_tau_s": _TAU,
+    "noise.planner_jitter_s": Range(0.0, 5.0, unit=_SECONDS), "noise.start_jitter_s": Range(0.0, 60.0, unit=_SECONDS),
 })
 
 

@@ -166,6 +166,7 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
     if test.timeout is not None:  # the test's own limit (Aerialist's simulation.timeout) ends it sooner
         timeout = min(timeout, test.timeout)
     outer_dt = 1.0 / cfg.outer_hz
+    plan_div = int(round(cfg.outer_hz / cfg.planner_hz))
     noise_key = "" if cfg.common_noise else test.key()
     # PX4's hover thrust estimator (MPC_USE_HTE=1, the default) converges within seconds of the takeoff; it is
     # modelled as converged: the controller's hover thrust is the vehicle's physical one.
@@ -186,9 +187,10 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
                                  (vehicle.drag_xy, vehicle.drag_z, vehicle.drag_quad))
             r.ks = np.zeros(10)
             r.wind = (0.0, 0.0, 0.0)
-            r.nav = Navigator(mission, params, cfg.takeoff_delay_s, cfg.takeoff_hold_s)
+            r.noise = NoiseSource(run_seed_sequence(noise_key, seed, index), cfg.noise, test.wind, outer_dt,
+                                  plan_div, cfg.takeoff_delay_s)
+            r.nav = Navigator(mission, params, cfg.takeoff_delay_s + r.noise.start_offset, cfg.takeoff_hold_s)
             r.planner = make_planner() if avoidance else None
-            r.noise = NoiseSource(run_seed_sequence(noise_key, seed, index), cfg.noise, test.wind, outer_dt)
             r.q_sp, r.thrust = (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)), 0.0
             r.status, r.message, r.end_t = None, "", 0.0
             r.log, r.true, r.plan_out = [], [], None
@@ -350,7 +352,7 @@ def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, se
         r.log.append((t, ex, ey, ez, evx, evy, evz, yaw))
     plan = None
     if r.planner is not None and nav.uses_planner:
-        if k % plan_div == 0 or r.plan_out is None:
+        if noise.plans(k) or r.plan_out is None:
             hits = sensor.scan((pos[0], pos[1], -pos[2]), yaw, r.noise.rng)
             if len(hits):
                 hits = hits + np.array([pe[0], pe[1], -(pe[2])])

@@ -242,7 +242,8 @@ def test_bad_folder_labels_exit_2(small_folder, tmp_path, capsys, edit, message)
 
 @pytest.mark.parametrize("args, message", [
     (["--mission", "missing.yaml"], "error: missing.yaml: base test YAML (mission and parameters) of "),
-    (["--uav", "no-such-uav"], "error: --uav 'no-such-uav': not a preset (px4-v1.12-sitl-iris, px4-vision-case0)"),
+    (["--uav", "no-such-uav"],
+     "error: --uav 'no-such-uav': not a preset (px4-v1.12-sitl-iris, px4-vision-case0, px4-vision-sitl)"),
     (["--runs", "0"], "error: --runs: expected a whole number >= 1, got 0"),
     (["--labels", "labels.csv"], "error: "),
 ])

@@ -54,12 +54,14 @@ def test_noise_blocks_are_the_series_of_at():
 
     wind = Wind(velocity_mean=6.0, velocity_variance=1.0, direction=(0.0, 1.0, 0.0), gust_start=3.0,
                 gust_duration=4.0, gust_velocity_mean=3.0)
-    a = NoiseSource(run_seed_sequence("k", 3, 1), NoiseConfig(), wind, 0.02)
-    b = NoiseSource(run_seed_sequence("k", 3, 1), NoiseConfig(), wind, 0.02)
-    rows = np.concatenate([b.block() for _ in range(3)])
-    for k in range(3 * NoiseSource.BLOCK):
-        pe, ve, yaw_err, w = a.at(k)
-        assert tuple(rows[k]) == (*pe, *ve, yaw_err, *w)
+    for config in (NoiseConfig(), NoiseConfig(planner_jitter_s=0.05, start_jitter_s=0.6)):
+        a = NoiseSource(run_seed_sequence("k", 3, 1), config, wind, 0.02)
+        b = NoiseSource(run_seed_sequence("k", 3, 1), config, wind, 0.02)
+        assert a.start_offset == b.start_offset
+        rows = np.concatenate([b.block() for _ in range(3)])
+        for k in range(3 * NoiseSource.BLOCK):
+            pe, ve, yaw_err, w = a.at(k)
+            assert tuple(rows[k]) == (*pe, *ve, yaw_err, *w, float(a.plans(k)))
     # the depth sensor's range noise: consecutive draws concatenate, so the loop draws several scans at once
     g1, g2 = (np.random.default_rng(7) for _ in range(2))
     assert np.array_equal(np.concatenate([g1.standard_normal(384) * 0.02 for _ in range(5)]),
@@ -73,6 +75,22 @@ def test_compiled_loop_equals_the_python_outer_loop(monkeypatch):
     total = 0
     for name, test in _scenarios().items():
         old, new = _fly_both(test, 2, resolve_uav(test=test).sim_config(), monkeypatch)
+        _assert_same(old, new, name)
+        total += len(new)
+    assert total == 14
+
+
+@pytest.mark.filterwarnings("ignore:.*is not supported")
+def test_compiled_loop_equals_the_python_outer_loop_with_the_sitl_timing(monkeypatch):
+    """The SITL timing (planner cycles from a per-run phase, each planning late; the mission start moved): both loops
+    fly the same runs bit for bit, on every scenario with avoidance."""
+    from surrealist_gym.sim.profiles import SITL_TIMING
+
+    total = 0
+    for name, test in _scenarios().items():
+        config = resolve_uav(test=test).sim_config()
+        config = dataclasses.replace(config, noise=dataclasses.replace(config.noise, **SITL_TIMING))
+        old, new = _fly_both(test, 2, config, monkeypatch)
         _assert_same(old, new, name)
         total += len(new)
     assert total == 14

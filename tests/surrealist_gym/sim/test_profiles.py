@@ -89,7 +89,8 @@ def test_resolve_uav_plain_competition_test(shared_data):
 
 
 @pytest.mark.parametrize("choice, message", [
-    ("no-such-uav", "--uav 'no-such-uav': not a preset (px4-v1.12-sitl-iris, px4-vision-case0) nor a .yaml file"),
+    ("no-such-uav",
+     "--uav 'no-such-uav': not a preset (px4-v1.12-sitl-iris, px4-vision-case0, px4-vision-sitl) nor a .yaml file"),
     ("missing.yaml", "--uav missing.yaml: cannot read profile"),
 ])
 def test_resolve_uav_bad_choice_is_one_line_naming_the_option(choice, message):
