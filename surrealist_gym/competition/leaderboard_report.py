@@ -164,8 +164,15 @@ def _px4_lines(board: Board, summaries: Sequence[Summary]) -> list[str]:
     return lines
 
 
+def _published_cell(year: str, tool: str, case_study: str):
+    """PX4's published cell of a tool on the report's case study derived from ours, or None."""
+    name, cs = published_name(tool), CASE_STUDIES.get(year, {}).get(case_study)
+    return PUBLISHED.get(year, {}).get(name, {}).get(cs) if name and cs else None
+
+
 def plot_board(board: Board, rows: Sequence[BoardRow], path) -> None:
-    """One panel per case study (and wind): each tool's score per repetition (dots) and mean (bar)."""
+    """One panel per case study (and wind): each tool's score per repetition (dots) and mean (bar), and PX4's
+    published score where the report has the cell (a black diamond)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -181,12 +188,21 @@ def plot_board(board: Board, rows: Sequence[BoardRow], path) -> None:
         ax.barh(ys, [s.score for s in group], color="0.8", height=0.6)
         for y, s, place in zip(ys, group, _places(group, year)):
             values = [r.suite_score if year == "2024" else r.failure_score for r in s.rows]
-            ax.plot(values, [y] * len(values), "o", color="tab:red", markersize=4)
-            ax.text(max([s.score, *values]), y, f"  #{place}", va="center", fontsize="small")
+            ax.plot(values, [y] * len(values), "o", color="tab:red", markersize=4,
+                    label="each repetition" if y == ys[0] else None)
+            px4 = _published_cell(year, s.tool, label)
+            if px4 is not None:
+                ax.plot([px4.score], [y], "D", color="black", markersize=5, label="PX4 (published)")
+            ax.text(max([s.score, *values, *([px4.score] if px4 else [])]), y, f"  #{place}", va="center",
+                    fontsize="small")
         ax.set_yticks(ys, [s.tool for s in group], fontsize="small")
         ax.set_xlabel("suite score" if year == "2024" else "failure score", fontsize="small")
         ax.set_title(label + (f", {wind} wind" if wind else ""), fontsize="small")
         ax.grid(True, axis="x", linewidth=0.3)
+        handles, names = ax.get_legend_handles_labels()
+        if "PX4 (published)" in names:
+            ax.legend(dict(zip(names, handles)).values(), dict(zip(names, handles)).keys(), fontsize="x-small",
+                      loc="lower right")
     fig.suptitle(f"leaderboard, {year} edition: bars the mean of {board.repetitions} repetitions, dots each one",
                  fontsize="medium")
     fig.tight_layout()
