@@ -1,6 +1,6 @@
 """The Aerialist test-case YAML: reading (:func:`load_test`) and writing (:func:`save_test`) the
 :class:`~surrealist_gym.testcase.TestCase` values, and the safe YAML loader for files from anywhere (:func:`safe_yaml`:
-no aliases, YAML 1.2 numbers, Aerialist's tags).
+no alias bombs, YAML 1.2 numbers, Aerialist's tags, numpy numbers).
 
 The YAML is Aerialist's, as both generations in use read and write it (docs/aerialist-yaml.md): :func:`save_test`
 writes what Aerialist master (``robot``/``mission``) and 0.2.x (``drone``/``test``) both load with geometry, and
@@ -16,7 +16,7 @@ import warnings
 from dataclasses import fields
 from pathlib import Path
 
-from .errors import InvalidTestCase, MissionError, regular_file
+from .errors import InvalidTestCase, MissionError, regular_file, text_lines
 from .mission import read_mission
 from .sim.ranges import param_problem
 from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, _finite, _parse_shape
@@ -193,13 +193,9 @@ def save_test(test: TestCase, path) -> None:
 
 def _port(value) -> int | None:
     """The port number Aerialist makes of a ``port`` field (None: Aerialist's RobotConfig sets none)."""
-    if isinstance(value, bool):
-        return None
-    if isinstance(value, int):
-        return value
     if isinstance(value, str):
         return int(value) if value.isdigit() else PORTS.get(value)
-    return None
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
 
 
 def _uses_avoidance(robot: dict, key: str, sim: dict, name: str, notes: list) -> bool:
@@ -381,7 +377,7 @@ def parse_obstacles(raw, name, notes: list | None = None) -> tuple[Obstacle, ...
 def _read_params(path: str) -> list[tuple[str, float]]:
     """PX4 parameters from ``NAME, value`` lines (no header)."""
     out = []
-    for n, row in enumerate(csv.reader(_text_lines(path)), start=1):
+    for n, row in enumerate(csv.reader(text_lines(path, InvalidTestCase)), start=1):
         if not row or not row[0].strip() or row[0].strip().startswith("#"):
             continue
         if len(row) < 2:
@@ -397,19 +393,8 @@ def _read_params(path: str) -> list[tuple[str, float]]:
     return out
 
 
-def _text_lines(path: str) -> list[str]:
-    """The lines of a UTF-8 text file (a one-line error naming the file otherwise)."""
-    regular_file(path, "file", InvalidTestCase)
-    try:
-        return Path(path).read_text(encoding="utf-8").splitlines()
-    except UnicodeDecodeError as err:
-        raise InvalidTestCase(f"{path}: not UTF-8 text (byte {err.start})") from None
-    except OSError as err:
-        raise InvalidTestCase(f"{path}: cannot read ({err.strerror})") from None
-
-
 def _read_commands(path: str) -> tuple[RuntimeCommand, ...]:
-    rows = [r for r in csv.reader(_text_lines(path)) if r and any(c.strip() for c in r)]
+    rows = [r for r in csv.reader(text_lines(path, InvalidTestCase)) if r and any(c.strip() for c in r)]
     if rows and rows[0][0].strip() == "timestamp":
         rows = rows[1:]
     out = []
@@ -440,14 +425,14 @@ def _parse_commands(raw, name) -> tuple[RuntimeCommand, ...]:
 
 # --- safe loading ------------------------------------------------------------------------------------------------
 def safe_yaml(text: str, name: str):
-    """``yaml.safe_load`` for files from anywhere: no aliases (an alias bomb expands to gigabytes; Aerialist files
-    have none), nesting too deep for the parser is an error, not a crash, and numbers read as YAML 1.2 reads them
-    (``1e9`` is a number, not a string)."""
+    """``yaml.safe_load`` for files from anywhere: aliases only while they expand to a small document (not an alias
+    bomb); nesting too deep is an error, not a crash; numbers as in YAML 1.2 (``1e9``) and numpy's (:func:`_loader`)."""
     import yaml
 
     try:
-        if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)):
-            raise InvalidTestCase(f"{name}: YAML aliases (*name) are not supported")
+        if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)) and \
+                _expanded(yaml.compose(text, Loader=_loader()), {}) > MAX_YAML_NODES:
+            raise InvalidTestCase(f"{name}: YAML aliases (*name) expand to more than {MAX_YAML_NODES} nodes")
         return yaml.load(text, Loader=_loader())
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
@@ -461,10 +446,40 @@ def safe_yaml(text: str, name: str):
 TRAJECTORY_TAG = "tag:yaml.org,2002:python/name:aerialist.px4.trajectory.Trajectory"
 
 
+MAX_YAML_NODES, _APPLY = 100_000, "tag:yaml.org,2002:python/object/apply:"  # a test YAML has some hundred nodes
+
+
+def _expanded(node, sizes: dict) -> int:
+    """How many nodes a composed YAML node stands for with its aliases expanded (a node within itself counts 0)."""
+    if id(node) not in sizes:
+        sizes[id(node)] = 0
+        items = node.value if isinstance(node.value, list) else []  # a scalar's value is its text
+        kids = [v for item in items for v in (item if isinstance(item, tuple) else (item,))]  # mappings: key, value
+        sizes[id(node)] = 1 + sum(_expanded(v, sizes) for v in kids)
+    return sizes[id(node)]
+
+
+def _numpy_scalar(loader, node):
+    """``!!python/object/apply:numpy...scalar [dtype, !!binary bytes]``: the number, when the dtype is numeric."""
+    import numpy as np
+    import yaml
+
+    try:
+        dtype_node, data = node.value
+        spec = {k.value: v for k, v in dtype_node.value}
+        dtype = np.dtype(spec["args"].value[0].value).newbyteorder(spec["state"].value[1].value)
+        if dtype_node.tag == _APPLY + "numpy.dtype" and dtype.kind in "biuf":
+            return np.frombuffer(loader.construct_yaml_binary(data), dtype=dtype, count=1)[0].item()
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError):
+        pass
+    raise yaml.constructor.ConstructorError(None, None, "not a numpy number", node.start_mark)
+
+
 @functools.cache
 def _loader():
-    """A SafeLoader whose floats include exponents without a dot (``1e9``, ``-2E-3``), as in YAML 1.2, and that
-    reads Aerialist master's tag of the trajectory variable as ``trajectory`` (no other Python tag)."""
+    """A SafeLoader with YAML 1.2's floats (``1e9``, ``-2E-3``), Aerialist master's tag of the trajectory variable
+    read as ``trajectory``, and numpy numbers as PyYAML's full dumper writes them (PALM's tests: without calling
+    anything, :func:`_numpy_scalar`); no other Python tag."""
     import re
 
     import yaml
@@ -475,4 +490,6 @@ def _loader():
     exponent = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
     Loader.add_implicit_resolver("tag:yaml.org,2002:float", exponent, list("-+0123456789"))
     Loader.add_constructor(TRAJECTORY_TAG, lambda loader, node: "trajectory")
+    for module in ("numpy._core.multiarray", "numpy.core.multiarray"):  # numpy 2 and 1
+        Loader.add_constructor(f"{_APPLY}{module}.scalar", _numpy_scalar)
     return Loader

@@ -73,3 +73,16 @@ def regular_file(path, what: str, error: type[SurrealistError] = SurrealistError
     if not empty_ok and info.st_size == 0:
         raise error(f"{name}: an empty file, no {what} in it")
     return name
+
+
+def text_lines(path, error: type[SurrealistError] = SurrealistError) -> list[str]:
+    """The lines of a UTF-8 text file (:func:`regular_file` first), else a one-line ``error`` naming the file."""
+    from pathlib import Path
+
+    regular_file(path, "file", error)
+    try:
+        return Path(path).read_text(encoding="utf-8").splitlines()
+    except UnicodeDecodeError as err:
+        raise error(f"{path}: not UTF-8 text (byte {err.start})") from None
+    except OSError as err:
+        raise error(f"{path}: cannot read ({err.strerror})") from None

@@ -89,7 +89,9 @@ def test_dict_obstacle_form_with_angle_and_tree(tmp_path):
     ("simulation:\n  wind: {velocity_mean: .inf}\n", "'velocity_mean': expected a finite number >= 0"),
     ("simulation:\n  obstacles: [1.0e+9,3,3, 0,0,0, 0]\n", "'l': expected at most 10000 m"),
     ("simulation:\n  obstacles: [1e9,3,3, 0,0,0, 0]\n", "'l': expected at most 10000 m"),  # 1e9 is a number
-    ("simulation:\n  obstacles: &a [3,3,3, 0,9,0, 0]\n  world: *a\n", "YAML aliases (*name) are not supported"),
+    ("a: &a [1,1,1,1,1,1,1,1,1,1]\nb: &b [*a,*a,*a,*a,*a,*a,*a,*a,*a,*a]\nc: &c [*b,*b,*b,*b,*b,*b,*b,*b,*b,*b]\n"
+     "d: &d [*c,*c,*c,*c,*c,*c,*c,*c,*c,*c]\ne: [*d,*d,*d,*d,*d,*d,*d,*d,*d,*d]\n", "expand to more than 100000 nodes"),
+    ("simulation:\n  obstacles: [!!python/object/apply:os.system [ls], 3, 3, 0, 9, 0, 0]\n", "invalid YAML"),
     ("a: " + "[" * 50_000 + "]" * 50_000 + "\n", "YAML nested too deeply"),
 ])
 def test_invalid_yaml_one_line_error(tmp_path, yaml_text, reason):
@@ -99,6 +101,20 @@ def test_invalid_yaml_one_line_error(tmp_path, yaml_text, reason):
         sg.load_test(path)
     message = str(err.value)
     assert reason in message and "bad.yaml" in message and "\n" not in message
+
+
+def test_numpy_numbers_and_small_aliases_load_as_pyyaml_s_dumper_writes_them(tmp_path):
+    """A tool that dumps numpy numbers with yaml.dump (PALM) writes each as its dtype (an anchor, then aliases) and
+    raw bytes; they read as numbers, and no Python callable runs."""
+    import numpy as np
+    import yaml
+
+    doc = {"simulation": {"obstacles": [{"size": {"l": np.float64(4.5), "w": np.float64(2.25), "h": 20},
+                                         "position": {"x": np.float64(-3.0), "y": 20, "z": 0, "r": np.int64(30)}}]}}
+    text = yaml.dump(doc)
+    assert "*id001" in text and "python/object/apply:numpy" in text
+    (tmp_path / "t.yaml").write_text(text)
+    assert sg.load_test(tmp_path / "t.yaml").obstacles[0] == Obstacle(4.5, 2.25, 20, -3.0, 20, 0, 30)
 
 
 def test_numbers_with_an_exponent_read_as_numbers(tmp_path):
