@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from ..errors import SurrealistError
-from .scoring import EDITIONS, Edition, SuiteScore, edition, standings
+from .scoring import Edition, SuiteScore, edition, standings
 
 __all__ = ["BOARD_FILE", "Board", "BoardRow", "Cell", "Tool", "cell_folder", "name_tools", "plan", "run_cell",
            "rank", "score_cell"]
@@ -468,5 +468,3 @@ def write_csv(board: Board, rows: Sequence[BoardRow], path: Path) -> Path:
     os.replace(tmp, path)
     return path
 
-
-EDITION_NAMES = tuple(EDITIONS)
