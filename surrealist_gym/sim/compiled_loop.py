@@ -98,7 +98,7 @@ L_SIZE = 24
 
 @njit(cache=True)
 def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
-             dt, outer_div, outer_dt, plan_div, log_div, max_steps, rest_z, stuck_on, stuck_w, stuck_d,
+             dt, outer_div, outer_dt, log_div, max_steps, rest_z, stuck_on, stuck_w, stuck_d,
              n_sub, body, half, scene, threshold,
              nav, mission, nav_params,
              kind, rays, boxes, cyls, rmin, rmax, see_ground, sensor_noise, noisy, hits,
@@ -108,7 +108,7 @@ def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
 
     Args:
         s, rest: the rigid-body state (in place) and its resting pose (the hold). kp, ks, pp, ps: inner loop and
-            position control parameters and states. noise: the block (n, 10) of outer steps ``k_first`` on
+            position control parameters and states. noise: the block (n, 11) of outer steps ``k_first`` on
             (NoiseSource.block). true (n, 4), log (n, 8): the records, with room for a block's periods and the last
             record. nav, mission, nav_params: the navigator (navigator_kernels). kind: NO_PLANNER, SIMPLE_PLANNER
             or PX4_PLANNER; rays ... see_ground: the depth sensor (DepthSensor's arrays); sensor_noise: the range
@@ -341,7 +341,7 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
             log = _grown(log, int(ls[L_N_LOG]), block + 2)
             code, status, end_t, info, cloud, age = fly_span(
                 ls, s, rest, r.kp, r.ks, r.pp, r.ps, noise, k_first, true, log,
-                dt, outer_div, outer_dt, plan_div, log_div, max_steps, world.rest_z, stuck_on, stuck_w,
+                dt, outer_div, outer_dt, log_div, max_steps, world.rest_z, stuck_on, stuck_w,
                 float(cfg.stuck_distance_m), world.n_sub, world.body, world.half, world.scene, world.threshold,
                 nav, mission_arr, nav_params,
                 kind, rays, boxes, cyls, rmin, rmax, see_ground, range_noise, noisy, hits,

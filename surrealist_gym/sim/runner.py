@@ -238,7 +238,6 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
     cid = world.cid
     dt = 1.0 / cfg.control_hz
     outer_div = int(round(cfg.control_hz / cfg.outer_hz))
-    plan_div = int(round(cfg.outer_hz / cfg.planner_hz))
     log_div = int(round(cfg.outer_hz / cfg.log_hz))
     outer_dt = outer_div * dt
     rest_z = world.rest_z
@@ -264,7 +263,7 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
             body = r.body
             pos, orn = get_pose(body, physicsClientId=cid)
             lin, ang = get_vel(body, physicsClientId=cid)
-            if outer and not _outer(r, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w,
+            if outer and not _outer(r, k, t, pos, lin, orn, outer_dt, log_div, rest_z, sensor, stuck_w,
                                     stuck_d):
                 done = True
                 continue
@@ -321,11 +320,11 @@ def _fly_compiled_outer(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, 
     """The reference of :func:`_fly_compiled` (the same results bit for bit, tests/.../test_compiled_loop): the
     Python :func:`_outer` per outer period, :func:`~surrealist_gym.sim.compiled_physics.advance` for the rest."""
     outer_dt = int(round(cfg.control_hz / cfg.outer_hz)) * (1.0 / cfg.control_hz)  # as _loop's
-    plan_div, log_div = int(round(cfg.outer_hz / cfg.planner_hz)), int(round(cfg.outer_hz / cfg.log_hz))
+    log_div = int(round(cfg.outer_hz / cfg.log_hz))
     rest_z, stuck_w, stuck_d = world.rest_z, cfg.stuck_window_s, cfg.stuck_distance_m
 
     def outer(r, k, t, pos, lin, orn):
-        return _outer(r, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d)
+        return _outer(r, k, t, pos, lin, orn, outer_dt, log_div, rest_z, sensor, stuck_w, stuck_d)
 
     def record(r, t, pos, orn, lin, ang, k):
         _record(r, t, pos, orn, lin, ang, rest_z, k)
@@ -333,7 +332,7 @@ def _fly_compiled_outer(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, 
     fly(world, runs, cfg, timeout, outer, record)
 
 
-def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, plan_div, log_div, rest_z, sensor, stuck_w, stuck_d) -> bool:
+def _outer(r: _Run, k, t, pos, lin, orn, outer_dt, log_div, rest_z, sensor, stuck_w, stuck_d) -> bool:
     """Estimator, planner, navigator, position control and bookkeeping; False when the run ended."""
     nav = r.nav
     noise = r.noise
