@@ -47,6 +47,8 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
+from surrealist_gym.competition.leaderboard import set_aside
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 THIRD_PARTY = ROOT.parent / "shared" / "third_party"
@@ -75,14 +77,6 @@ def surrealist(*args: str, log: Path) -> int:
     with open(log, "w", encoding="utf-8") as f:
         return subprocess.call([sys.executable, "-m", "surrealist_gym.cli", *args], stdout=f, stderr=subprocess.STDOUT,
                                stdin=subprocess.DEVNULL, env=env)
-
-
-def set_aside(folder: Path) -> None:
-    """Keep an interrupted run's folder beside, under a new name (nothing is deleted)."""
-    k = 1
-    while folder.with_name(f"{folder.name}.interrupted-{k}").exists():
-        k += 1
-    folder.rename(folder.with_name(f"{folder.name}.interrupted-{k}"))
 
 
 def tool_folder(cell: Cell, out: Path, args) -> Path:

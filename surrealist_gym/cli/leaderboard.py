@@ -80,11 +80,12 @@ def run(args: argparse.Namespace) -> int:
           f"{len(board.case_studies)} case studies x {board.repetitions} repetitions, edition {board.edition.name}: "
           f"budget {board.budget}, {board.runs} runs of up to {board.edition.tests} tests; UAV {board.uav}; "
           f"{'Dask ' + args.dask_scheduler if executor else f'{workers} workers'}; {board.out}", flush=True)
-    lb.start(board)
+    board.out.mkdir(parents=True, exist_ok=True)
     try:
         _lock(board.out)
     except SurrealistError:
         raise SurrealistError(f"--out {board.out}: another leaderboard is writing to this folder") from None
+    lb.start(board)  # its settings, written by the one writer
     started = time.perf_counter()
     try:
         summaries = lb.run_cells(board, workers, executor and executor.client,

@@ -36,10 +36,11 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from ..errors import SurrealistError
+from .reevaluation_report import _r
 from .scoring import Edition, SuiteScore, edition, standings
 
 __all__ = ["BOARD_FILE", "Board", "BoardRow", "Cell", "Tool", "cell_folder", "name_tools", "plan", "run_cell",
-           "rank", "score_cell"]
+           "rank", "score_cell", "set_aside", "start"]
 
 BOARD_FILE = "leaderboard.json"  # the board's settings: a rerun into the same folder must have the same
 _GENERIC = {"snippets", "src", "tool"}  # folder names that say nothing of the tool: its parent's name is taken
@@ -240,7 +241,7 @@ def _check_folder(board: Board) -> None:
 
 
 def start(board: Board) -> None:
-    """Make the folder and record the board's settings, with every tool it has held."""
+    """Record the board's settings in its folder, with every tool it has held."""
     board.out.mkdir(parents=True, exist_ok=True)
     path = board.out / BOARD_FILE
     settings = board.settings()
@@ -361,15 +362,11 @@ class BoardRow:
         row.update(reported_tests=self.reported_tests, evaluated_tests=self.evaluated_tests,
                    failing_tests=self.failing_tests)
         if ed.name == "2024":
-            row["suite_score"] = _round(self.suite_score)
+            row["suite_score"] = _r(self.suite_score, 6)
         else:
-            row.update(failure_score=_round(self.failure_score), diversity=_round(self.diversity), R=_round(self.r))
+            row.update(failure_score=_r(self.failure_score, 6), diversity=_r(self.diversity, 6), R=_r(self.r, 6))
         row.update(rank=self.rank, simulations=self.simulations, refused=self.refused, problem=self.problem)
         return row
-
-
-def _round(value: float, digits: int = 6):
-    return "" if value is None or (isinstance(value, float) and math.isnan(value)) else round(float(value), digits)
 
 
 def score_folder(board: Board, cell: Cell, wind: str) -> Path:
@@ -452,19 +449,3 @@ def _blown(board: Board, case_study: str, test, wind: str):
     if wind == "without":
         return replace(test, wind=None)
     return test
-
-
-def write_csv(board: Board, rows: Sequence[BoardRow], path: Path) -> Path:
-    """``leaderboard.csv``: one row per cell (and wind), in the board's order; written whole, then moved into
-    place."""
-    import csv
-
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", newline="", encoding="utf-8") as f:
-        dict_rows = [row.to_row(board.edition) for row in rows]
-        writer = csv.DictWriter(f, fieldnames=list(dict_rows[0]) if dict_rows else ["tool"])
-        writer.writeheader()
-        writer.writerows(dict_rows)
-    os.replace(tmp, path)
-    return path
-

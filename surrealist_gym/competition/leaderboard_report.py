@@ -20,8 +20,9 @@ from typing import Sequence
 
 import numpy as np
 
-from .leaderboard import Board, BoardRow, write_csv
+from .leaderboard import Board, BoardRow
 from .published import CASE_STUDIES, PUBLISHED, published_name, rerun_share
+from .reevaluation_report import _f, _write_csv
 
 __all__ = ["Summary", "agreement_2024", "summarise", "write_report"]
 
@@ -95,10 +96,6 @@ def agreement_2024(summaries: Sequence[Summary]) -> dict:
         out["studies"][cs] = {"ours": ours, "report": theirs, "same_order": ours == theirs,
                               "report_best_first": theirs[0] in firsts and len(firsts) == 1}
     return out
-
-
-def _f(value, digits: int = 2) -> str:
-    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}"
 
 
 def report_lines(board: Board, rows: Sequence[BoardRow]) -> list[str]:
@@ -214,7 +211,9 @@ def write_report(board: Board, rows: Sequence[BoardRow]) -> dict:
     text of the tables (``text``)."""
     out = Path(board.out)
     paths = {"csv": out / "leaderboard.csv", "png": out / "leaderboard.png", "report": out / "report.md"}
-    write_csv(board, rows, paths["csv"])
+    draft = paths["csv"].with_name(paths["csv"].name + ".tmp")
+    _write_csv(draft, [row.to_row(board.edition) for row in rows])
+    os.replace(draft, paths["csv"])  # whole or not at all
     plot_board(board, rows, paths["png"])
     lines = report_lines(board, rows)
     head = [f"# Leaderboard, {board.edition.name} edition, on our simulator ({board.uav})", "",
