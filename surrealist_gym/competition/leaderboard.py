@@ -174,9 +174,10 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     probe = out / ".probe-not-written"
     winds = []
     for case in case_studies:
-        for tool in named[:len(folders)]:
-            prepare(tool.folder, case, budget, probe, seed=seed, uav=uav)
-        winds.append(load_competition_test(_case_file(case)).wind)
+        files = [prepare(tool.folder, case, budget, probe, seed=seed, uav=uav).case_study_file
+                 for tool in named[:len(folders)]]  # the file each tool is given (its own case_studies/ first)
+        files += [Path(file) for _, file, _ in ran if case_label(file) == case_label(case)]  # as its cell ran it
+        winds.append(load_competition_test(files[0] if files else _case_file(case)).wind)
     by_folder = {t.folder: t for t in named}
     given, count = [], {}
     for tool, file, folder in ran:

@@ -274,3 +274,15 @@ def test_one_writer_per_board(local_board, boxes, windy, capsys, aerialist):
     finally:
         _unlock(local_board)
     assert "another leaderboard is writing to this folder" in _one_line(capsys)
+
+
+def test_a_case_study_is_the_tool_s_own_from_any_folder(tmp_path, monkeypatch, aerialist):
+    """mission1 is the tool's case_studies/mission1.yaml, as compete gives it, wherever the command runs."""
+    from surrealist_gym.competition.leaderboard import plan
+    from surrealist_gym.competition.rules import CASE_STUDY_ENV
+
+    monkeypatch.delenv(CASE_STUDY_ENV, raising=False)
+    monkeypatch.chdir(tmp_path)  # no ../shared/data here: the project's own look-up finds nothing
+    board = plan([SNIPPETS], ["mission1"], "2026", out=tmp_path / "board")
+    assert board.case_studies == ("mission1",) and board.winds == (None,)
+    assert not (tmp_path / "board").exists()
