@@ -128,8 +128,9 @@ class Agent(ABC):
         return self._log.result(self._stop_reason)
 
     def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
-        """Search on ``env`` until the agent stops or the env's budget is spent."""
-        _, info = env.reset(seed=seed if seed is not None else self.seed)
+        """Search on ``env`` until the agent stops or the env's budget is spent. ``seed`` is the episode's
+        (``env.reset(seed=...)``: the noise its runs draw), None the env's own; the agent draws from its own seed."""
+        _, info = env.reset(seed=seed)  # the episode's noise: seed, else the env's own (random_seed)
         self.setup(env, info)
         while not self.stop():
             actions = self.ask()

@@ -159,7 +159,8 @@ def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, prog
     import gymnasium as gym
 
     def make_env(store):
-        kwargs = dict(env_kwargs, budget=budget, random_seed=rep, store=str(store), executor=executor)
+        # the bare env (flyable=False): agents compared on the paper's semantics, an invalid test refused
+        kwargs = dict(env_kwargs, budget=budget, random_seed=rep, store=str(store), executor=executor, flyable=False)
         return gym.make(env_id, **(kwargs if runs is None else dict(kwargs, runs=runs)))
 
     def report(evaluations, done: bool) -> None:

@@ -164,8 +164,9 @@ class ProceduralEnv(gym.Env):
         super().reset(seed=seed)
         if self.inner is not None:
             self.inner.close()
-        self.inner = self._draw(int(self.np_random.integers(0, 2**31 - 1)))
-        return self.inner.reset(seed=int(self.np_random.integers(0, 2**31 - 1)))
+        self.inner = self._draw(int(self.np_random.integers(0, 2**31 - 1)))  # the problem's noise seed too
+        self.np_random.integers(0, 2**31 - 1)  # a draw kept so that a seed still draws the problems it drew
+        return self.inner.reset()
 
     def step(self, action):
         """One step of the current problem's env."""
@@ -424,8 +425,7 @@ class PPOAgent(Agent):
         if env.action_space.shape != expected:
             raise SurrealistError(f"policy {getattr(self, 'policy_path', '')}: trained for {expected[0]} mutators, "
                                   f"the env has {env.action_space.shape[0]}")
-        seed = seed if seed is not None else self.seed
-        self._obs, info = env.reset(seed=seed)
+        self._obs, info = env.reset(seed=seed)  # the episode's noise: seed, else the env's own (random_seed)
         self._explore = False
         self.setup(env, info)
         done = False

@@ -33,9 +33,10 @@ def _register_envs() -> None:
     """Register the envs (idempotent); entry points are strings, so nothing heavy is imported until make()."""
     from gymnasium.envs.registration import register, registry
 
-    for env_id, entry_point in (("Surrealist-Replicate-v0", "surrealist_gym.envs.replicate:ReplicateEnv"),
-                                ("Surrealist-Generate-v0", "surrealist_gym.envs.generate:GenerateEnv"),
-                                ("Surrealist-CaseStudy-v1", "surrealist_gym.competition.case_study_env:CaseStudyEnv")):
+    for env_id, entry_point in (("Surrealist-Replicate-v0", "surrealist_gym.envs.flyable:replicate"),
+                                ("Surrealist-Generate-v0", "surrealist_gym.envs.flyable:generate"),
+                                ("Surrealist-CaseStudy-v1",
+                                 "surrealist_gym.competition.case_study_env:flyable_case_study")):
         if env_id not in registry:
             register(id=env_id, entry_point=entry_point)
 

@@ -176,6 +176,15 @@ class Evaluator:
         self._uncounted = 0  # of those, not yet counted in the store (a dropped candidate's runs, until the next add)
         self.replayed_seconds = 0.0  # simulation time of the evaluations read back from the store
 
+    def reseeded(self, seed: int) -> "Evaluator":
+        """An evaluator like this one whose runs draw their noise from ``seed`` (a new episode's seed), on the same
+        executor, with a memo of its own. A store holds one search's evaluations, so an evaluator with a store keeps
+        its seed (ValueError)."""
+        if self.store is not None:
+            raise ValueError(f"{self.store.path}: holds the evaluations of the search with random seed {self.seed}; "
+                             f"to fly with seed {seed}, make the env with random_seed={seed} and a store of its own")
+        return Evaluator(self.objective, self.runs, seed, self.sim_config, self.executor)
+
     def evaluate(self, test: TestCase, runs: int | None = None) -> Evaluation:
         """The evaluation of ``test``: from the memo, else the store, else simulated (and stored).
 

@@ -30,6 +30,11 @@ class Command(IntEnum):
 
 
 NAV_COMMANDS = {Command.WAYPOINT, Command.RETURN_TO_LAUNCH, Command.LAND, Command.TAKEOFF}
+#: Mission items that drive a camera or gimbal, not the vehicle (MAVLink's MAV_CMD list): PX4's mission mode runs
+#: them without changing the flight, so they are skipped without a warning (the competition's missions open with 530).
+NO_FLIGHT_EFFECT = {203: "DO_DIGICAM_CONTROL", 205: "DO_MOUNT_CONTROL", 206: "DO_SET_CAM_TRIGG_DIST",
+                    530: "SET_CAMERA_MODE", 2000: "IMAGE_START_CAPTURE", 2001: "IMAGE_STOP_CAPTURE",
+                    2500: "VIDEO_START_CAPTURE", 2501: "VIDEO_STOP_CAPTURE"}
 # MAV_FRAME values whose altitude is relative to home (or terrain, treated as home here) / absolute (AMSL).
 _RELATIVE_FRAMES = {3, 6, 10, 11}
 _GLOBAL_FRAMES = {0, 5}
@@ -252,9 +257,13 @@ def read_waypoints(path, home: tuple[float, float] | None = None) -> Mission:
 
 def _build_mission(name, rows, planned, home, skipped, cruise_speed) -> Mission:
     """Convert (where, command, frame, params) rows into a Mission relative to the chosen home."""
-    skipped = list(skipped)
+    skipped, quiet = list(skipped), []
     usable = []
     for where, command, frame, params in rows:
+        if command in NO_FLIGHT_EFFECT:
+            quiet.append(f"{where}: MAV_CMD {command} ({NO_FLIGHT_EFFECT[command]}) does not move the vehicle "
+                         f"(skipped)")
+            continue
         try:
             cmd = Command(command)
         except ValueError:
@@ -293,7 +302,7 @@ def _build_mission(name, rows, planned, home, skipped, cruise_speed) -> Mission:
             radius = float(p[1] or 0.0) if cmd == Command.WAYPOINT else 0.0
             hold = float(p[0] or 0.0) if cmd == Command.WAYPOINT else 0.0
             items.append(MissionItem(cmd, north, east, up, acceptance_radius=radius, hold_s=hold))
-    return Mission(tuple(items), (lat0, lon0, alt0), cruise_speed, tuple(skipped), name)
+    return Mission(tuple(items), (lat0, lon0, alt0), cruise_speed, tuple(quiet + skipped), name)
 
 
 def write_plan(mission: Mission, path) -> None:

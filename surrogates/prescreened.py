@@ -81,7 +81,7 @@ class Prescreened:
         """Search on ``env`` until the agent stops or the budget is spent; ``callback`` gets the info of every step
         on the env."""
         prescreener, agent = self.prescreener, self.agent
-        _, info = env.reset(seed=seed if seed is not None else self.seed)
+        _, info = env.reset(seed=seed)  # the episode's noise: seed, else the env's own (random_seed)
         prescreener.start(env, info)
         agent.setup(prescreener.agent_env, info)
         record = SearchLog(prescreener.env, agent.best, info)

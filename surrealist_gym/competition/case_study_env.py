@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..envs.base import EnvSetup, SurrealistEnv
+from ..envs.flyable import maker
 from ..errors import InvalidTestCase
 from ..evaluation import GenerationObjective
 from ..mutators import mutated_obstacles
@@ -83,3 +84,5 @@ class CaseStudyEnv(SurrealistEnv):
                 raise InvalidTestCase(f"infeasible: {reason}")
         return test
 
+
+flyable_case_study = maker(CaseStudyEnv)  # Surrealist-CaseStudy-v1's entry point

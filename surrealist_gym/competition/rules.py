@@ -20,9 +20,10 @@ from ..errors import InvalidTestCase
 from ..outcomes import POINTS, UNSAFE_DISTANCE_M, points  # noqa: F401 - a run's points are the core's, named here
 from ..testcase import Obstacle, Shape, TestCase
 
-#: Where case-study names are looked up, in order (the competition repository keeps them in snippets/case_studies).
+#: Where case-study names are looked up, in order (the competition repository keeps them in snippets/case_studies),
+#: before the case studies bundled with the package (mission1-3 and their 2026 wind variants, missionN-wind).
 CASE_STUDY_ENV = "SURREALIST_CASE_STUDIES"
-CASE_STUDY_FOLDERS = ("case_studies", "snippets/case_studies", "../shared/data/competition/case_studies")
+CASE_STUDY_FOLDERS = ("case_studies", "snippets/case_studies")
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,16 +105,16 @@ def check_rules(test: TestCase, rules: Rules = RULES) -> None:
 
 # --- case studies ---------------------------------------------------------------------------------------------------
 def case_study_path(name) -> Path:
-    """The YAML of a case study: a path to an Aerialist YAML, or a name (``mission2``) looked up in
-    ``$SURREALIST_CASE_STUDIES``, then ``case_studies/``, ``snippets/case_studies/`` and
-    ``../shared/data/competition/case_studies/`` under the current folder."""
+    """The YAML of a case study: a path to an Aerialist YAML, or a name (``mission2``, ``mission2-wind``) looked up in
+    ``$SURREALIST_CASE_STUDIES``, then ``case_studies/`` and ``snippets/case_studies/`` under the current folder,
+    then among the case studies bundled with the package (:func:`bundled_case_studies`)."""
     given = Path(os.fspath(name))
     if given.suffix in (".yaml", ".yml"):
         if not given.is_file():
             raise InvalidTestCase(f"case study {os.fspath(name)!r}: no such file")
         return given
     folders = [Path(p) for p in os.environ.get(CASE_STUDY_ENV, "").split(os.pathsep) if p]
-    folders += [Path(p) for p in CASE_STUDY_FOLDERS]
+    folders += [Path(p) for p in CASE_STUDY_FOLDERS] + [bundled_case_studies()]
     for folder in folders:
         if (folder / f"{given.name}.yaml").is_file():
             return folder / f"{given.name}.yaml"
@@ -122,6 +123,15 @@ def case_study_path(name) -> Path:
     raise InvalidTestCase(f"case study {os.fspath(name)!r}: not found in {where}"
                           + (f" (known: {', '.join(known)})" if known else f"; set {CASE_STUDY_ENV} to the "
                              f"competition's case_studies folder"))
+
+
+def bundled_case_studies() -> Path:
+    """The folder of the case studies that ship with the package: the competition's sample case studies mission1-3
+    with their plans, parameters and commands (byte for byte), and ``missionN-wind``, the same with the 2026
+    example wind (3 m/s mean, 5 m/s max, toward x)."""
+    from .. import data_path
+
+    return Path(data_path("case_studies"))
 
 
 def load_competition_test(path) -> TestCase:

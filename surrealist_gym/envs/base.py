@@ -5,8 +5,8 @@ mutator's range (``values_for(action)`` gives metres and degrees, ``action_for(v
 ``env.seed_action`` (0 when every range is symmetric about the seed). The adaptive greedy's move "param +/- step on
 one mutator around the best" is an action vector; CMA-ES and RL propose whole vectors. Reward: the fitness of the
 mutated test (maximised).
-Observation: the action last evaluated (scaled to [-1, 1]), the last and best fitness (scaled by the seed's), and
-the share of the budget left. Info: the fitness terms, the test, each run's status and distances, and the trajectory
+Observation (a bounded Box): the action last evaluated (scaled to [-1, 1]), the last and best fitness (in units of
+the seed's, clipped to +-``FITNESS_BOUND``), and the share of the budget left (0 to 1). Info: the fitness terms, the test, each run's status and distances, and the trajectory
 judged as a :class:`~surrealist_gym.trajectory.Trajectory` (a value, not a bare array: Gymnasium's vector envs
 stack array-valued info entries, which flights of different lengths cannot be). ``reset`` evaluates the seed (one
 evaluation). A test evaluated before in the episode comes from the memo and costs no budget (``info["memo"]``); one
@@ -38,6 +38,7 @@ from ..testcase import TestCase
 from ..trajectory import Trajectory
 
 INVALID_STEPS_FACTOR = 4  # an episode also ends after this many steps per unit of budget (invalid actions)
+FITNESS_BOUND = 10.0  # the observation's fitnesses, in units of the seed's, are clipped to +-this
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -95,10 +96,12 @@ class SurrealistEnv(gym.Env):
     """Base of Surrealist-Replicate-v0, Surrealist-Generate-v0 and Surrealist-CaseStudy-v1.
 
     ``render_mode="rgb_array"``: ``render()`` returns the top view of the last test evaluated (its obstacles and its
-    runs' flights; a replication's real flight too) as an H x W x 3 uint8 array; None (default): no rendering.
+    runs' flights; a replication's real flight too) as an H x W x 3 uint8 array; ``"human"``: ``reset`` and ``step``
+    show that view in a matplotlib window (none under a non-interactive backend, e.g. on a server); None (default):
+    no rendering.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 4}
     steps_per_budget = INVALID_STEPS_FACTOR  # the episode also ends after this many steps per evaluation budgeted
 
     def __init__(self, seed_test: TestCase, mutators: Sequence[PropertyMutator], budget: int, *, setup: EnvSetup,
@@ -135,7 +138,9 @@ class SurrealistEnv(gym.Env):
         high = np.array([m.high for m in self._mutators], dtype=np.float64)
         self._centre, self._half_range = (high + low) / 2, (high - low) / 2
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(n + 3,), dtype=np.float32)
+        low = np.concatenate([-np.ones(n), [-FITNESS_BOUND, -FITNESS_BOUND, 0.0]]).astype(np.float32)
+        self.observation_space = gym.spaces.Box(low, np.concatenate([np.ones(n), [FITNESS_BOUND] * 2 + [1.0]])
+                                                .astype(np.float32), dtype=np.float32)
         self._evaluations = 0
         self._simulations = 0
         self._steps = 0
@@ -145,6 +150,7 @@ class SurrealistEnv(gym.Env):
         self._seed_evaluation: Evaluation | None = None
         self._shown: Evaluation | None = None  # what render() draws: the last test evaluated
         self._refused: str | None = None  # why the last action was refused, if it was
+        self._window = None  # render_mode="human": (figure, image) of the matplotlib window
         self._seed_action = self.action_for([m.default_value for m in self._mutators])
         self._seed_action.setflags(write=False)
         self._last_action = self._seed_action.copy()
@@ -228,9 +234,13 @@ class SurrealistEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode from the seed test (evaluated, or answered from the store).
 
-        ``seed`` seeds Gymnasium's ``np_random`` only; the env draws nothing from it. The runs' noise comes from the
-        constructor's ``random_seed`` and each test's key, so an episode's evaluations do not depend on ``seed``."""
+        ``seed`` seeds the episode's noise (and Gymnasium's ``np_random``): run ``i`` of a test draws from (seed,
+        the test's key, i), so the same seed reproduces an episode and different seeds fly different noise (a vector
+        env's sub-envs, seeded ``s, s + 1, ...``, differ). None keeps the seed of the episode before, at first the
+        constructor's ``random_seed``. An env with a store keeps the store's seed (ValueError for another)."""
         super().reset(seed=seed)
+        if seed is not None and int(seed) != self.evaluator.seed:
+            self.evaluator = self.evaluator.reseeded(int(seed))
         self._evaluations = 0
         self._simulations = 0
         self._steps = 0
@@ -248,6 +258,7 @@ class SurrealistEnv(gym.Env):
         self._seed_evaluation = evaluation
         self._best = evaluation
         self._shown, self._refused = evaluation, None
+        self._show()
         return self._observation(evaluation.fitness), self._info(evaluation, None, False)
 
     def step(self, action):
@@ -270,12 +281,44 @@ class SurrealistEnv(gym.Env):
         truncated = self.budget_left <= 0 or self._steps >= self.steps_per_budget * self._budget
         terminated = evaluation is not None and self._terminated(evaluation)
         info = self._info(evaluation, invalid, memo)
+        self._show()
         return self._observation(fitness), float(fitness), terminated, truncated, info
 
     def render(self):
         """``render_mode="rgb_array"``: the top view of the last test evaluated (an invalid action evaluates nothing,
-        so the one before stays) as an H x W x 3 uint8 array; None without a render mode or before ``reset``."""
-        if self.render_mode is None or self._shown is None:
+        so the one before stays) as an H x W x 3 uint8 array; None in other modes or before ``reset``."""
+        if self.render_mode != "rgb_array":
+            return None
+        return self._top_view()
+
+    def _show(self) -> None:
+        """``render_mode="human"``: draw the top view in this env's matplotlib window (made on first use)."""
+        if self.render_mode != "human":
+            return
+        import matplotlib
+        import matplotlib.pyplot as plt
+        from matplotlib.backends import BackendFilter, backend_registry
+
+        if matplotlib.get_backend().lower() in backend_registry.list_builtin(BackendFilter.NON_INTERACTIVE):
+            return  # nowhere to show it (a server): nothing drawn
+
+        image = self._top_view()
+        if image is None:
+            return
+        if self._window is None or not plt.fignum_exists(self._window[0].number):
+            figure = plt.figure("surrealist-gym")
+            axes = figure.add_axes((0, 0, 1, 1))
+            axes.set_axis_off()
+            self._window = (figure, axes.imshow(image))
+            plt.show(block=False)
+        else:
+            self._window[1].set_data(image)
+        self._window[0].canvas.draw_idle()
+        plt.pause(1.0 / self.metadata["render_fps"])
+
+    def _top_view(self):
+        """The top view of the last test evaluated, as an image array (None before ``reset``)."""
+        if self._shown is None:
             return None
         from ..cli.plots import top_view_image
 
@@ -293,7 +336,12 @@ class SurrealistEnv(gym.Env):
         return None
 
     def close(self):
-        """Close the evaluator (and its executor)."""
+        """Close the evaluator (and its executor) and the window of ``render_mode="human"``."""
+        if self._window is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._window[0])
+            self._window = None
         self.evaluator.close()
 
     # --- internals ------------------------------------------------------------------------------------------------
@@ -316,8 +364,8 @@ class SurrealistEnv(gym.Env):
         scale = max(1.0, abs(self._seed_fitness))
         fitness = fitness if np.isfinite(fitness) else self._penalty()
         best = self._best.fitness if self._best is not None and np.isfinite(self._best.fitness) else fitness
-        obs = np.concatenate([self._last_action,
-                              [fitness / scale, best / scale, self.budget_left / self._budget]])
+        scaled = np.clip([fitness / scale, best / scale], -FITNESS_BOUND, FITNESS_BOUND)
+        obs = np.concatenate([self._last_action, scaled, [max(self.budget_left, 0) / self._budget]])
         return obs.astype(np.float32)
 
     def _info(self, evaluation: Evaluation | None, invalid: str | None, memo: bool) -> dict:

@@ -1,3 +1,4 @@
+import json
 import math
 import warnings
 
@@ -38,11 +39,18 @@ def test_invalid_plans_rejected_with_one_line(name, reason):
     assert reason in message and name in message and "\n" not in message
 
 
-def test_unsupported_items_are_named_in_a_warning():
-    with pytest.warns(UserWarning, match="MAV_CMD 530 is not supported"):
+def test_camera_items_are_skipped_quietly_and_unknown_items_named_in_a_warning(tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # auto1.plan opens with MAV_CMD 530 (SET_CAMERA_MODE): no flight effect
         mission = sg.read_mission(EXPERIMENTS / "auto1.plan")
-    assert any("530" in s for s in mission.skipped)
+    assert any("530" in s and "SET_CAMERA_MODE" in s for s in mission.skipped)
     assert [it.command for it in mission.items] == [Command.TAKEOFF, Command.WAYPOINT, Command.LAND]
+    plan = json.loads((EXPERIMENTS / "auto1.plan").read_text())
+    plan["mission"]["items"][0]["command"] = 31000  # a command nothing here knows
+    (tmp_path / "odd.plan").write_text(json.dumps(plan))
+    with pytest.warns(UserWarning, match="MAV_CMD 31000 is not supported"):
+        mission = sg.read_mission(tmp_path / "odd.plan")
+    assert any("31000" in s for s in mission.skipped)
 
 
 def test_case0_plan_in_local_frame():
