@@ -1,21 +1,21 @@
 """The template env: an episode is one search from a seed test case.
 
-Action: one value in [-1, 1] per mutator (``env.mutators``): the mutation of the SEED test, scaled to each
-mutator's range (``values_for(action)`` gives metres and degrees, ``action_for(values)`` the inverse); the seed is
-``env.seed_action`` (0 when every range is symmetric about the seed). The adaptive greedy's move "param +/- step on
-one mutator around the best" is an action vector; CMA-ES and RL propose whole vectors. Reward: the fitness of the
-mutated test (maximised).
-Observation (a bounded Box): the action last evaluated (scaled to [-1, 1]), the last and best fitness (in units of
-the seed's, clipped to +-``FITNESS_BOUND``), and the share of the budget left (0 to 1). Info: the fitness terms, the test, each run's status and distances, and the trajectory
-judged as a :class:`~surrealist_gym.trajectory.Trajectory` (a value, not a bare array: Gymnasium's vector envs
-stack array-valued info entries, which flights of different lengths cannot be). ``reset`` evaluates the seed (one
-evaluation). A test evaluated before in the episode comes from the memo and costs no budget (``info["memo"]``); one
-evaluated in an earlier episode, or by an interrupted search whose store is reused, is not simulated again but costs
-budget, so an episode does not depend on what came before it (and a resumed search retraces the interrupted one);
-``info["simulations"]`` counts the runs the episode's evaluations stand for; an invalid test (overlap, non-positive
-size) is not simulated, costs no budget and scores a penalty. The episode is truncated when the budget is spent. A
-wrapper that changes what is charged (e.g. ``surrogates.racing.Racing``) is a
-:class:`~surrealist_gym.envs.wrapper.SurrealistWrapper`.
+Action: one value in [-1, 1] per mutator (``env.mutators``): the mutation of the SEED test, scaled to each mutator's
+range (``values_for(action)`` gives metres and degrees, ``action_for(values)`` the inverse); the seed is
+``env.seed_action`` (0 when every range is symmetric about the seed). The adaptive greedy's move "param +/- step on one
+mutator around the best" is an action vector; CMA-ES and RL propose whole vectors. Reward: the fitness of the mutated
+test (maximised). Observation (a bounded Box): the action last evaluated (scaled to [-1, 1]), the last and best fitness
+(in units of the seed's, clipped to +-``FITNESS_BOUND``), and the share of the budget left (0 to 1). Info: the fitness
+terms, the test, each run's status and distances, and the trajectory judged as a
+:class:`~surrealist_gym.trajectory.Trajectory` (a value, not a bare array: Gymnasium's vector envs stack array-valued
+info entries, which flights of different lengths cannot be). ``reset`` evaluates the seed (one evaluation). A test
+evaluated before in the episode comes from the memo and costs no budget (``info["memo"]``); one evaluated in an earlier
+episode, or by an interrupted search whose store is reused, is not simulated again but costs budget, so an episode does
+not depend on what came before it (and a resumed search retraces the interrupted one); ``info["simulations"]`` counts
+the runs the episode's evaluations stand for; an invalid test (overlap, non-positive size) is not simulated, costs no
+budget and scores a penalty (``gym.make`` wraps the env so that every action flies instead:
+:mod:`~surrealist_gym.envs.flyable`). The episode is truncated when the budget is spent. A wrapper that changes what is
+charged (e.g. ``surrogates.racing.Racing``) is a :class:`~surrealist_gym.envs.wrapper.SurrealistWrapper`.
 
 Subclasses override only the hooks ``_objective`` and, if needed, ``_terminated``, and hand the base class their
 seed test, mutators, budget and one :class:`EnvSetup` (how evaluations fly: runs, UAV, noise seed, where, store).
