@@ -16,7 +16,7 @@ parser.add_argument("--runs", type=int, default=1)
 parser.add_argument("--inline", action="store_true", help="simulate in this process")
 args = parser.parse_args()
 
-env = gym.make("Surrealist-Replicate-v0", budget=args.budget, runs=args.runs,
+env = gym.make("Surrealist-Replicate-v0", budget=args.budget, runs=args.runs, flyable=False,  # the paper's actions
                executor="inline" if args.inline else None)
 result = AdaptiveGreedy("authors").run(env, seed=0)
 seed, best = env.unwrapped.seed_evaluation, env.unwrapped.best

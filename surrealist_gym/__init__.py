@@ -10,6 +10,8 @@ Public face::
 """
 from __future__ import annotations
 
+import os as _os
+import sys as _sys
 from importlib import resources as _resources
 
 from .aerialist import load_test, save_test
@@ -27,6 +29,22 @@ from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind
 from .trajectory import Trajectory
 
 __version__ = "0.1.0"
+
+
+def _kernel_cache() -> None:
+    """Numba caches the compiled simulator in the user's cache folder (``$XDG_CACHE_HOME``, else ``~/.cache``, on
+    Windows ``%LOCALAPPDATA%``; then ``surrealist-gym/numba``), not beside the installed package, which the user may
+    not own. ``NUMBA_CACHE_DIR``, when set, wins (it is numba's setting, shared by all numba code in the process)."""
+    if _os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    base = _os.environ.get("XDG_CACHE_HOME") or (_os.environ.get("LOCALAPPDATA") if _os.name == "nt" else None)
+    folder = _os.path.join(base or _os.path.join(_os.path.expanduser("~"), ".cache"), "surrealist-gym", "numba")
+    _os.environ["NUMBA_CACHE_DIR"] = folder  # read when numba is imported, and by worker processes
+    if "numba" in _sys.modules:  # imported already: its config read the environment before this
+        _sys.modules["numba"].config.CACHE_DIR = folder
+
+
+_kernel_cache()
 
 
 def _register_envs() -> None:

@@ -22,6 +22,8 @@ checks that both give the same results bit for bit.
 from __future__ import annotations
 
 import math
+import os
+import sys
 
 import numpy as np
 from numba import njit, types
@@ -282,6 +284,8 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
     from .avoidance import LocalPlanner
     from .px4_avoidance import Px4AvoidanceConfig, kernel_settings
 
+    _notice_compiling()
+
     dt = 1.0 / cfg.control_hz
     outer_div = int(round(cfg.control_hz / cfg.outer_hz))
     outer_dt = outer_div * dt  # as the Python loops'
@@ -358,6 +362,25 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
         r.status, r.end_t, r.active = _STATUS[status], end_t, False
         r.message = _message(status, end_t, info, cfg, timeout)
         r.log, r.true = log[:int(ls[L_N_LOG])], true[:int(ls[L_N_TRUE])]
+
+
+def _notice_compiling() -> None:
+    """Say on stderr, once per process, that the simulator is being compiled (no cached kernels yet: the first
+    simulation after an install or an upgrade). Numba's cache layout is its own, so when it cannot be read, nothing
+    is said."""
+    if fly_span.overloads:  # compiled or loaded in this process already
+        return
+    try:
+        cached = os.path.exists(fly_span._cache._cache_file._index_path)
+    except AttributeError:
+        return
+    if not cached:
+        where = os.environ.get("NUMBA_CACHE_DIR") or "numba's cache"
+        print(f"surrealist-gym: compiling the simulator into {where} (once per install: {COMPILE_NOTE})",
+              file=sys.stderr, flush=True)
+
+
+COMPILE_NOTE = "about a minute on a 2-core laptop; later runs start in seconds"
 
 
 def _message(status: int, t: float, info: int, cfg, timeout: float) -> str:
