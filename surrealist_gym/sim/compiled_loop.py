@@ -116,7 +116,7 @@ def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
             or PX4_PLANNER; rays ... see_ground: the depth sensor (DepthSensor's arrays); sensor_noise: the range
             noise values (zeros when not ``noisy``); hits: the scan's buffer. cloud ... pconsts: PX4-Avoidance's
             state (px4_avoidance_cycle); memory ... sconsts: the simple planner's (avoidance_cycle); the other
-            planner's are placeholders.
+            planner's are placeholders, with its constants None, so its branch is pruned and never compiled.
 
     Returns:
         (stop code, status, end time, info, cloud, age): ``info`` the obstacle row of a collision, else the
@@ -175,14 +175,16 @@ def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
                         hits[j, 0] = hits[j, 0] + pe0
                         hits[j, 1] = hits[j, 1] + pe1
                         hits[j, 2] = hits[j, 2] + -pe2
-                    if kind == PX4_PLANNER:
+                    # pconsts / sconsts are None for the planners not flown: numba prunes their branches before
+                    # typing, so a profile compiles only its own planner (fly_kernel)
+                    if pconsts is not None:
                         out = px4_avoidance_cycle.cycle(cloud, age, path, pstate, settings, pconsts, t, pos_up,
                                                         vel_up, yaw, nav_goal(nav), nav_prev(nav), hits[:m], 0.0, tree)
                         cloud, age = out[0], out[1]
                         ls[L_PLAN_KIND] = PLAN_POSITION
                         ls[L_PLAN_VEC], ls[L_PLAN_VEC + 1], ls[L_PLAN_VEC + 2] = out[2], out[3], out[4]
                         ls[L_PLAN_YAW] = out[5]
-                    else:
+                    elif sconsts is not None:
                         vel, vyaw, _ = avoidance_cycle.cycle(memory, sstate, cand, cand_az, cand_el, sparams,
                                                              sconsts, t, pos_up, vel_up, nav_goal(nav), hits[:m],
                                                              nav_cruise(nav))
@@ -324,7 +326,7 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
         if kind == PX4_PLANNER:
             settings, pconsts = planner._settings, px4_avoidance_cycle.constants(planner)
         else:
-            settings, pconsts = kernel_settings(Px4AvoidanceConfig()), np.zeros(6)
+            settings, pconsts = kernel_settings(Px4AvoidanceConfig()), None  # None: its branch is not compiled
         # the simple planner's (placeholders for the others)
         memory = Dict.empty(key_type=types.int64, value_type=types.float64)
         sstate = avoidance_cycle.initial_state()
@@ -333,7 +335,7 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
             sparams, sconsts = planner._params, avoidance_cycle.constants(planner)
         else:
             cand, cand_az, cand_el = np.zeros((1, 1, 3)), np.zeros((1, 1)), np.zeros((1, 1))
-            sparams, sconsts = np.zeros(12), np.zeros(16)
+            sparams, sconsts = np.zeros(12), None
         rng = r.noise.rng
         noisy = kind != NO_PLANNER and rng is not None and noise_std > 0.0
         range_noise = np.empty(0) if noisy else np.zeros(n_rays)

@@ -55,14 +55,11 @@ def test_rules_name_the_field_and_bound():
     assert violations(mission().with_obstacles(seed_layout(3))) == ()
 
 
-def test_unknown_case_study_is_one_line():
-    with pytest.raises(InvalidTestCase, match=r"case study 'mission9': not found in .*known: mission1, mission2"):
-        import os
-        os.environ["SURREALIST_CASE_STUDIES"] = str(CASE_STUDIES)
-        try:
-            case_study_path("mission9")
-        finally:
-            del os.environ["SURREALIST_CASE_STUDIES"]
+def test_unknown_case_study_is_one_line(monkeypatch):
+    monkeypatch.setenv("SURREALIST_CASE_STUDIES", str(CASE_STUDIES))
+    with pytest.raises(InvalidTestCase, match=r"case study 'mission9': not found in .*known: mission1, mission1-wind, "
+                                              r"mission2, mission2-wind, mission3, mission3-wind\)$"):
+        case_study_path("mission9")
 
 
 def test_layout_mutators_span_exactly_the_rules():

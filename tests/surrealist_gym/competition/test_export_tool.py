@@ -18,6 +18,7 @@ from surrealist_gym.cli import main
 from surrealist_gym.competition.compete.locate import AERIALIST_ENV
 from surrealist_gym.competition.export_tool import SETTINGS_FILE, TOOL_FILES
 from surrealist_gym.logs import read_flight
+from tests.conftest import SHARED_DATA
 
 ROOT = Path(__file__).resolve().parents[3]
 THIRD_PARTY = ROOT.parent / "shared" / "third_party"
@@ -149,9 +150,10 @@ def test_bad_settings_are_refused_before_anything_is_written(tmp_path, capsys, o
     assert not (tmp_path / "tool").exists()
 
 
-def test_case_studies_not_found_are_refused_before_anything_is_written(tmp_path, capsys, monkeypatch):
+def test_outside_the_project_the_bundled_case_studies_are_exported(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("SURREALIST_CASE_STUDIES", raising=False)
-    assert main(["export-tool", "tool"]) == 2
-    assert _one_line(capsys).startswith("error: case study 'mission1': not found in case_studies")
-    assert not (tmp_path / "tool").exists()
+    assert main(["export-tool", "tool"]) == 0
+    shared = SHARED_DATA / "competition" / "case_studies"
+    for name in ("mission1.yaml", "mission1.plan", "mission-params.csv", "mission-commands.csv"):
+        assert (tmp_path / "tool" / "case_studies" / name).read_bytes() == (shared / name).read_bytes()
