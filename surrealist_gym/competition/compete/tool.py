@@ -1,10 +1,12 @@
 """Run a competition tool's own ``cli.py``, unedited, with every Aerialist agent flying surrealist-gym's simulator.
 
-:func:`prepare` checks everything before anything starts (the tool folder and its ``cli.py``, the case study, the output
-folder, the UAV, an Aerialist that holds the API the tool imports and imports here); :func:`run` copies the tool folder
-into the output folder, starts a :class:`~surrealist_gym.competition.compete.server.SimulationServer`, and runs
-``python cli.py generate CASE_STUDY BUDGET`` in the copy, as the competition does, with the shim folder first on its
-``PYTHONPATH`` (``shim/``: Aerialist's agents ask the server to fly). The output folder then holds::
+:func:`prepare` checks everything before anything starts (the tool folder and its ``cli.py``, no link out of it:
+``toolcopy``; the case study, the output folder, the UAV, an Aerialist that holds the API the tool imports and
+imports here); :func:`run` copies the tool folder into the output folder, starts a
+:class:`~surrealist_gym.competition.compete.server.SimulationServer`, and runs ``python cli.py generate CASE_STUDY
+BUDGET`` in the copy, as the competition does, in a process group of its own under resource limits (``process``),
+with the shim folder first on its ``PYTHONPATH`` (``shim/``: Aerialist's agents ask the server to fly). What the
+tool wrote is read in streams, within :data:`MAX_READ_BYTES`. The output folder then holds::
 
     tool/            the copy the tool ran in, with what it wrote (its output folder, logs/, results/)
     flights/         every test flown, as our YAML (sim-NNNN.yaml) and one ULog per run (sim-NNNN-runI.ulg)
