@@ -8,14 +8,15 @@ only this user may enter, says hello with a key only the two processes know, and
      "compat": [NOTES]}
 
 Every field is checked (``request.py``: ``runs`` a whole number from 1 to the budget, ...), and every file the test
-names must lie in one of the server's ``roots`` (the tool's working folder, the case study's folder), links
-resolved. The server writes the test as our YAML (``sim-NNNN.yaml`` in its folder: the test as flown), flies its
-``N`` runs and writes each as a ULog (``sim-NNNN-runI.ulg``), and answers ``{"ok": True, "logs": [PATHS]}``; or
-``{"ok": False, "error": ONE_LINE}`` for a bad request, a test that cannot be flown, a failed simulation or a
-request over the budget, which is refused unflown. That line is short and never quotes a file or an exception's text
-(a test naming ``/etc/shadow`` must not get a line of it back, nor leave one in ``flights.csv``). The budget counts
-runs flown (one PX4 simulation each). Run ``k`` of the whole session (k = 0, 1, ... in request order) draws its
-noise from (test, seed, k), so a tool that asks for the same tests in the same order gets the same flights.
+names must lie in one of the server's ``roots`` (the tool's working folder, the case study's folder, the files the
+case study names), links resolved. The server writes the test as our YAML (``sim-NNNN.yaml`` in its folder: the test
+as flown), flies its ``N`` runs and writes each as a ULog (``sim-NNNN-runI.ulg``), and answers ``{"ok": True,
+"logs": [PATHS]}``; or ``{"ok": False, "error": ONE_LINE}`` for a bad request, a test that cannot be flown, a failed
+simulation or a request over the budget, which is refused unflown. That line is short and never quotes a file or an
+exception's text (a test naming ``/etc/shadow`` must not get a line of it back, nor leave one in ``flights.csv``).
+The budget counts runs flown (one PX4 simulation each). Run ``k`` of the whole session (k = 0, 1, ... in request
+order) draws its noise from (test, seed, k), so a tool that asks for the same tests in the same order gets the same
+flights.
 
 Example::
 

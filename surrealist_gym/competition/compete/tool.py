@@ -209,15 +209,24 @@ def _case_study(tool: Path, name) -> tuple[str, Path]:
 
 def _check_relative_files(file: Path, tool: Path) -> None:
     """Aerialist opens a case study's relative paths from the tool's working folder: they must be there."""
+    for key, value in _named_files(file):
+        if not os.path.isabs(value) and not (tool / value).is_file():
+            raise InvalidTestCase(f"case study {file}: field {key!r}: {value!r} is not in the tool's folder {tool} "
+                                  f"(Aerialist opens relative paths from the tool's working folder)")
+
+
+def _named_files(file: Path) -> tuple[tuple[str, str], ...]:
+    """(field, path as written) of each file the case study names."""
     import yaml
 
-    doc = yaml.safe_load(file.read_text(encoding="utf-8")) or {}
+    doc = yaml.safe_load(Path(file).read_text(encoding="utf-8")) or {}
+    named = []
     for section, legacy, key in _FILE_FIELDS:
         part = doc.get(section) or doc.get(legacy) or {}
         value = part.get(key) if isinstance(part, dict) else None
-        if isinstance(value, str) and not os.path.isabs(value) and not (tool / value).is_file():
-            raise InvalidTestCase(f"case study {file}: field {key!r}: {value!r} is not in the tool's folder {tool} "
-                                  f"(Aerialist opens relative paths from the tool's working folder)")
+        if isinstance(value, str):
+            named.append((key, value))
+    return tuple(named)
 
 
 def _check_imports(source: AerialistSource) -> None:
@@ -277,7 +286,8 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     stdout, stderr = plan.out / "tool-stdout.txt", plan.out / "tool-stderr.txt"
     config = resolve_uav(plan.uav).sim_config()
     command = [str(tool_env.python), "cli.py", "generate", plan.case_study, str(plan.budget)]
-    roots = (work, plan.case_study_file.parent)  # where the files a test names may be
+    roots = (work, plan.case_study_file.parent,  # where the files a test names may be: and those the case study names
+             *(Path(v) for _, v in _named_files(plan.case_study_file) if os.path.isabs(v)))
     with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight,
                           roots=roots) as server, open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
         env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
