@@ -414,6 +414,23 @@ def corpus(rng: np.random.Generator) -> list[Case]:
     return cases
 
 
+# --- compete: a tool folder is untrusted (issue 44) ------------------------------------------------------------------
+def compete_untrusted_cases() -> list[Case]:
+    """``compete`` on a tool folder holding a link out of it, a loop or a FIFO: refused before anything is written."""
+    def tool(make: Callable[[Path], None]) -> Callable[[Path], None]:
+        def setup(folder: Path) -> None:
+            (folder / "tool").mkdir()
+            (folder / "tool" / "cli.py").write_text("print('never run')\n")
+            make(folder / "tool")
+        return setup
+    argv = ("compete", "tool", "mission1", "1", "--out", "out")
+    return [Case("compete-tool", name, argv, tool(make)) for name, make in [
+        ("link out (etc -> /etc)", lambda t: os.symlink("/etc", t / "etc")),
+        ("link out (up -> ..)", lambda t: os.symlink("..", t / "up")),
+        ("loop (loop -> .)", lambda t: os.symlink(".", t / "loop")),
+        ("FIFO in the tool", lambda t: os.mkfifo(t / "pipe"))]]
+
+
 def _pickled_policy(folder: Path) -> None:
     import io
     import zipfile
@@ -467,7 +484,7 @@ def _read_only(folder: Path) -> bool:
 
 def refusal_corpus(args) -> None:
     rng = np.random.default_rng(args.random_seed + 1)
-    cases = corpus(rng)
+    cases = corpus(rng) + compete_untrusted_cases()
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         ro = tmp / "ro"

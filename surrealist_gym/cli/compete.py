@@ -43,6 +43,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="which Python runs the tool: ours, or an environment of its own built from its "
                              "requirements.txt and cached (default auto: ours when every module the tool imports is "
                              "installed here, else its own)")
+    parser.add_argument("--tool-timeout", metavar="SECONDS", type=float, default=7200.0,
+                        help="wall time after which the tool and its processes are stopped (default 7200; its CPU "
+                             "time is limited to 1.5 x this: the competition gives a tool 1.5 vCPU)")
+    parser.add_argument("--tool-memory", metavar="GB", type=float, default=8.0,
+                        help="address space of each of the tool's processes (RLIMIT_AS, default 8)")
     parser.add_argument("--tool-env-cache", metavar="DIR", default=None,
                         help="where the tools' own environments are kept (default $SURREALIST_TOOL_ENVS, else "
                              "~/.cache/surrealist-gym/tool-envs)")
@@ -50,18 +55,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
+    import math
+
     from tqdm import tqdm
 
     from ..competition.compete import prepare, run as run_tool
+    from ..competition.compete.process import ToolLimits
     from ..competition.compete.toolenv import CACHE_ENV
     from ..errors import SurrealistError
+    from ._search import _lock, _unlock
     from .options import check_at_least, check_writable, default_out
 
     check_at_least(args, budget=1, runs_per_test=1, workers=1, random_seed=0)
+    for flag, value, top in (("--tool-timeout", args.tool_timeout, 10 ** 7), ("--tool-memory", args.tool_memory, 4096)):
+        if not (math.isfinite(value) and 0 < value <= top):
+            raise SurrealistError(f"{flag}: expected a number above 0 and at most {top}, got {value:g}")
     plan = prepare(args.tool, args.case_study, args.budget, args.out or default_out("compete"),
                    runs_per_test=args.runs_per_test, workers=args.workers, aerialist=args.aerialist,
                    seed=args.random_seed, uav=args.uav, tool_env=args.tool_env,
-                   tool_env_cache=args.tool_env_cache)
+                   tool_env_cache=args.tool_env_cache,
+                   limits=ToolLimits(timeout_s=args.tool_timeout, memory_gb=args.tool_memory))
     check_writable(plan.out, "--out")
     if plan.env.kind == "own":  # where its environment is kept (built there unless it is)
         check_writable(plan.env.cache, "--tool-env-cache" if args.tool_env_cache else f"${CACHE_ENV} or the cache")
@@ -70,6 +83,12 @@ def run(args: argparse.Namespace) -> int:
     if plan.env.kind == "own":
         print(f"tool environment: its own ({plan.env.reason}), from the cache {plan.env.cache} or built there "
               f"(pip's output: {plan.out / 'tool-env.txt'})", flush=True)
+    print(plan.limits.describe(), flush=True)
+    try:  # one writer: a second compete on this --out stops here, in one line, and touches nothing of the first's
+        plan.out.mkdir(parents=True)
+        _lock(plan.out)
+    except (FileExistsError, SurrealistError):
+        raise SurrealistError(f"--out {plan.out}: exists (another compete writes there?); give a new folder") from None
     bar = tqdm(total=plan.budget, unit="sim", desc="simulations", file=sys.stderr, dynamic_ncols=True)
     failing = []
 
@@ -85,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
         result = run_tool(plan, on_flight)
     finally:
         bar.close()
+        _unlock(plan.out)
     _print_summary(result)
     if result.problem:
         raise SurrealistError(result.problem)

@@ -1,18 +1,22 @@
 """The simulation server of ``surrealist compete``: flies the tests that a tool's Aerialist agents send, within budget.
 
-A tool's process (with the shim, ``shim/surrealist_compete_shim.py``) connects to a
-:class:`multiprocessing.connection.Listener` on a local socket, authenticated by a key only the two processes know,
-and sends one message per ``agent.run()``::
+A tool's process (with the shim, ``shim/surrealist_compete_shim.py``) connects to an ``AF_UNIX`` socket in a folder
+only this user may enter, says hello with a key only the two processes know, and sends one JSON message per
+``agent.run()`` (``shim/surrealist_compete_wire.py``: length-prefixed JSON, never pickle)::
 
     {"op": "fly", "agent": "DockerAgent", "api": "AerialistTest", "cwd": TOOL_FOLDER, "test": TO_DICT, "runs": N,
      "compat": [NOTES]}
 
-The server writes the test as our YAML (``sim-NNNN.yaml`` in its folder: the test as flown), flies its ``N`` runs
-and writes each as a ULog (``sim-NNNN-runI.ulg``), and answers ``{"ok": True, "logs": [PATHS]}``; or
-``{"ok": False, "error": ONE_LINE}`` for a test that cannot be flown, a failed simulation or a request over the
-budget, which is refused unflown. The budget counts runs flown (one PX4 simulation each). Run ``k`` of the whole
-session (k = 0, 1, ... in request order) draws its noise from (test, seed, k), so a tool that asks for the same
-tests in the same order gets the same flights.
+Every field is checked (``request.py``: ``runs`` a whole number from 1 to the budget, ...), and every file the test
+names must lie in one of the server's ``roots`` (the tool's working folder, the case study's folder, the files the
+case study names), links resolved. The server writes the test as our YAML (``sim-NNNN.yaml`` in its folder: the test
+as flown), flies its ``N`` runs and writes each as a ULog (``sim-NNNN-runI.ulg``), and answers ``{"ok": True,
+"logs": [PATHS]}``; or ``{"ok": False, "error": ONE_LINE}`` for a bad request, a test that cannot be flown, a failed
+simulation or a request over the budget, which is refused unflown. That line is short and never quotes a file or an
+exception's text (a test naming ``/etc/shadow`` must not get a line of it back, nor leave one in ``flights.csv``).
+The budget counts runs flown (one PX4 simulation each). Run ``k`` of the whole session (k = 0, 1, ... in request
+order) draws its noise from (test, seed, k), so a tool that asks for the same tests in the same order gets the same
+flights.
 
 Example::
 
@@ -23,15 +27,24 @@ Example::
 """
 from __future__ import annotations
 
+import hmac
+import os
 import secrets
+import shutil
+import socket
+import tempfile
 import threading
 import time
 from dataclasses import dataclass
-from multiprocessing.connection import Client, Listener
 from pathlib import Path
 from typing import Callable
 
-from ...errors import SurrealistError, one_line
+from ...errors import SurrealistError
+from .request import AGENTS, APIS, BadRequest, check
+from .shim.surrealist_compete_wire import WireError, receive, send
+
+#: Connections a tool may hold open at once (a process of its each); more are closed unanswered.
+MAX_CONNECTIONS = 64
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,11 +96,13 @@ class SimulationServer:
     """
 
     def __init__(self, folder, budget: int, config, seed: int = 0, workers: int = 1,
-                 on_flight: Callable[[Flight], None] | None = None, runaway_after: int | None = None) -> None:
+                 on_flight: Callable[[Flight], None] | None = None, runaway_after: int | None = None,
+                 roots: tuple = ()) -> None:
         from ...executors import InlineExecutor, LocalPoolExecutor
 
         self.folder = Path(folder)
         self.budget, self.config, self.seed = budget, config, seed
+        self.roots = tuple(Path(os.path.realpath(r)) for r in roots)
         self._executor = InlineExecutor() if workers <= 1 else LocalPoolExecutor(workers)
         self._on_flight = on_flight
         self._runaway_after = default_runaway_after(budget) if runaway_after is None else runaway_after
@@ -99,36 +114,42 @@ class SimulationServer:
         self._spent = 0
         self._refused_counts: list[int] = []
         self._closing = False
-        self._listener: Listener | None = None
+        self._socket: socket.socket | None = None
+        self._home: str | None = None
+        self._slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
         self._thread: threading.Thread | None = None
 
     # --- lifecycle -----------------------------------------------------------------------------------------------
     @property
     def address(self) -> str:
         """The socket a tool's shim connects to."""
-        return self._listener.address
+        return os.path.join(self._home, "server.sock")
 
     def start(self) -> "SimulationServer":
-        """Listen on a new socket in a background thread; returns self."""
+        """Listen on a new socket (in a new folder of mode 0700) in a background thread; returns self."""
         self.folder.mkdir(parents=True, exist_ok=True)
-        self._listener = Listener(family="AF_UNIX", authkey=self.authkey)
+        self._home = tempfile.mkdtemp(prefix="surrealist-compete-")
+        self._socket = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self._socket.bind(self.address)
+        self._socket.listen(16)
         self._thread = threading.Thread(target=self._accept, name="surrealist-compete-server", daemon=True)
         self._thread.start()
         return self
 
     def stop(self) -> None:
         """Stop listening and wake the accepting thread (once; later calls do nothing)."""
-        if self._listener is None or self._closing:
+        if self._socket is None or self._closing:
             return
         self._closing = True
         try:  # wake the accepting thread
-            Client(self.address, authkey=self.authkey).close()
+            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as wake:
+                wake.connect(self.address)
         except OSError:
             pass
         self._thread.join(timeout=10)
-        self._listener.close()
+        self._socket.close()
+        shutil.rmtree(self._home, ignore_errors=True)
         self._executor.close()
-
     def __enter__(self) -> "SimulationServer":
         return self.start()
 
@@ -163,81 +184,101 @@ class SimulationServer:
     def _accept(self) -> None:
         while not self._closing:
             try:
-                conn = self._listener.accept()
-            except (OSError, EOFError):
+                conn, _ = self._socket.accept()
+            except OSError:
                 if self._closing:
                     return
                 continue
-            except Exception:  # noqa: BLE001 - a client with a wrong key (AuthenticationError): ignore it
-                continue
-            if self._closing:
+            if self._closing or not self._slots.acquire(blocking=False):
                 conn.close()
-                return
+                continue
             threading.Thread(target=self._serve, args=(conn,), daemon=True).start()
 
-    def _serve(self, conn) -> None:
-        with conn:
-            while True:
-                try:
-                    message = conn.recv()
-                except (EOFError, OSError):
+    def _serve(self, conn: socket.socket) -> None:
+        try:
+            with conn:
+                conn.settimeout(30)  # the hello comes at once
+                if not self._hello(conn):
                     return
-                try:
-                    reply = self._handle(message)
-                except Exception as err:  # noqa: BLE001 - the tool gets one line; the server goes on
-                    reply = {"ok": False, "error": f"internal error of surrealist compete ({type(err).__name__}: "
-                                                   f"{one_line(err)})"}
-                try:
-                    conn.send(reply)
-                except OSError:
-                    return
+                conn.settimeout(None)
+                while True:
+                    message = receive(conn)
+                    try:
+                        reply = self._handle(message)
+                    except Exception as err:  # noqa: BLE001 - the tool gets one line; the server goes on
+                        reply = {"ok": False, "error": f"internal error of surrealist compete ({type(err).__name__})"}
+                    send(conn, reply)
+        except (EOFError, OSError, WireError):  # the tool closed, or sent what is not a message: drop it
+            return
+        finally:
+            self._slots.release()
 
-    def _handle(self, message) -> dict:
-        if not isinstance(message, dict) or message.get("op") != "fly":
-            return {"ok": False, "error": f"unknown request {message!r:.60}"}
+    def _hello(self, conn: socket.socket) -> bool:
+        message = receive(conn)
+        key = message.get("key") if message.get("op") == "hello" else None
+        if not isinstance(key, str) or not hmac.compare_digest(key, self.authkey.hex()):
+            return False
+        send(conn, {"ok": True})
+        return True
+
+    def _handle(self, message: dict) -> dict:
         with self._lock:
-            for note in message.get("compat") or ():
-                self._notes.setdefault(str(note))
-            return self._fly(message)
+            try:
+                request = check(message, self.budget)
+            except BadRequest as err:
+                agent, api = message.get("agent"), message.get("api")
+                self._count_refusal(0)
+                return self._record(Flight(len(self._flights) + 1, agent if agent in AGENTS else "?",
+                                           api if api in APIS else "?", error=str(err)))
+            for note in request.compat:
+                if len(self._notes) < 64:
+                    self._notes.setdefault(note)
+            return self._fly(request)
 
-    def _fly(self, message: dict) -> dict:
+    def _count_refusal(self, runs: int) -> None:
+        self._refused_counts.append(runs)
+        if len(self._refused_counts) >= self._runaway_after:
+            self.runaway.set()
+
+    def _fly(self, request) -> dict:
         from ..rules import load_competition_test
-        from .translate import write_test
+        from .translate import outside, write_test
 
         number = len(self._flights) + 1
-        agent, api = str(message.get("agent", "?")), str(message.get("api", "?"))
-        runs = int(message.get("runs") or 1)
+        agent, api, runs = request.agent, request.api, request.runs
         if self._spent + runs > self.budget:
             error = (f"the budget of {self.budget} simulations is spent ({self._spent} flown, this test asks for "
                      f"{runs} more)")
-            self._refused_counts.append(runs)
-            if len(self._refused_counts) >= self._runaway_after:
-                self.runaway.set()
+            self._count_refusal(runs)
             return self._record(Flight(number, agent, api, refused=True, error=error))
         start = time.perf_counter()
         stem = self.folder / f"sim-{number:04d}"
         try:
-            test_file = write_test(message.get("test"), message.get("cwd") or ".", stem.with_suffix(".yaml"))
+            field = outside(request.test, request.cwd, self.roots)
+            if field is not None:
+                return self._record(Flight(number, agent, api, error=f"the test cannot be flown: its field {field!r} "
+                                                                     f"names a file outside the tool's folder"))
+            test_file = write_test(request.test, request.cwd, stem.with_suffix(".yaml"))
             test = load_competition_test(test_file)
-        except SurrealistError as err:
-            return self._record(Flight(number, agent, api, error=f"the test cannot be flown: {err}"))
+        except (SurrealistError, ValueError, TypeError, OSError) as err:  # its words may quote a file: not sent
+            return self._record(Flight(number, agent, api, error=f"the test cannot be flown ({type(err).__name__}: "
+                                                                 f"not a test our loader reads)"))
         first = self._spent
         self._spent += runs  # a run that fails counts as flown, as a PX4 run does
         results = self._executor.run(test, range(first, first + runs), self.seed, self.config)
-        logs, statuses, distances, failures = [], [], [], []
+        logs, statuses, distances, failures = [], [], [], 0
         for i, run in enumerate(results):
             statuses.append(str(getattr(run.status, "value", run.status)))
             if not hasattr(run, "save_ulog"):  # executors.FailedRun: its simulation raised twice
-                failures.append(run.message)
+                failures += 1
                 continue
             log = f"{stem}-run{i}.ulg"
             run.save_ulog(log, mission=test.mission)
             logs.append(log)
             distances.append(float(run.competition_distance))
-        error = "" if logs else f"the simulation failed: {failures[0] if failures else 'no run'}"
+        error = "" if logs else f"the simulation failed ({failures} of {runs} runs raised)"
         return self._record(Flight(number, agent, api, str(test_file), tuple(logs), tuple(statuses),
                                    tuple(distances), time.perf_counter() - start, error=error))
-
     def _record(self, flight: Flight) -> dict:
         self._flights.append(flight)
         if self._on_flight is not None:

@@ -1,10 +1,12 @@
 """Run a competition tool's own ``cli.py``, unedited, with every Aerialist agent flying surrealist-gym's simulator.
 
-:func:`prepare` checks everything before anything starts (the tool folder and its ``cli.py``, the case study, the output
-folder, the UAV, an Aerialist that holds the API the tool imports and imports here); :func:`run` copies the tool folder
-into the output folder, starts a :class:`~surrealist_gym.competition.compete.server.SimulationServer`, and runs
-``python cli.py generate CASE_STUDY BUDGET`` in the copy, as the competition does, with the shim folder first on its
-``PYTHONPATH`` (``shim/``: Aerialist's agents ask the server to fly). The output folder then holds::
+:func:`prepare` checks everything before anything starts (the tool folder and its ``cli.py``, no link out of it:
+``toolcopy``; the case study, the output folder, the UAV, an Aerialist that holds the API the tool imports and
+imports here); :func:`run` copies the tool folder into the output folder, starts a
+:class:`~surrealist_gym.competition.compete.server.SimulationServer`, and runs ``python cli.py generate CASE_STUDY
+BUDGET`` in the copy, as the competition does, in a process group of its own under resource limits (``process``),
+with the shim folder first on its ``PYTHONPATH`` (``shim/``: Aerialist's agents ask the server to fly). What the
+tool wrote is read in streams, within :data:`MAX_READ_BYTES`. The output folder then holds::
 
     tool/            the copy the tool ran in, with what it wrote (its output folder, logs/, results/)
     flights/         every test flown, as our YAML (sim-NNNN.yaml) and one ULog per run (sim-NNNN-runI.ulg)
@@ -25,7 +27,6 @@ import hashlib
 import json
 import math
 import os
-import shutil
 import subprocess
 import sys
 import time
@@ -37,7 +38,9 @@ from typing import Callable
 from ...errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, one_line
 from ..scoring import writing_order
 from .locate import AerialistSource, find_aerialist, tool_apis
+from .process import ToolLimits, ending_with_us, start, stop, wait
 from .server import Flight, SimulationServer
+from .toolcopy import check_folder, copy_folder
 from .toolenv import EnvChoice, ToolEnv, choose_env, own_env, top_level_imports
 
 SHIM = Path(__file__).resolve().parent / "shim"
@@ -45,7 +48,9 @@ DEFAULT_UAV = "px4-v1.12-sitl-iris"
 COMPAT_EXTRA = "pip install -e '.[compete]'"
 #: Made in the tool's working folder before it runs, as the competition's Dockerfile does (``mkdir -p``).
 PREPARED_FOLDERS = ("logs", "results", "generated_tests")
-_COPY_IGNORE = shutil.ignore_patterns(".git", "__pycache__", ".venv", "venv", ".pytest_cache")
+#: The largest file of the tool's that compete reads (a ULog it wrote, its stdout and stderr are read in part).
+MAX_READ_BYTES = 512 * 2 ** 20
+_LINE = 64 * 1024  # a line of the tool's stdout is read up to this many characters
 #: Aerialist's modules that only its LocalAgent imports (PX4's and ROS's Python modules: mavsdk, rospy, ...).
 LOCAL_AGENT_MODULES = ("local_agent", "drone", "simulator", "tools")
 _FILE_FIELDS = (("robot", "drone", "mission_file"), ("robot", "drone", "params_file"),
@@ -68,6 +73,7 @@ class CompetePlan:
     seed: int = 0
     uav: str = DEFAULT_UAV
     env: EnvChoice = EnvChoice("ours", "every module its files import is installed here")
+    limits: ToolLimits = ToolLimits()
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,7 +138,8 @@ class CompeteResult:
 
 # --- checks ----------------------------------------------------------------------------------------------------------
 def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, workers: int = 1, aerialist=None,
-            seed: int = 0, uav: str = DEFAULT_UAV, tool_env: str = "auto", tool_env_cache=None) -> CompetePlan:
+            seed: int = 0, uav: str = DEFAULT_UAV, tool_env: str = "auto", tool_env_cache=None,
+            limits: ToolLimits = ToolLimits()) -> CompetePlan:
     """Check every input and find the Aerialist to use; nothing is written. One-line SurrealistError otherwise.
 
     Args:
@@ -148,6 +155,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         uav: the UAV profile flown (default the competition's PX4 v1.12 SITL Iris).
         tool_env: which Python runs the tool: ``auto``, ``ours`` or ``own`` (``toolenv.choose_env``).
         tool_env_cache: where the tools' own environments are kept (default ``toolenv.default_cache()``).
+        limits: what the tool's process may use (time, memory, file size, CPU time; ``process.ToolLimits``).
     """
     from ...sim.profiles import resolve_uav
 
@@ -159,6 +167,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         raise SurrealistError(f"tool {tool}: {'not a folder' if tool.exists() else 'no such folder'}")
     if not (tool / "cli.py").is_file():
         raise SurrealistError(f"tool {tool}: no cli.py in it (a competition tool is a folder with cli.py)")
+    check_folder(tool)  # no link out of it, no loop, no FIFO: before anything in it is read
     out = (Path(out) if out is not None else Path("results") / f"compete-{datetime.now():%Y%m%d-%H%M%S}").absolute()
     if out.exists() or out.is_symlink():
         raise SurrealistError(f"--out {out}: exists; give a new folder")
@@ -172,7 +181,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
     if env.kind == "ours":  # an own environment gets Aerialist's imports installed
         _check_imports(source)
     return CompetePlan(tool.resolve(), argument, file, budget, out, source, apis, runs_per_test, workers, seed, uav,
-                       env)
+                       env, limits)
 
 
 def _case_study(tool: Path, name) -> tuple[str, Path]:
@@ -200,15 +209,24 @@ def _case_study(tool: Path, name) -> tuple[str, Path]:
 
 def _check_relative_files(file: Path, tool: Path) -> None:
     """Aerialist opens a case study's relative paths from the tool's working folder: they must be there."""
+    for key, value in _named_files(file):
+        if not os.path.isabs(value) and not (tool / value).is_file():
+            raise InvalidTestCase(f"case study {file}: field {key!r}: {value!r} is not in the tool's folder {tool} "
+                                  f"(Aerialist opens relative paths from the tool's working folder)")
+
+
+def _named_files(file: Path) -> tuple[tuple[str, str], ...]:
+    """(field, path as written) of each file the case study names."""
     import yaml
 
-    doc = yaml.safe_load(file.read_text(encoding="utf-8")) or {}
+    doc = yaml.safe_load(Path(file).read_text(encoding="utf-8")) or {}
+    named = []
     for section, legacy, key in _FILE_FIELDS:
         part = doc.get(section) or doc.get(legacy) or {}
         value = part.get(key) if isinstance(part, dict) else None
-        if isinstance(value, str) and not os.path.isabs(value) and not (tool / value).is_file():
-            raise InvalidTestCase(f"case study {file}: field {key!r}: {value!r} is not in the tool's folder {tool} "
-                                  f"(Aerialist opens relative paths from the tool's working folder)")
+        if isinstance(value, str):
+            named.append((key, value))
+    return tuple(named)
 
 
 def _check_imports(source: AerialistSource) -> None:
@@ -253,59 +271,52 @@ def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs
 
 # --- the run ---------------------------------------------------------------------------------------------------------
 def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) -> CompeteResult:
-    """Run the tool (see the module docstring); ``on_flight`` is called with each Flight as the server records it."""
+    """Run the tool (see the module docstring); ``on_flight`` is called with each Flight as the server records it.
+    ``plan.out`` must not exist, or be empty but for the ``.lock`` the command line holds in it."""
     from ...sim.profiles import resolve_uav
 
-    start = time.perf_counter()
-    plan.out.mkdir(parents=True)
+    start_s = time.perf_counter()
+    _claim(plan.out)
     tool_env = own_env(plan.env, plan.out / "tool-env.txt") if plan.env.kind == "own" else \
         ToolEnv("ours", Path(sys.executable), plan.env.reason)
     work = plan.out / "tool"
-    shutil.copytree(plan.tool, work, ignore=_COPY_IGNORE)
+    copy_folder(plan.tool, work)
     for folder in PREPARED_FOLDERS:  # as the competition's Dockerfile prepares the tool's working folder
         (work / folder).mkdir(exist_ok=True)
     stdout, stderr = plan.out / "tool-stdout.txt", plan.out / "tool-stderr.txt"
     config = resolve_uav(plan.uav).sim_config()
     command = [str(tool_env.python), "cli.py", "generate", plan.case_study, str(plan.budget)]
-    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight) as server, \
-            open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
+    roots = (work, plan.case_study_file.parent,  # where the files a test names may be: and those the case study names
+             *(Path(v) for _, v in _named_files(plan.case_study_file) if os.path.isabs(v)))
+    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight,
+                          roots=roots) as server, open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
         env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
         started = time.time()
-        process = subprocess.Popen(command, cwd=work, env=env, stdout=out_file, stderr=err_file,
-                                   stdin=subprocess.DEVNULL)
-        try:
-            returncode, stopped = _wait(process, server.runaway)
-        finally:
-            if process.poll() is None:  # Ctrl-C or any other exit: the tool does not outlive us
-                _stop(process)
+        with ending_with_us():
+            process = start(command, plan.limits, cwd=work, env=env, stdout=out_file, stderr=err_file,
+                            stdin=subprocess.DEVNULL)
+            try:
+                returncode, stopped = wait(process, plan.limits, server.runaway)
+            finally:  # an exception, Ctrl-C, SIGTERM, or the tool's end: none of its processes outlives this
+                stop(process)
         flights, spent, refused, notes = server.flights, server.spent, server.refused, server.notes
     output, found_by = find_output_folder(stdout, work, started)
-    tests = _written_tests(output, flights) if output is not None else ()
+    tests = _written_tests(output, flights, work) if output is not None else ()
     problem = _problem(plan, returncode, stopped, output, found_by, stdout, stderr)
     result = CompeteResult(plan, returncode, output, tests, flights, spent, refused, notes,
-                           time.perf_counter() - start, problem, found_by, tool_env)
+                           time.perf_counter() - start_s, problem, found_by, tool_env)
     _write_records(result)
     return result
 
 
-def _wait(process: subprocess.Popen, runaway) -> tuple[int, bool]:
-    """The tool's exit code, and whether it was stopped for asking past its budget again and again."""
-    while True:
-        try:
-            return process.wait(timeout=0.2), False
-        except subprocess.TimeoutExpired:
-            if runaway.is_set():
-                _stop(process)
-                return process.returncode, True
-
-
-def _stop(process: subprocess.Popen) -> None:
-    process.terminate()
+def _claim(out: Path) -> None:
+    """Make the output folder; one line if it exists (another compete made it since :func:`prepare` looked)."""
     try:
-        process.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        process.wait()
+        out.mkdir(parents=True)
+    except FileExistsError:
+        if out.is_dir() and not out.is_symlink() and [p.name for p in out.iterdir()] == [".lock"]:
+            return  # made, and locked, by the command line
+        raise SurrealistError(f"--out {out}: exists (another compete writes there?); give a new folder") from None
 
 
 def find_output_folder(stdout: Path, work: Path, since: float = 0.0) -> tuple[Path | None, str]:
@@ -313,21 +324,28 @@ def find_output_folder(stdout: Path, work: Path, since: float = 0.0) -> tuple[Pa
     (relative to its working folder), when it exists; else, as the organisers collect a tool's tests, the folder whose
     test YAMLs were written last (after ``since``, a time stamp: not a folder the tool shipped) under its
     ``generated_tests*/`` folders (``generated_tests/``; AmbieGen's ``generated_tests-01/``) or ``$TESTS_FOLDER``,
-    which the tools read. (None, why) when neither is there."""
+    which the tools read. (None, why) when neither is there. Only a folder inside ``work`` (links resolved) counts.
+    stdout is read line by line, each line up to 64 K characters."""
     printed = None
-    for line in stdout.read_text(encoding="utf-8", errors="replace").splitlines():
-        if line.strip().startswith("output folder:"):
-            printed = line.strip()[len("output folder:"):].strip() or None
+    with open(stdout, encoding="utf-8", errors="replace") as lines:
+        for line in iter(lambda: lines.readline(_LINE), ""):
+            if line.strip().startswith("output folder:"):
+                printed = line.strip()[len("output folder:"):].strip() or None
     named = None if printed is None else Path(os.path.normpath(Path(printed) if Path(printed).is_absolute()
                                                                else work / printed))
-    if named is not None and named.is_dir():
+    inside = named is not None and Path(os.path.realpath(named)).is_relative_to(os.path.realpath(work))
+    if named is not None and inside and named.is_dir():
         return named, "printed by the tool ('output folder: PATH')"
-    said = "it printed no 'output folder: PATH'" if named is None else f"the folder it printed, {named}, does not exist"
+    said = ("it printed no 'output folder: PATH'" if named is None else
+            f"the folder it printed, {named}, is outside its working folder" if not inside else
+            f"the folder it printed, {named}, does not exist")
     roots = sorted(work.glob("generated_tests*")) + ([work / os.environ["TESTS_FOLDER"]]
                                                      if os.environ.get("TESTS_FOLDER") else [])
     latest: dict[Path, tuple[float, str]] = {}  # folder -> (when its last test YAML was written, its root's name)
-    for root in (r for r in roots if r.is_dir()):
+    for root in (r for r in roots if r.is_dir() and not r.is_symlink()):
         for yaml_file in root.rglob("*.yaml"):
+            if yaml_file.is_symlink():
+                continue
             written = yaml_file.stat().st_mtime
             if written >= since and written > latest.get(yaml_file.parent, (0.0, ""))[0]:
                 latest[yaml_file.parent] = (written, root.name)
@@ -341,10 +359,12 @@ def _problem(plan, returncode, stopped, output, found_by, stdout, stderr) -> str
     """Why the run does not count (None when it does). Simulations refused over the budget are not a problem: the
     tool saw them fail, as PX4 runs past a budget would not have been given, and its output is scored as usual."""
     where = f"what it wrote is kept in {plan.out}"
-    if stopped:
+    if stopped == "runaway":
         return (f"the tool kept asking for simulations past its budget of {plan.budget} and was stopped; {where}")
+    if stopped == "timeout":
+        return f"the tool ran past its time limit of {plan.limits.timeout_s:g} s and was stopped; {where}"
     if returncode != 0:
-        lines = [line for line in stderr.read_text(encoding="utf-8", errors="replace").splitlines() if line.strip()]
+        lines = [line for line in _tail(stderr).splitlines() if line.strip()]
         last = f": {one_line(lines[-1], 120)}" if lines else ""
         return f"the tool crashed (exit code {returncode}){last} (see {stderr}); {where}"
     if output is None:
@@ -352,22 +372,50 @@ def _problem(plan, returncode, stopped, output, found_by, stdout, stderr) -> str
     return None
 
 
+def _tail(path: Path, size: int = 64 * 1024) -> str:
+    """The last ``size`` bytes of a file, as text."""
+    with open(path, "rb") as f:
+        f.seek(max(0, f.seek(0, os.SEEK_END) - size))
+        return f.read().decode("utf-8", errors="replace")
+
+
 def _digest(path) -> str:
-    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
+    """The SHA-1 of a file, read in blocks of 1 MB."""
+    digest = hashlib.sha1()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(2 ** 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
-def _written_tests(folder: Path, flights) -> tuple[WrittenTest, ...]:
+def _own_file(path: Path, work: Path) -> Path | None:
+    """``path`` when it is a regular file of the tool's (no link), else None."""
+    return path if not path.is_symlink() and path.is_file() and path.resolve().is_relative_to(work.resolve()) \
+        else None
+
+
+def _written_tests(folder: Path, flights, work: Path) -> tuple[WrittenTest, ...]:
     """The tests in the tool's output folder, each judged by the competition's distance on its own ULog with the
-    obstacles of the flight it came from (the tool copies our ULog as it is)."""
+    obstacles of the flight it came from (the tool copies our ULog as it is). A ULog is read only when its size is
+    that of a ULog flown (then it is at most that large), never one over :data:`MAX_READ_BYTES`; links are not
+    followed."""
+    by_size: dict[int, list[str]] = {}
+    for flight in flights:
+        for log in flight.logs:
+            if Path(log).is_file():
+                by_size.setdefault(Path(log).stat().st_size, []).append(log)
     by_log = {_digest(log): flight for flight in flights for log in flight.logs if Path(log).is_file()}
     tests = []
-    for yaml_file in writing_order(folder.glob("*.yaml")):
-        ulg, png = yaml_file.with_suffix(".ulg"), yaml_file.with_suffix(".png")
-        ulg, png = (ulg if ulg.is_file() else None), (png if png.is_file() else None)
-        flight = by_log.get(_digest(ulg)) if ulg is not None else None
+    for yaml_file in writing_order(y for y in folder.glob("*.yaml") if _own_file(y, work)):
+        ulg, png = _own_file(yaml_file.with_suffix(".ulg"), work), _own_file(yaml_file.with_suffix(".png"), work)
+        size = ulg.stat().st_size if ulg is not None else 0
+        flight = by_log.get(_digest(ulg)) if ulg is not None and size in by_size and size <= MAX_READ_BYTES \
+            else None
         distance, points, note = None, None, ""
         if ulg is None:
             note = "no ULog beside it"
+        elif size > MAX_READ_BYTES:
+            note = f"its ULog is {size} bytes, over the {MAX_READ_BYTES} compete reads; not read"
         elif flight is None:
             note = "its ULog is none that was flown"
         else:

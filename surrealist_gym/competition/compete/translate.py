@@ -38,6 +38,21 @@ def aerialist_doc(test: Mapping, cwd) -> dict:
     return doc
 
 
+def outside(test: Mapping, cwd, roots) -> str | None:
+    """The first file field of the test whose file (links resolved) lies in none of the folders ``roots``, else None
+    (always None without roots)."""
+    if not roots:
+        return None
+    doc = aerialist_doc(test, cwd)
+    for section, keys in _FILE_FIELDS.items():
+        part = doc.get(section)
+        for key in keys if isinstance(part, Mapping) else ():
+            if part.get(key) is not None and not any(Path(os.path.realpath(part[key])).is_relative_to(root)
+                                                     for root in roots):
+                return key
+    return None
+
+
 def write_test(test: Mapping, cwd, path) -> Path:
     """Write the Aerialist test as a YAML at ``path`` (``load_test`` reads it); returns the path."""
     import yaml

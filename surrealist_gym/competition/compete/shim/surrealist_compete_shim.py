@@ -3,12 +3,12 @@
 As Aerialist's agent modules import (``aerialist.px4.local_agent``, ``docker_agent``, ``k8s_agent``), their
 ``LocalAgent``, ``DockerAgent`` and ``K8sAgent`` are replaced by subclasses that start no PX4, container or job:
 ``run()`` sends the test (Aerialist's own ``to_dict()``) to the ``surrealist compete`` process over a local socket
-(``SURREALIST_COMPETE_ADDRESS``), which flies it and writes each run as a ULog, and returns what Aerialist's agent
-returns: a list with one result per run, ``DroneTestResult`` (Aerialist 0.2.x) or ``AerialistTestResult``
-(master), built by Aerialist's own code from the ULog at its ``log_file`` (so ``record`` is Aerialist's
-``Trajectory``). A test whose ``agent:`` section gives a count flies that many runs, any other
-``SURREALIST_COMPETE_RUNS`` (default 1). A refused or failed flight raises ``RuntimeError`` in the tool, as a failed
-PX4 run raises there.
+(``SURREALIST_COMPETE_ADDRESS``; length-prefixed JSON, ``surrealist_compete_wire``), which flies it and writes each
+run as a ULog, and returns what Aerialist's agent returns: a list with one result per run, ``DroneTestResult``
+(Aerialist 0.2.x) or ``AerialistTestResult`` (master), built by Aerialist's own code from the ULog at its
+``log_file`` (so ``record`` is Aerialist's ``Trajectory``). A test whose ``agent:`` section gives a count flies that
+many runs, any other ``SURREALIST_COMPETE_RUNS`` (default 1). A refused or failed flight raises ``RuntimeError`` in
+the tool, as a failed PX4 run raises there.
 
 Where the Aerialist in use lacks what a competition tool calls, it is added, each time with a note that the
 summary lists (see docs/compete.md): ``AerialistTest.plot`` (the 2025 snippet calls it; master moved it to
@@ -27,6 +27,8 @@ import os
 import sys
 import threading
 
+import surrealist_compete_wire
+
 ADDRESS_ENV = "SURREALIST_COMPETE_ADDRESS"
 AUTHKEY_ENV = "SURREALIST_COMPETE_AUTHKEY"
 RUNS_ENV = "SURREALIST_COMPETE_RUNS"
@@ -43,14 +45,19 @@ def _ask(message: dict) -> dict:
     global _link
     with _lock:
         if _link is None or _link[0] != os.getpid():
-            from multiprocessing.connection import Client
+            import socket
 
             address = os.environ.get(ADDRESS_ENV)
             if not address:
                 raise RuntimeError(f"surrealist compete: no simulation server ({ADDRESS_ENV} is not set)")
-            _link = (os.getpid(), Client(address, authkey=bytes.fromhex(os.environ.get(AUTHKEY_ENV, ""))))
-        _link[1].send(message)
-        return _link[1].recv()
+            conn = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            conn.connect(address)
+            surrealist_compete_wire.send(conn, {"op": "hello", "key": os.environ.get(AUTHKEY_ENV, "")})
+            if not surrealist_compete_wire.receive(conn).get("ok"):
+                raise RuntimeError("surrealist compete: the simulation server refused the connection")
+            _link = (os.getpid(), conn)
+        surrealist_compete_wire.send(_link[1], message)
+        return surrealist_compete_wire.receive(_link[1])
 
 
 def _plain(value):
@@ -60,7 +67,7 @@ def _plain(value):
     if isinstance(value, int):
         return int(value)
     if isinstance(value, float):
-        return float(value)
+        return float(value) if value == value and abs(value) != float("inf") else str(value)  # JSON has no nan
     if isinstance(value, dict):
         return {str(k): _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
