@@ -39,13 +39,13 @@ class FlyableActions(SurrealistWrapper):
         env = self.inner
         low, high = env.action_bounds()
         wanted = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), low, high)
-        if self._flyable(wanted):
+        if self.flies(wanted):
             return wanted
         seed = np.asarray(env.seed_action, dtype=np.float64)
         near, far = 0.0, 1.0
         for _ in range(BISECTIONS):
             middle = (near + far) / 2
-            if self._flyable(seed + middle * (wanted - seed)):
+            if self.flies(seed + middle * (wanted - seed)):
                 near = middle
             else:
                 far = middle
@@ -59,7 +59,8 @@ class FlyableActions(SurrealistWrapper):
         info["action"], info["repaired"] = flown, not np.array_equal(flown, given)
         return obs, reward, terminated, truncated, info
 
-    def _flyable(self, action: np.ndarray) -> bool:
+    def flies(self, action) -> bool:
+        """Whether the bare env flies ``action`` as it is (its test is valid), rather than refusing it."""
         try:
             self.inner.test_for(action)
         except InvalidTestCase:
