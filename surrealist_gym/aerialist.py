@@ -83,7 +83,7 @@ def load_test(path, allow_outside=()) -> TestCase:
         except MissionError as err:
             raise InvalidTestCase(f"{name}: field 'mission_file': {err}") from err
     params_file = resolve("params_file", robot.get("params_file"))
-    params = dict(_read_params(params_file)) if params_file else {}
+    params = dict(_in_field(name, "params_file", _read_params, params_file)) if params_file else {}
     inline = robot.get("params")
     if inline is not None:
         if not isinstance(inline, dict):
@@ -95,7 +95,7 @@ def load_test(path, allow_outside=()) -> TestCase:
     if mis.get("commands") is not None:
         commands = _parse_commands(mis["commands"], name)
     else:
-        commands = _read_commands(commands_file) if commands_file else ()
+        commands = _in_field(name, "commands_file", _read_commands, commands_file) if commands_file else ()
     obstacles = parse_obstacles(sim.get("obstacles"), name, notes)
     wind = None
     if sim.get("wind") is not None:
@@ -350,6 +350,14 @@ def parse_obstacles(raw, name, notes: list | None = None) -> tuple[Obstacle, ...
     if notes is not None:
         notes.extend(f"obstacles {', '.join(map(str, which))}: {what}" for what, which in odd.items())
     return tuple(out)
+
+
+def _in_field(name: str, key: str, read, path: str):
+    """``read(path)``, its error prefixed with the YAML and the field that names the file."""
+    try:
+        return read(path)
+    except InvalidTestCase as err:
+        raise InvalidTestCase(f"{name}: field {key!r}: {err}") from None
 
 
 def _csv_rows(path: str, what: str) -> list[tuple[int, list[str]]]:

@@ -159,6 +159,10 @@ def input_file(value, base, where: str, error: type[SurrealistError] = Surrealis
     roots = allowed_folders(base, allow_outside)
     inside = next((p for p in found if any(p.is_relative_to(root) for root in roots)), None)
     if inside is None:
-        raise error(f"{where}: file {value!r} ({found[0]}) lies outside the YAML's folder and the working folder; "
+        shown = f"{value!r}" + (f" ({found[0]})" if str(found[0]) != value else "")
+        raise error(f"{where}: file {shown} lies outside the YAML's folder and the working folder; "
                     f"--allow-outside FOLDER lets tests read files under FOLDER")
-    return regular_file(str(inside), f"file of {where}", error)
+    try:
+        return regular_file(str(inside), "file", error)
+    except SurrealistError as err:
+        raise error(f"{where}: {err}") from None
