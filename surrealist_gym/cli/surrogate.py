@@ -88,7 +88,7 @@ def _check_inputs(args) -> None:
                 f"expected 1 to {len(args.stores) - 1} (stores given: {len(args.stores)})" if len(args.stores) > 1
                 else "needs at least 2 stores, one to train on and one to hold out (given: 1)"))
         out = Path(args.out)
-        held = sorted(p.name for p in out.iterdir()) if out.is_dir() and not out.is_symlink() else []
+        held = sorted(p.name for p in out.iterdir()) if out.is_dir() else []
         if held and not args.overwrite:  # before check_writable's probe, which would touch the folder
             raise SurrealistError(f"--out {out}: " + ("holds a model already" if "meta.json" in held else
                                                       f"not empty (holds {held[0]})")
