@@ -133,13 +133,23 @@ def allowed_folders(base, allow_outside=()) -> tuple:
 CASE_STUDIES = "case_studies"
 
 
+def _a_tools_case_study(path, base) -> bool:
+    """Whether ``path`` lies in a ``case_studies`` folder of a tool's folder beside ``base`` (``surrealist compete``
+    writes the tests a tool sends into ``flights/``, naming its copy's ``tool/case_studies/...`` by absolute path)."""
+    from pathlib import Path
+
+    parent = Path(base).resolve().parent
+    return any(folder.name == CASE_STUDIES and folder.parent.parent == parent for folder in Path(path).parents)
+
+
 def input_file(value, base, where: str, error: type[SurrealistError] = SurrealistError, missing_ok: bool = False,
                allow_outside=()):
     """The file a test's field names, resolved as Aerialist resolves it: an absolute path as it is, a relative one
     against the YAML's folder ``base``, then the working folder, then by its name in ``base`` (the paper's seeds name
     paths relative to their repository root: ``experiments/case0.plan``), and a path in the competition's
     ``case_studies/`` also in the folder above ``base`` (:data:`CASE_STUDIES`). Never by walking up parents. The
-    file must lie (links resolved) under :func:`allowed_folders` and be a regular file (:func:`regular_file`). Else
+    file must lie (links resolved) under :func:`allowed_folders` or in a tool's ``case_studies`` beside ``base``
+    (:func:`_a_tools_case_study`), and be a regular file (:func:`regular_file`). Else
     a one-line ``error`` naming the field (``where``) and the path, never the file's contents; a file not found is
     None when ``missing_ok``."""
     from pathlib import Path
@@ -157,7 +167,8 @@ def input_file(value, base, where: str, error: type[SurrealistError] = Surrealis
             return None
         raise error(f"{where}: file {value!r} not found (looked in the YAML's folder and the working folder)")
     roots = allowed_folders(base, allow_outside)
-    inside = next((p for p in found if any(p.is_relative_to(root) for root in roots)), None)
+    inside = next((p for p in found if any(p.is_relative_to(root) for root in roots)
+                   or _a_tools_case_study(p, base)), None)
     if inside is None:
         shown = f"{value!r}" + (f" ({found[0]})" if str(found[0]) != value else "")
         raise error(f"{where}: file {shown} lies outside the YAML's folder and the working folder; "

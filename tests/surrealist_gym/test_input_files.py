@@ -180,3 +180,15 @@ class _nothing:
 
     def __exit__(self, *exc):
         return False
+
+
+def test_a_tools_case_studies_beside_the_tests_folder(tmp_path, monkeypatch):
+    """surrealist compete writes the tests a tool sends into out/flights/, naming the tool copy's files absolute."""
+    monkeypatch.chdir(tmp_path / "..")
+    shutil.copytree(CASE_STUDIES, tmp_path / "out" / "tool" / "case_studies")
+    shutil.copytree(CASE_STUDIES, tmp_path / "out" / "tool" / "elsewhere")
+    plan = tmp_path / "out" / "tool" / "case_studies" / "mission1.plan"
+    test = sg.load_test(_yaml(tmp_path / "out" / "flights", f"robot:\n  mission_file: {plan}\n"))
+    assert test.mission_file == str(plan)
+    other = tmp_path / "out" / "tool" / "elsewhere" / "mission1.plan"
+    _refused(_yaml(tmp_path / "out" / "flights", f"robot:\n  mission_file: {other}\n"), "lies outside")
