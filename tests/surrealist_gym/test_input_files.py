@@ -36,7 +36,8 @@ def _refused(path, *names, allow_outside=()) -> str:
 
 
 def test_no_lookup_walks_up_parent_folders(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path / "..")
+    (tmp_path / "cwd").mkdir()
+    monkeypatch.chdir(tmp_path / "cwd")  # the working folder holds none of the files
     (tmp_path / "etc").mkdir()
     (tmp_path / "etc" / "passwd").write_text(f"root:{SECRET}\n")
     path = _yaml(tmp_path / "a" / "b", "robot:\n  mission_file: etc/passwd\n")  # the old loader found ../../etc/passwd
@@ -45,7 +46,8 @@ def test_no_lookup_walks_up_parent_folders(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("value", ["{outside}/secret.csv", "../../outside/secret.csv", "link.csv"])
 def test_a_file_outside_the_yaml_folder_and_working_folder_is_refused_unless_allowed(tmp_path, monkeypatch, value):
-    monkeypatch.chdir(tmp_path / "..")
+    (tmp_path / "cwd").mkdir()
+    monkeypatch.chdir(tmp_path / "cwd")  # the working folder holds none of the files
     outside = tmp_path / "outside"
     outside.mkdir()
     (outside / "secret.csv").write_text(f"MPC_XY_CRUISE, {SECRET}\n")
@@ -136,7 +138,8 @@ def test_the_paper_seeds_load_from_anywhere(tmp_path, monkeypatch, folder):
 
 
 def test_the_competition_layout_one_folder_up_only(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path / "..")
+    (tmp_path / "cwd").mkdir()
+    monkeypatch.chdir(tmp_path / "cwd")  # the working folder holds none of the files
     shutil.copytree(CASE_STUDIES, tmp_path / "tool" / "case_studies")
     body = "robot:\n  mission_file: case_studies/mission1.plan\n"
     test = sg.load_test(_yaml(tmp_path / "tool" / "generated_tests", body))
@@ -184,7 +187,8 @@ class _nothing:
 
 def test_a_tools_case_studies_beside_the_tests_folder(tmp_path, monkeypatch):
     """surrealist compete writes the tests a tool sends into out/flights/, naming the tool copy's files absolute."""
-    monkeypatch.chdir(tmp_path / "..")
+    (tmp_path / "cwd").mkdir()
+    monkeypatch.chdir(tmp_path / "cwd")
     shutil.copytree(CASE_STUDIES, tmp_path / "out" / "tool" / "case_studies")
     shutil.copytree(CASE_STUDIES, tmp_path / "out" / "tool" / "elsewhere")
     plan = tmp_path / "out" / "tool" / "case_studies" / "mission1.plan"
