@@ -411,6 +411,7 @@ def corpus(rng: np.random.Generator) -> list[Case]:
         _write("bad.zip", b"PK\x03\x04 not a zip"))
     for argv in ARGPARSE:
         add("argparse", " ".join(argv) or "(none)", argv)
+    _what_a_test_reads(add)
     return cases
 
 
@@ -429,6 +430,57 @@ def compete_untrusted_cases() -> list[Case]:
         ("link out (up -> ..)", lambda t: os.symlink("..", t / "up")),
         ("loop (loop -> .)", lambda t: os.symlink(".", t / "loop")),
         ("FIFO in the tool", lambda t: os.mkfifo(t / "pipe"))]]
+
+
+# --- issue 44: tests read only what they should; outputs kept; each refusal one line -----------------------------
+def _what_a_test_reads(add) -> None:
+    """Files a test should not read, CSV fields over csv's limit, 3,000 boxes, one folder under two names, nested
+    JSON, a dangling export-tool folder, and outputs that hold a model or a policy already."""
+    simulate = ["simulate", "t.yaml"] + CHEAP["simulate"][2:]
+    for value, extra in [("etc/passwd", []), ("/etc/passwd", []), ("../../../../../../etc/passwd", []),
+                         ("/proc/self/environ", []), ("/proc/self/environ", ["--allow-outside", "/"]),
+                         ("/proc/kmsg", ["--allow-outside", "/"]), ("/dev/zero", ["--allow-outside", "/dev"]),
+                         ("link.csv", [])]:
+        add("reads", f"simulate params_file {value} {' '.join(extra)}".strip(), simulate + extra,
+            lambda folder, v=value: [_write("t.yaml", _test_yaml(params_file=v))(folder),
+                                     (folder / "link.csv").symlink_to("/etc/passwd")])
+    huge = "MPC_XY_CRUISE, " + "1" * 140_000 + "\n"
+    for command, argv in [("simulate", simulate), ("generate", ["generate", "t.yaml"] + CHEAP["generate"][2:]),
+                          ("evaluate", ["evaluate", "t.yaml", "--any-layout", "--runs", "1", "--workers", "1",
+                                        "--out", "out"]),
+                          ("replicate --seed", _with(CHEAP["replicate"], "--seed", "t.yaml"))]:
+        for field_ in ("params", "commands"):
+            body = _test_yaml(params_file="big.csv") if field_ == "params" else _test_yaml(
+                commands="commands_file: big.csv")
+            add("reads", f"{command} ({field_} CSV field over 128 KB)", argv,
+                lambda folder, b=body: [_write("t.yaml", b)(folder), _write("big.csv", huge)(folder)])
+    boxes = "".join(f"    - {{size: {{l: 1, w: 1, h: 1}}, position: {{x: {3 * (k % 60)}, y: {3 * (k // 60)}}}}}\n"
+                    for k in range(3000)) + "    - {size: {l: 1, w: 1, h: 1}, position: {x: 0.5, y: 0.5}}\n"
+    add("reads", "simulate (3,000 boxes, two overlapping)", simulate,
+        _write("t.yaml", _test_yaml().replace("  obstacles: [7.625, 5.0625, 20, 17.1875, 17.53125, 0, 0]\n",
+                                              "  obstacles:\n" + boxes)))
+
+    def two_names(folder: Path) -> None:
+        (folder / "suite").mkdir()
+        shutil.copytree(CASE_STUDIES, folder / "case_studies")
+        shutil.copy(sorted(CAMBA.glob("*.yaml"))[0], folder / "suite")
+        (folder / "again").symlink_to("suite")
+    for extra in ([], ["--competition", "2025"]):
+        add("reads", f"evaluate suite again {' '.join(extra)}".strip(),
+            ["evaluate", "suite", "again", "--runs", "1", "--workers", "1", "--out", "out"] + extra, two_names)
+    nested = "[" * 50_000 + "]" * 50_000
+    add("reads", "fidelity (obstacles JSON nested 50,000 deep)",
+        ["fidelity", "deep.csv", "--mission", str(CASE_STUDIES / "mission1.yaml"), "--workers", "1", "--out", "out"],
+        _write("deep.csv", f'test_id,obstacles,px4_min_distance_2d\nt1,"{nested}",1.0\n'))
+    add("reads", "export-tool DIR (a dangling link)", ["export-tool", "tool"],
+        lambda folder: (folder / "tool").symlink_to("nowhere"))
+    add("reads", "surrogate train --out MODEL (holds a model)", CHEAP["surrogate-train"][:-1] + ["m"],
+        lambda folder: [(folder / "m").mkdir(), _write("m/meta.json", "{}")(folder)])
+    add("reads", "surrogate train A LINK-TO-A --holdout 1",
+        ["surrogate", "train", "a.sqlite", "b.sqlite", "--problem", "generate", "--kind", "knn", "--holdout", "1",
+         "--out", "model"],
+        lambda folder: [shutil.copy(STORE, folder / "a.sqlite"), (folder / "b.sqlite").symlink_to("a.sqlite")])
+    add("reads", "train --out p.zip (holds a policy)", CHEAP["train"], _write("policy.zip", b"PK policy"))
 
 
 def _pickled_policy(folder: Path) -> None:

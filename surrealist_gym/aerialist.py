@@ -16,9 +16,9 @@ import warnings
 from dataclasses import fields
 from pathlib import Path
 
-from .errors import InvalidTestCase, MissionError, regular_file, text_lines
+from .errors import InvalidTestCase, MissionError, input_file, one_line, read_text, regular_file, text_lines
 from .mission import read_mission
-from .sim.ranges import param_problem
+from .sim.ranges import RANGES, UAV_SETTING_PREFIX, param_problem
 from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, _finite, _parse_shape
 
 # --- YAML --------------------------------------------------------------------------------------------------------
@@ -39,7 +39,7 @@ SIMULATORS = ("gazebo", "ros", "jmavsim")
 AGENTS = ("local", "docker", "k8s")
 
 
-def load_test(path) -> TestCase:
+def load_test(path, allow_outside=()) -> TestCase:
     """Load an Aerialist test-case YAML, as Aerialist master or 0.2.x writes it (docs/aerialist-yaml.md).
 
     Sections under either generation's names (``robot``/``drone``, ``mission``/``test``; both given: they must be
@@ -47,19 +47,14 @@ def load_test(path) -> TestCase:
     cylinder's radius). The simulation's ``timeout`` (times its ``speed``: Aerialist's clock is the wall's) limits the
     flight. What cannot be flown is a one-line error naming the file and field (a real vehicle's port, an unknown
     simulator or field); what Aerialist's flight would not miss is read with one warning line naming the file
-    (a shape name Aerialist reads without geometry, jMAVSim, ``agent.count``). Relative file paths are resolved
-    against the YAML's folder, then its parents (the paper's seeds name paths relative to their repository root),
-    then by file name in the YAML's folder.
+    (a shape name Aerialist reads without geometry, jMAVSim, ``agent.count``). A file the test names is resolved
+    and checked by :func:`~surrealist_gym.errors.input_file`: against the YAML's folder, the working folder, then by
+    its name in the YAML's folder; it must lie under one of them or a folder of ``allow_outside`` (the command
+    line's ``--allow-outside``).
     """
     path = Path(path)
     name = regular_file(path, "test case", InvalidTestCase)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise InvalidTestCase(f"{name}: cannot read test case ({err.strerror})") from err
-    except UnicodeDecodeError as err:
-        raise InvalidTestCase(f"{name}: not UTF-8 text (byte {err.start})") from None
-    doc = safe_yaml(text, name)
+    doc = safe_yaml(read_text(path, "test case", InvalidTestCase), name)
     if not isinstance(doc, dict):
         raise InvalidTestCase(f"{name}: expected a mapping with sections {sorted(_SECTIONS)}")
     unknown = set(doc) - _SECTIONS
@@ -77,14 +72,8 @@ def load_test(path) -> TestCase:
     base = path.resolve().parent
 
     def resolve(key: str, value) -> str | None:
-        if value is None:
-            return None
-        if not isinstance(value, str):
-            raise InvalidTestCase(f"{name}: field {key!r}: expected a file path, got {value!r}")
-        found = _resolve_path(value, base)
-        if found is None:
-            raise InvalidTestCase(f"{name}: field {key!r}: file {value!r} not found")
-        return found
+        return None if value is None else input_file(value, base, f"{name}: field {key!r}", InvalidTestCase,
+                                                  allow_outside=allow_outside)
 
     mission_file = resolve("mission_file", robot.get("mission_file"))
     mission = None
@@ -94,7 +83,7 @@ def load_test(path) -> TestCase:
         except MissionError as err:
             raise InvalidTestCase(f"{name}: field 'mission_file': {err}") from err
     params_file = resolve("params_file", robot.get("params_file"))
-    params = dict(_read_params(params_file)) if params_file else {}
+    params = dict(_in_field(name, "params_file", _read_params, params_file)) if params_file else {}
     inline = robot.get("params")
     if inline is not None:
         if not isinstance(inline, dict):
@@ -106,7 +95,7 @@ def load_test(path) -> TestCase:
     if mis.get("commands") is not None:
         commands = _parse_commands(mis["commands"], name)
     else:
-        commands = _read_commands(commands_file) if commands_file else ()
+        commands = _in_field(name, "commands_file", _read_commands, commands_file) if commands_file else ()
     obstacles = parse_obstacles(sim.get("obstacles"), name, notes)
     wind = None
     if sim.get("wind") is not None:
@@ -128,7 +117,8 @@ def load_test(path) -> TestCase:
     log = assertion.get("log_file") if assertion.get("log_file") is not None else own.get("assertion_log")
     if log is not None and not isinstance(log, str):
         raise InvalidTestCase(f"{name}: field 'log_file': expected a file path, got {log!r}")
-    reference_log = _resolve_path(log, base) if log else None
+    reference_log = input_file(log, base, f"{name}: field 'log_file'", InvalidTestCase, True,
+                               allow_outside) if log else None
     if notes:
         warnings.warn(f"{name}: " + "; ".join(notes), stacklevel=2)
     try:
@@ -277,18 +267,6 @@ def _section(doc, name, key, legacy, allowed) -> tuple[dict, str]:
     return value, key
 
 
-def _resolve_path(value: str, base: Path) -> str | None:
-    candidate = Path(value).expanduser()
-    if candidate.is_absolute():
-        return str(candidate) if candidate.is_file() else None
-    for folder in (base, *base.parents):
-        if (folder / candidate).is_file():
-            return str((folder / candidate).resolve())
-    if (base / candidate.name).is_file():
-        return str((base / candidate.name).resolve())
-    return None
-
-
 def _relative(file: str, base: Path) -> str:
     """``file`` relative to ``base`` when it lies inside it, else absolute."""
     path = Path(file).resolve()
@@ -374,35 +352,54 @@ def parse_obstacles(raw, name, notes: list | None = None) -> tuple[Obstacle, ...
     return tuple(out)
 
 
+def _in_field(name: str, key: str, read, path: str):
+    """``read(path)``, its error prefixed with the YAML and the field that names the file."""
+    try:
+        return read(path)
+    except InvalidTestCase as err:
+        raise InvalidTestCase(f"{name}: field {key!r}: {err}") from None
+
+
+def _csv_rows(path: str, what: str) -> list[tuple[int, list[str]]]:
+    """The numbered rows of a CSV file; a malformed one (a field over csv's limit, a NUL) is a one-line error."""
+    try:
+        return list(enumerate(csv.reader(text_lines(path, InvalidTestCase, what)), start=1))
+    except csv.Error as err:
+        raise InvalidTestCase(f"{path}: not a {what} (CSV: {one_line(err, 60)})") from None
+
+
 def _read_params(path: str) -> list[tuple[str, float]]:
-    """PX4 parameters from ``NAME, value`` lines (no header)."""
+    """PX4 parameters from ``NAME, value`` lines (no header). Errors name the line, never quote it (a test may name
+    any file: docs/aerialist-yaml.md)."""
     out = []
-    for n, row in enumerate(csv.reader(text_lines(path, InvalidTestCase)), start=1):
+    for n, row in _csv_rows(path, "params file"):
         if not row or not row[0].strip() or row[0].strip().startswith("#"):
             continue
         if len(row) < 2:
-            raise InvalidTestCase(f"{path}: line {n}: expected 'NAME, value', got {','.join(row)!r}")
+            raise InvalidTestCase(f"{path}: line {n}: expected 'NAME, value'")
+        name = row[0].strip()
+        shown = f"parameter {name}" if name in RANGES or name.startswith(UAV_SETTING_PREFIX) else "the parameter"
         try:
             value = float(row[1])
-        except ValueError as err:
-            raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: not a number {row[1]!r}") from err
-        bad = param_problem(row[0].strip(), value)
+        except ValueError:
+            raise InvalidTestCase(f"{path}: line {n}: {shown}: its value is not a number") from None
+        bad = param_problem(name, value)
         if bad:
-            raise InvalidTestCase(f"{path}: line {n}: parameter {row[0].strip()}: {bad}")
-        out.append((row[0].strip(), int(value) if value.is_integer() and "." not in row[1] else value))
+            raise InvalidTestCase(f"{path}: line {n}: {shown}: {bad}")
+        out.append((name, int(value) if value.is_integer() and "." not in row[1] else value))
     return out
 
 
 def _read_commands(path: str) -> tuple[RuntimeCommand, ...]:
-    rows = [r for r in csv.reader(text_lines(path, InvalidTestCase)) if r and any(c.strip() for c in r)]
-    if rows and rows[0][0].strip() == "timestamp":
+    rows = [(n, r) for n, r in _csv_rows(path, "commands file") if r and any(c.strip() for c in r)]
+    if rows and rows[0][1][0].strip() == "timestamp":
         rows = rows[1:]
     out = []
-    for n, row in enumerate(rows, start=2):
+    for n, row in rows:
         try:
             values = [float(c) for c in row]
-        except ValueError as err:
-            raise InvalidTestCase(f"{path}: line {n}: expected numbers timestamp,mode,x,y,z,r") from err
+        except ValueError:
+            raise InvalidTestCase(f"{path}: line {n}: expected numbers timestamp,mode,x,y,z,r") from None
         if len(values) != 6:
             raise InvalidTestCase(f"{path}: line {n}: expected 6 columns timestamp,mode,x,y,z,r, got {len(values)}")
         try:

@@ -52,11 +52,14 @@ class InfrastructureError(SurrealistError):
     never stored as a result; the search stops and ``--resume`` re-flies what is missing."""
 
 
-def regular_file(path, what: str, error: type[SurrealistError] = SurrealistError, empty_ok: bool = True) -> str:
+def regular_file(path, what: str, error: type[SurrealistError] = SurrealistError, empty_ok: bool = True,
+                 max_bytes: int | None = None) -> str:
     """``path`` (as a string) if it names an existing regular file, else a one-line ``error``: missing, or what it is
     instead (a folder, a FIFO, a device, a socket), or empty when ``empty_ok`` is False. Checked with ``stat``, which
     does not open the file, so an input that is a FIFO or a device is refused instead of blocking its reader. Every
-    reader of an input file calls it before opening it. ``what`` names the input ("log file", "test case")."""
+    reader of an input file calls it before opening it. ``what`` names the input ("log file", "test case"). A file
+    of the kernel's (under /proc or /sys: regular to ``stat``, but endless, blocking or secret) is refused, and so is
+    one larger than ``max_bytes``."""
     import os
     import stat
 
@@ -70,19 +73,107 @@ def regular_file(path, what: str, error: type[SurrealistError] = SurrealistError
                 else "a socket" if stat.S_ISSOCK(info.st_mode)
                 else "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode) else "a special file")
         raise error(f"{name}: {kind}, not a regular file ({what} expected)")
+    real = os.path.realpath(name)
+    kernel = next((root for root in KERNEL_FOLDERS if real == root or real.startswith(root + "/")), None)
+    if kernel:
+        raise error(f"{name}: a file of the kernel's ({kernel}), not a regular file ({what} expected)")
+    if max_bytes is not None and info.st_size > max_bytes:
+        raise error(f"{name}: {info.st_size} bytes, more than the {max_bytes} a {what} may hold")
     if not empty_ok and info.st_size == 0:
         raise error(f"{name}: an empty file, no {what} in it")
     return name
 
 
-def text_lines(path, error: type[SurrealistError] = SurrealistError) -> list[str]:
-    """The lines of a UTF-8 text file (:func:`regular_file` first), else a one-line ``error`` naming the file."""
+#: Folders of the kernel's files: never an input (/proc/kmsg blocks, /proc/self/environ is the environment).
+KERNEL_FOLDERS = ("/proc", "/sys")
+#: The most bytes a test's own text files (its YAML, mission, params and commands files) may hold.
+MAX_TEXT_BYTES = 16 * 1024 * 1024
+
+
+def read_text(path, what: str, error: type[SurrealistError] = SurrealistError, max_bytes: int = MAX_TEXT_BYTES) -> str:
+    """A UTF-8 text file of at most ``max_bytes`` (:func:`regular_file` first; read no further than the limit, should
+    the file grow), else a one-line ``error`` naming the file, never quoting it."""
+    name = regular_file(path, what, error, max_bytes=max_bytes)
+    try:
+        with open(name, "rb") as f:
+            data = f.read(max_bytes + 1)
+    except OSError as err:
+        raise error(f"{name}: cannot read {what} ({err.strerror or err})") from None
+    if len(data) > max_bytes:
+        raise error(f"{name}: more than the {max_bytes} bytes a {what} may hold")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise error(f"{name}: not UTF-8 text (byte {err.start})") from None
+
+
+def text_lines(path, error: type[SurrealistError] = SurrealistError, what: str = "file") -> list[str]:
+    """The lines of a UTF-8 text file (:func:`read_text`), else a one-line ``error`` naming the file."""
+    return read_text(path, what, error).splitlines()
+
+
+#: The environment variable holding the folders (``os.pathsep``-separated) a test may read files under besides its
+#: YAML's folder and the working folder; ``--allow-outside PATH`` sets it (worker processes inherit it).
+ALLOW_OUTSIDE_ENV = "SURREALIST_ALLOW_OUTSIDE"
+
+
+def allowed_folders(base, allow_outside=()) -> tuple:
+    """The folders a test whose YAML is in ``base`` may read files under: ``base``, the working folder, the
+    competition's ``case_studies`` beside ``base`` (:data:`CASE_STUDIES`) and the folders of
+    ``$SURREALIST_ALLOW_OUTSIDE`` and ``allow_outside`` (all with their links resolved)."""
+    import os
     from pathlib import Path
 
-    regular_file(path, "file", error)
+    extra = [p for p in os.environ.get(ALLOW_OUTSIDE_ENV, "").split(os.pathsep) if p] + list(allow_outside)
+    return tuple(Path(p).expanduser().resolve() for p in (base, Path.cwd(), Path(base).parent / CASE_STUDIES, *extra))
+
+
+#: The competition's layout: a tool writes its tests into a folder of its own (``generated_tests/``) and names the
+#: case study's files from the tool's folder (``case_studies/mission1.plan``), Aerialist's working folder there.
+CASE_STUDIES = "case_studies"
+
+
+def _a_tools_case_study(path, base) -> bool:
+    """Whether ``path`` lies in a ``case_studies`` folder of a tool's folder beside ``base`` (``surrealist compete``
+    writes the tests a tool sends into ``flights/``, naming its copy's ``tool/case_studies/...`` by absolute path)."""
+    from pathlib import Path
+
+    parent = Path(base).resolve().parent
+    return any(folder.name == CASE_STUDIES and folder.parent.parent == parent for folder in Path(path).parents)
+
+
+def input_file(value, base, where: str, error: type[SurrealistError] = SurrealistError, missing_ok: bool = False,
+               allow_outside=()):
+    """The file a test's field names, resolved as Aerialist resolves it: an absolute path as it is, a relative one
+    against the YAML's folder ``base``, then the working folder, then by its name in ``base`` (the paper's seeds name
+    paths relative to their repository root: ``experiments/case0.plan``), and a path in the competition's
+    ``case_studies/`` also in the folder above ``base`` (:data:`CASE_STUDIES`). Never by walking up parents. The
+    file must lie (links resolved) under :func:`allowed_folders` or in a tool's ``case_studies`` beside ``base``
+    (:func:`_a_tools_case_study`), and be a regular file (:func:`regular_file`). Else
+    a one-line ``error`` naming the field (``where``) and the path, never the file's contents; a file not found is
+    None when ``missing_ok``."""
+    from pathlib import Path
+
+    if not isinstance(value, str) or not value.strip():
+        raise error(f"{where}: expected a file path, got {value!r}")
+    given = Path(value).expanduser()
+    base = Path(base)
+    tries = [given] if given.is_absolute() else [base / given, Path.cwd() / given, base / given.name]
+    if not given.is_absolute() and given.parts[0] == CASE_STUDIES:  # the competition's layout, one folder up only
+        tries.append(base.parent / given)
+    found = [p.resolve() for p in tries if p.exists()]
+    if not found:
+        if missing_ok:
+            return None
+        raise error(f"{where}: file {value!r} not found (looked in the YAML's folder and the working folder)")
+    roots = allowed_folders(base, allow_outside)
+    inside = next((p for p in found if any(p.is_relative_to(root) for root in roots)
+                   or _a_tools_case_study(p, base)), None)
+    if inside is None:
+        shown = f"{value!r}" + (f" ({found[0]})" if str(found[0]) != value else "")
+        raise error(f"{where}: file {shown} lies outside the YAML's folder and the working folder; "
+                    f"--allow-outside FOLDER lets tests read files under FOLDER")
     try:
-        return Path(path).read_text(encoding="utf-8").splitlines()
-    except UnicodeDecodeError as err:
-        raise error(f"{path}: not UTF-8 text (byte {err.start})") from None
-    except OSError as err:
-        raise error(f"{path}: cannot read ({err.strerror})") from None
+        return regular_file(str(inside), "file", error)
+    except SurrealistError as err:
+        raise error(f"{where}: {err}") from None

@@ -63,11 +63,15 @@ class FailedRun:
 
 
 def _die_with_parent() -> None:
-    """Pool worker initializer: on Linux, end this worker when the process that started it dies (even kill -9)."""
+    """Pool worker initializer: on Linux, end this worker when the process that started it dies (even kill -9).
+    Ctrl-C is the parent's to answer (one message; it stops the workers): a worker ignores SIGINT, which the terminal
+    sends to the whole process group, instead of printing its traceback."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         try:
             import ctypes
-            import signal
 
             ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
         except (OSError, AttributeError):

@@ -14,7 +14,7 @@ import warnings
 from dataclasses import dataclass, field
 from enum import IntEnum
 
-from .errors import MissionError, regular_file
+from .errors import MissionError, read_text, regular_file
 
 EARTH_RADIUS_M = 6371000.0  # PX4 CONSTANTS_RADIUS_OF_EARTH
 
@@ -163,13 +163,13 @@ def read_mission(path, home: tuple[float, float] | None = None) -> Mission:
 def read_plan(path, home: tuple[float, float] | None = None) -> Mission:
     """Read a QGroundControl ``.plan`` file (plan version 1, mission version 2)."""
     name = os.fspath(path)
+    text = read_text(path, "mission file", MissionError)
     try:
-        with open(path, encoding="utf-8") as f:
-            doc = json.load(f)
-    except OSError as err:
-        raise MissionError(f"{name}: cannot read mission file ({err.strerror})") from err
-    except (json.JSONDecodeError, UnicodeDecodeError) as err:
-        raise MissionError(f"{name}: not a QGroundControl plan (invalid JSON: {err})") from err
+        doc = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise MissionError(f"{name}: not a QGroundControl plan (invalid JSON: {err})") from None
+    except RecursionError:
+        raise MissionError(f"{name}: not a QGroundControl plan (JSON nested too deeply)") from None
     if not isinstance(doc, dict) or doc.get("fileType") != "Plan":
         raise MissionError(f"{name}: not a QGroundControl plan (fileType must be 'Plan')")
     if doc.get("version") != 1:
@@ -225,17 +225,11 @@ def _expand_complex(item: dict, where: str, simple: list, skipped: list) -> None
 def read_waypoints(path, home: tuple[float, float] | None = None) -> Mission:
     """Read a MAVLink ``QGC WPL 110`` file; item 0 is the home position."""
     name = os.fspath(path)
-    try:
-        with open(path, encoding="utf-8") as f:
-            lines = [ln.strip() for ln in f if ln.strip()]
-    except OSError as err:
-        raise MissionError(f"{name}: cannot read mission file ({err.strerror})") from err
-    except UnicodeDecodeError as err:
-        raise MissionError(f"{name}: not a QGC WPL file (not text)") from err
+    lines = [ln.strip() for ln in read_text(path, "mission file", MissionError).splitlines() if ln.strip()]
     if not lines or not lines[0].startswith("QGC WPL"):
         raise MissionError(f"{name}: not a QGC WPL file (first line must be 'QGC WPL 110')")
     if lines[0].split()[-1] != "110":
-        raise MissionError(f"{name}: unsupported WPL version {lines[0]!r} (expected 'QGC WPL 110')")
+        raise MissionError(f"{name}: unsupported WPL version (expected 'QGC WPL 110')")
     rows = []
     planned = None
     for n, line in enumerate(lines[1:], start=2):
@@ -245,8 +239,8 @@ def read_waypoints(path, home: tuple[float, float] | None = None) -> Mission:
         try:
             seq, frame, command = int(cols[0]), int(cols[2]), int(cols[3])
             params = [float(c) for c in cols[4:11]]
-        except ValueError as err:
-            raise MissionError(f"{name}: line {n}: {err}") from err
+        except ValueError:
+            raise MissionError(f"{name}: line {n}: expected numbers (seq, current, frame, command, 7 params)") from None
         if seq == 0 and planned is None:
             planned = params[4:7]
             if command == Command.WAYPOINT:  # item 0 is home, not a waypoint to fly

@@ -107,6 +107,29 @@ class Obstacle:
                 "position": {"x": self.x, "y": self.y, "z": self.z, "r": self.r}}
 
 
+def first_overlap(obstacles) -> tuple[int, int] | None:
+    """The first pair (i < j, in order) of obstacles that overlap, or None. Only the pairs whose footprints' bounding
+    boxes meet and whose heights overlap are tested (shapely's STRtree), so thousands of obstacles answer at once."""
+    if len(obstacles) < 2:
+        return None
+    import numpy as np
+    from shapely import STRtree, box
+
+    corners = [o.footprint() for o in obstacles]
+    boxes = [box(min(x for x, _ in c), min(y for _, y in c), max(x for x, _ in c), max(y for _, y in c))
+             for c in corners]
+    left, right = STRtree(boxes).query(boxes, predicate="intersects")
+    keep = left < right
+    left, right = left[keep], right[keep]
+    base = np.array([o.z for o in obstacles])
+    top = base + np.array([o.h for o in obstacles])
+    keep = (base[left] < top[right]) & (base[right] < top[left])
+    for i, j in sorted(zip(left[keep].tolist(), right[keep].tolist())):
+        if obstacles[i].overlaps(obstacles[j]):
+            return i, j
+    return None
+
+
 def _parse_shape(value) -> Shape:
     if isinstance(value, Shape):
         return value
@@ -279,10 +302,9 @@ class TestCase:
         for i, o in enumerate(obstacles):
             if not isinstance(o, Obstacle):
                 raise InvalidTestCase(f"obstacles[{i}]: expected an Obstacle, got {type(o).__name__}")
-        for i in range(len(obstacles)):
-            for j in range(i + 1, len(obstacles)):
-                if obstacles[i].overlaps(obstacles[j]):
-                    raise InvalidTestCase(f"obstacles[{i}] and obstacles[{j}] overlap")
+        pair = first_overlap(obstacles)
+        if pair:
+            raise InvalidTestCase(f"obstacles[{pair[0]}] and obstacles[{pair[1]}] overlap")
         object.__setattr__(self, "obstacles", obstacles)
         object.__setattr__(self, "commands", tuple(self.commands))
         params = {}

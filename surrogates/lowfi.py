@@ -108,4 +108,24 @@ class LowFidelity:
 
         folder = Path(folder)
         ref = folder / "lowfi-reference.npy"
-        return cls(load_test(folder / "lowfi-seed.yaml"), np.load(ref) if ref.is_file() else None)
+        seed = folder / "lowfi-seed.yaml"
+        return cls(load_test(seed, allow_outside=_named_folders(seed)), np.load(ref) if ref.is_file() else None)
+
+
+def _named_folders(path: Path) -> list[str]:
+    """The folders of the files :meth:`LowFidelity.save`'s YAML names by absolute path (the seed test's params,
+    commands and reference log, where the model was trained): the model's own file may read there."""
+    import os
+
+    from surrealist_gym.aerialist import safe_yaml
+    from surrealist_gym.errors import SurrealistError
+
+    try:
+        doc = safe_yaml(path.read_text(encoding="utf-8"), str(path))
+    except (OSError, UnicodeDecodeError, SurrealistError):
+        return []  # load_test says what is wrong
+    sections = doc.values() if isinstance(doc, dict) else ()
+    return sorted({os.path.dirname(value) for section in sections if isinstance(section, dict)
+                   for key, value in section.items()
+                   if key.endswith("_file") and isinstance(value, str) and os.path.isabs(value)})
+

@@ -7,10 +7,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import warnings
+from pathlib import Path
 
-from ..errors import SurrealistError
+from ..errors import ALLOW_OUTSIDE_ENV, SurrealistError
 
 # sub-command -> (module, one-line help); modules are imported only when their command runs.
 COMMANDS = {
@@ -52,6 +54,9 @@ def _parser() -> argparse.ArgumentParser:
         cmd = sub.add_parser(name, help=help_text, description=help_text, aliases=ALIASES.get(name, []))
         cmd.set_defaults(_module=module)
         importlib.import_module(module).add_arguments(cmd)
+        cmd.add_argument("--allow-outside", action="append", default=[], metavar="FOLDER",
+                         help="let tests read files under FOLDER (default: only under the YAML's folder and the "
+                              "working folder; docs/aerialist-yaml.md); may be given more than once")
     return parser
 
 
@@ -89,10 +94,12 @@ def main(argv: list[str] | None = None) -> int:
     args._flags = _given(parser, args.command, argv)
     warnings.simplefilter("ignore", DeprecationWarning)
     warnings.formatwarning = lambda msg, category, *a, **k: f"warning: {msg}\n"
+    allowed = os.environ.get(ALLOW_OUTSIDE_ENV)
     try:
         from ..sim.config import default_physics
 
         default_physics()  # a bad $SURREALIST_PHYSICS is refused before any work
+        _allow_outside(args.allow_outside)
         return importlib.import_module(args._module).run(args) or 0
     except SurrealistError as err:
         print(f"error: {err}", file=sys.stderr)
@@ -100,6 +107,24 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    finally:
+        if allowed is None:
+            os.environ.pop(ALLOW_OUTSIDE_ENV, None)
+        else:
+            os.environ[ALLOW_OUTSIDE_ENV] = allowed
+
+
+def _allow_outside(folders: list[str]) -> None:
+    """``--allow-outside``: each an existing folder, added to ``$SURREALIST_ALLOW_OUTSIDE`` for this command (its
+    worker processes inherit it)."""
+    resolved = []
+    for folder in folders:
+        path = Path(folder).expanduser()
+        if not path.is_dir():
+            raise SurrealistError(f"--allow-outside {folder}: " + ("not a folder" if path.exists() else "not found"))
+        resolved.append(str(path.resolve()))
+    if resolved:
+        os.environ[ALLOW_OUTSIDE_ENV] = os.pathsep.join(filter(None, [os.environ.get(ALLOW_OUTSIDE_ENV), *resolved]))
 
 
 if __name__ == "__main__":

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -76,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
                    tool_env_cache=args.tool_env_cache,
                    limits=ToolLimits(timeout_s=args.tool_timeout, memory_gb=args.tool_memory))
     check_writable(plan.out, "--out")
+    _allow_the_tools_files(plan)
     if plan.env.kind == "own":  # where its environment is kept (built there unless it is)
         check_writable(plan.env.cache, "--tool-env-cache" if args.tool_env_cache else f"${CACHE_ENV} or the cache")
     print(f"tool: {plan.tool} ({', '.join(plan.apis) or 'no Aerialist test API found'}), case study "
@@ -109,6 +111,18 @@ def run(args: argparse.Namespace) -> int:
     if result.problem:
         raise SurrealistError(result.problem)
     return 0
+
+
+def _allow_the_tools_files(plan) -> None:
+    """The tests a tool sends name its files by absolute path (its folder, the copy it runs in under ``--out``, the
+    case study given): the tests may read there, for this command (cli.main restores the environment)."""
+    import os
+
+    from ..errors import ALLOW_OUTSIDE_ENV
+
+    folders = [os.environ.get(ALLOW_OUTSIDE_ENV)] + [str(Path(p).resolve()) for p in
+                                                      (plan.tool, plan.out, Path(plan.case_study_file).parent)]
+    os.environ[ALLOW_OUTSIDE_ENV] = os.pathsep.join(filter(None, folders))
 
 
 def _print_summary(result) -> None:

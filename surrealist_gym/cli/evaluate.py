@@ -166,6 +166,7 @@ def run(args: argparse.Namespace) -> int:
             raise SurrealistError("TESTS: give the tests to evaluate (YAMLs or folders of them), or --resume DIR")
         if args.competition is not None:
             edition(args.competition)
+        _distinct(args.tests, "TESTS")
         out = _empty_folder(Path(args.out or default_out("evaluate")))
         options = EvaluateOptions.from_args(args)
     uav = None if options.uav is None else resolve_uav(options.uav if args.resume else args.uav)  # named as given
@@ -229,6 +230,16 @@ def _empty_folder(out: Path) -> Path:
     return out
 
 
+def _distinct(tests, where: str, hint: str = "give it once") -> None:
+    """Each test or folder once: two names for one (a link, ``./``) would be flown once but scored twice."""
+    seen: dict = {}
+    for given in tests:
+        first = seen.setdefault(Path(given).resolve(), given)
+        if first != given:
+            raise SurrealistError(f"{where}: {given} and {first} are the same "
+                                  f"{'folder' if Path(given).is_dir() else 'file'}; {hint}")
+
+
 def _evaluation_folder(out: Path) -> bool:
     try:
         return json.loads((out / RUN_FILE).read_text()).get("command") == "evaluate"
@@ -244,6 +255,8 @@ def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
     if not (out / RUN_FILE).is_file():
         raise SurrealistError(f"--resume {out}: not an evaluation to resume (no {RUN_FILE})")
     options = EvaluateOptions.from_json(out / RUN_FILE)
+    _distinct(options.tests, f"--resume {out}: {RUN_FILE}'s tests",  # started twice by an earlier version
+              "it cannot be resumed: start a new evaluation with each once")
     flags = getattr(args, "_flags", frozenset())
     given = {"tests": (tuple(str(Path(t).absolute()) for t in args.tests) if args.tests else None, None),
              "runs": (args.runs, None), "random_seed": (args.random_seed, 0), "uav": (_uav_option(args.uav), None),

@@ -365,6 +365,8 @@ def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tu
     import tempfile
 
     path = Path(path)
+    if path.is_symlink() and not path.exists():
+        raise SurrealistError(f"{flag} {path}: a link to {os.readlink(path)}, which does not exist")
     if kind == "file":
         if suffixes and path.suffix.lower() not in suffixes:
             raise SurrealistError(f"{flag} {path}: expected a {' or '.join(suffixes)} file")

@@ -14,7 +14,9 @@ def add_arguments(parser) -> None:
     train = sub.add_parser("train", help="train a model on one or more evaluation stores",
                            description="train a model on one or more evaluation stores (.sqlite)")
     train.add_argument("stores", nargs="+", metavar="STORE", help="evaluation stores of one problem")
-    train.add_argument("--out", required=True, metavar="MODEL", help="model folder to write (weights.pt, meta.json)")
+    train.add_argument("--out", required=True, metavar="MODEL", help="model folder to write (weights.pt, meta.json): "
+                       "new or empty unless --overwrite")
+    train.add_argument("--overwrite", action="store_true", help="replace the model an existing --out holds")
     train.add_argument("--problem", default="replicate", choices=["replicate", "generate"],
                        help="what the stores searched: replicate (features against the mission and the reference "
                             "flight) or generate (default replicate)")
@@ -62,6 +64,7 @@ def _check_inputs(args) -> None:
 
     for store in args.stores:
         regular_file(store, "evaluation store", empty_ok=False)
+    args.stores = _distinct_stores(args.stores)
     if args.action == "eval":
         if args.plot:
             check_writable(args.plot, "--plot", "file", (".png",))
@@ -84,7 +87,27 @@ def _check_inputs(args) -> None:
             raise SurrealistError(f"--holdout {args.holdout}: " + (
                 f"expected 1 to {len(args.stores) - 1} (stores given: {len(args.stores)})" if len(args.stores) > 1
                 else "needs at least 2 stores, one to train on and one to hold out (given: 1)"))
+        out = Path(args.out)
+        held = sorted(p.name for p in out.iterdir()) if out.is_dir() else []
+        if held and not args.overwrite:  # before check_writable's probe, which would touch the folder
+            raise SurrealistError(f"--out {out}: " + ("holds a model already" if "meta.json" in held else
+                                                      f"not empty (holds {held[0]})")
+                                  + "; --overwrite replaces it, or choose another folder")
         check_writable(args.out, "--out", "folder")
+
+
+def _distinct_stores(stores: list[str]) -> list[str]:
+    """Each store once, by its resolved path (two names for one store would count it twice, and with --holdout
+    measure the held-out R2 on training data): a store given again is dropped with a warning."""
+    import warnings
+    from pathlib import Path
+
+    first: dict = {}
+    for store in stores:
+        seen = first.setdefault(Path(store).resolve(), store)
+        if seen != store:
+            warnings.warn(f"{store}: the same store as {seen}, read once", stacklevel=2)
+    return list(first.values())
 
 
 def run(args) -> int:

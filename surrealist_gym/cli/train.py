@@ -13,7 +13,9 @@ def add_arguments(parser) -> None:
 
     parser.add_argument("--steps", type=int, default=2000, help="env steps (evaluations) to train for (default 2000)")
     parser.add_argument("--out", metavar="POLICY.zip", default=None,
-                        help=f"where to save the policy (default {OUT_PATTERN.format(command='train')}/policy.zip)")
+                        help=f"where to save the policy (default {OUT_PATTERN.format(command='train')}/policy.zip): "
+                             "a new file unless --overwrite")
+    parser.add_argument("--overwrite", action="store_true", help="replace the policy an existing --out holds")
     parser.add_argument("--problem", default="replicate", choices=["replicate", "generate", "case-study"],
                         help="training problems: hidden layouts of case0 (replicate), RQ2 seeds (generate), or a "
                              "competition case study's layouts within its rules (case-study, with --case-study)")
@@ -72,7 +74,10 @@ def run(args) -> int:
     if not (math.isfinite(args.spread) and 0 < args.spread <= 1):
         raise SurrealistError(f"--spread: expected a number in (0, 1] (action units), got {args.spread:g}")
     out = Path(args.out)  # stable-baselines3 saves to the path with .zip added unless it ends in .zip
-    check_writable(out if out.suffix == ".zip" else out.with_name(out.name + ".zip"), "--out", "file")
+    out = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
+    check_writable(out, "--out", "file")
+    if out.exists() and not args.overwrite:
+        raise SurrealistError(f"--out {out}: holds a policy already; --overwrite replaces it, or choose another file")
     if args.init:
         from ..errors import regular_file
         regular_file(args.init, "--init policy file")

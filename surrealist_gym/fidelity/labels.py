@@ -174,6 +174,8 @@ def _load_csv(path: Path, base: TestCase) -> LabelledSet:
             test = base.with_obstacles(Obstacle(**o) for o in raw)
         except (ValueError, TypeError, InvalidTestCase) as err:
             raise InvalidLabels(f"{path}: row {n}, field 'obstacles': {err}") from err
+        except RecursionError:
+            raise InvalidLabels(f"{path}: row {n}, field 'obstacles': JSON nested too deeply") from None
         _check_count(path, n, row, test)
         _check_mission(path, n, row, test, "the base test")
         labels.append(label)

@@ -19,12 +19,15 @@ Example::
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
+import os
 import re
 import shutil
 import sys
 import tarfile
+import tempfile
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -76,12 +79,33 @@ def write_tool(folder, settings: ToolSettings = ToolSettings()) -> Path:
 
     settings.check()
     folder = Path(folder)
+    if folder.is_symlink():
+        raise SurrealistError(f"DIR {folder}: a link (to {os.readlink(folder)}); give a new or empty folder")
     if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
         raise SurrealistError(f"DIR {folder}: exists and is not an empty folder; give a new or empty folder")
     root = _source_root()
     studies = [_case_study_files(name) for name in CASE_STUDIES]  # a missing one fails before anything is written
     archive = f"surrealist_gym-{__version__}.tar.gz"
-    folder.mkdir(parents=True, exist_ok=True)
+    made = [p for p in folder.parents if not p.exists()]  # the folders to remove should writing fail
+    staging = None
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.partial-", dir=folder.parent))
+        _write_files(staging, settings, studies, root, archive)
+        staging.chmod(0o755)
+        os.replace(staging, folder)  # the whole tool or nothing (onto an empty folder too)
+    except OSError as err:
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
+        for parent in made:
+            with contextlib.suppress(OSError):
+                parent.rmdir()
+        raise SurrealistError(f"DIR {folder}: cannot write the tool ({err.strerror or err}); nothing is left "
+                              f"there") from None
+    return folder
+
+
+def _write_files(folder: Path, settings: ToolSettings, studies: list, root: Path, archive: str) -> None:
     for name in TOOL_FILES:
         text = (TEMPLATES / name).read_text(encoding="utf-8")
         text = text.replace("@ARCHIVE@", archive).replace("@PYTHON_VERSION@", "%d.%d" % sys.version_info[:2])
@@ -94,7 +118,6 @@ def write_tool(folder, settings: ToolSettings = ToolSettings()) -> Path:
     _source_archive(root, folder / archive, archive[:-len(".tar.gz")])
     (folder / "constraints.txt").write_text("".join(f"{name}=={version}\n" for name, version in _dependencies()),
                                            encoding="utf-8")
-    return folder
 
 
 def _source_root() -> Path:

@@ -15,6 +15,7 @@ from surrealist_gym.cli import main
 from surrealist_gym.competition.compete.locate import AERIALIST_ENV
 from surrealist_gym.competition.leaderboard import BoardRow, name_tools
 from surrealist_gym.competition.published import PUBLISHED, published_name, rerun_share
+from surrealist_gym.errors import ALLOW_OUTSIDE_ENV
 
 ROOT = Path(__file__).resolve().parents[3]
 THIRD_PARTY = ROOT.parent / "shared" / "third_party"
@@ -60,6 +61,19 @@ def boxes(tmp_path_factory) -> Path:
     folder.mkdir()
     (folder / "cli.py").write_text(TOOL)
     return folder
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _shared_case_studies_allowed():
+    """The windy case study names the shared case studies' files by absolute path: every command of this module may
+    read them (--allow-outside, as the environment variable its workers inherit)."""
+    old = os.environ.get(ALLOW_OUTSIDE_ENV)
+    os.environ[ALLOW_OUTSIDE_ENV] = str(CASE_STUDIES)
+    yield
+    if old is None:
+        del os.environ[ALLOW_OUTSIDE_ENV]
+    else:
+        os.environ[ALLOW_OUTSIDE_ENV] = old
 
 
 @pytest.fixture(scope="module")
