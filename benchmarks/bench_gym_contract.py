@@ -64,8 +64,10 @@ def simulate_seconds(cache: str, out: Path) -> float:
     """Wall seconds of ``surrealist simulate mission1 --runs 1`` with numba's cache in ``cache``."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "surrealist_gym.cli", "simulate", "mission1", "--runs", "1", "--out",
-                    str(out)], env=env, check=True, capture_output=True)
+    from surrealist_gym.competition.rules import case_study_path
+
+    subprocess.run([sys.executable, "-m", "surrealist_gym.cli", "simulate", str(case_study_path("mission1")), "--runs",
+                    "1", "--out", str(out)], env=env, check=True, capture_output=True)
     return time.perf_counter() - start
 
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from contextlib import contextmanager
 
 import numpy as np
 from numba import njit, types
@@ -64,7 +65,7 @@ from .px4_avoidance_settings import MAX_NODES
 from .px4_avoidance_tree import _tree_work
 from .sensor import _cast
 
-__all__ = ["fly_kernel", "fly_span"]
+__all__ = ["compiling", "fly_kernel", "fly_span"]
 
 # stop codes
 BLOCK_END, NEED_SENSOR_NOISE, ENDED = 0, 1, 2
@@ -286,7 +287,6 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
     from .avoidance import LocalPlanner
     from .px4_avoidance import Px4AvoidanceConfig, kernel_settings
 
-    _notice_compiling()
 
     dt = 1.0 / cfg.control_hz
     outer_div = int(round(cfg.control_hz / cfg.outer_hz))
@@ -366,6 +366,28 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
         r.log, r.true = log[:int(ls[L_N_LOG])], true[:int(ls[L_N_TRUE])]
 
 
+QUICK_OPT = "1"  # numba's optimisation level for the loop: as fast as its default 3 here, and compiled sooner
+
+
+@contextmanager
+def compiling():
+    """Around a simulation, whose kernels compile on first use: say so when no cached loop exists
+    (:func:`_notice_compiling`), and compile at numba's optimisation level :data:`QUICK_OPT` unless ``NUMBA_OPT`` is
+    set (the level is numba's process-wide setting, restored after; docs/compiled-loop.md has the measurement)."""
+    _notice_compiling()
+    from numba.core import config
+
+    level = getattr(config, "_process_opt_level", None)  # numba's parser of NUMBA_OPT values
+    if level is None or os.environ.get("NUMBA_OPT"):
+        yield
+        return
+    before, config.OPT = config.OPT, level(QUICK_OPT)
+    try:
+        yield
+    finally:
+        config.OPT = before
+
+
 def _notice_compiling() -> None:
     """Say on stderr, once per process, that the simulator is being compiled (no cached kernels yet: the first
     simulation after an install or an upgrade). Numba's cache layout is its own, so when it cannot be read, nothing
@@ -382,7 +404,7 @@ def _notice_compiling() -> None:
               file=sys.stderr, flush=True)
 
 
-COMPILE_NOTE = "about a minute on a 2-core laptop; later runs start in seconds"
+COMPILE_NOTE = "about 35 s on a 2-core laptop; later runs start in seconds"
 
 
 def _message(status: int, t: float, info: int, cfg, timeout: float) -> str:

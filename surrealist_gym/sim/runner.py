@@ -20,7 +20,7 @@ from ..mission import Command
 from ..outcomes import RunStatus
 from ..trajectory import Trajectory
 from . import run_end
-from .compiled_loop import fly_kernel
+from .compiled_loop import compiling, fly_kernel
 from .compiled_physics import CompiledWorld, fly
 from .config import Physics, SimConfig, auto_timeout, resolve_params
 from .control import inner_step, kernel_params, position_params, position_step
@@ -152,6 +152,11 @@ def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None
 
 def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
     """Fly the runs with the given indices of a test case together (see :func:`simulate`)."""
+    with compiling():  # the first simulation of an install compiles the kernels, and says so
+        return _simulate_runs(test, indices, seed, config)
+
+
+def _simulate_runs(test, indices, seed: int, config: SimConfig | None) -> list[RunResult]:
     from .profiles import test_uav_settings, with_uav_settings
 
     cfg = with_uav_settings(config or SimConfig(), test_uav_settings(test))  # the test's uav.* params
