@@ -73,7 +73,7 @@ def make_tool(folder: Path, layouts) -> Path:
 
 def plain(flights, seed: int) -> list[tuple[float, float]]:
     """Wall time [s] of a plain simulate of each flight's test and run, and its simulated duration [s]."""
-    from surrealist_gym.competition.rules import load_competition_test
+    from surrealist_gym.aerialist import load_test
     from surrealist_gym.sim import simulate_runs
     from surrealist_gym.sim.profiles import load_profile
 
@@ -82,7 +82,7 @@ def plain(flights, seed: int) -> list[tuple[float, float]]:
     with tempfile.TemporaryDirectory() as tmp:
         for n, flight in enumerate(flights):
             start = time.perf_counter()
-            test = load_competition_test(flight.test_file)
+            test = load_test(flight.test_file)
             run = simulate_runs(test, [n], seed, config)[0]
             run.save_ulog(Path(tmp) / f"{n}.ulg", mission=test.mission)
             out.append((time.perf_counter() - start, run.duration))

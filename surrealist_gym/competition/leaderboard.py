@@ -146,9 +146,9 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     """Check every input before anything runs (one-line SurrealistError): the edition, the numbers, each tool on each
     case study (:func:`~surrealist_gym.competition.compete.prepare`), and the folder: new, or holding this very board
     (then the run resumes)."""
+    from ..aerialist import load_test
     from .compete import prepare
     from .reevaluation import compete_summary
-    from .rules import load_competition_test
 
     ed = edition(edition_name, "--edition")
     budget = ed.budget if budget is None else budget
@@ -177,7 +177,7 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
         files = [prepare(tool.folder, case, budget, probe, seed=seed, uav=uav).case_study_file
                  for tool in named[:len(folders)]]  # the file each tool is given (its own case_studies/ first)
         files += [Path(file) for _, file, _ in ran if case_label(file) == case_label(case)]  # as its cell ran it
-        winds.append(load_competition_test(files[0] if files else _case_file(case)).wind)
+        winds.append(load_test(files[0] if files else _case_file(case)).wind)
     by_folder = {t.folder: t for t in named}
     given, count = [], {}
     for tool, file, folder in ran:

@@ -132,11 +132,11 @@ def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, Te
     """Load the tests named by ``paths`` (see :func:`find_tests`) and check them; unless ``any_layout``, against
     the competition's rules (:func:`~surrealist_gym.competition.rules.violations`). Raises a one-line
     :class:`~surrealist_gym.errors.InvalidTestCase` naming the file and field of the first bad test."""
-    from .rules import load_competition_test
+    from ..aerialist import load_test
 
     out = []
     for path in find_tests(paths):
-        test = load_competition_test(path)
+        test = load_test(path)
         if test.mission is None or not any(item.has_position for item in test.mission.items):
             raise InvalidTestCase(f"{path}: mission_file: no mission item with a position to fly to")
         if not any_layout and (broken := rule_broken(test)):

@@ -134,22 +134,12 @@ def bundled_case_studies() -> Path:
     return Path(data_path("case_studies"))
 
 
-def load_competition_test(path) -> TestCase:
-    """``load_test`` without the warning every competition mission gives: its first item (MAV_CMD 530, a camera
-    mode) is skipped, as known."""
-    import warnings
-
-    from ..aerialist import load_test
-
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message=r".*MAV_CMD 530 is not supported")
-        return load_test(path)
-
-
 def load_case_study(name) -> TestCase:
     """The case study's mission, parameters and commands as a test without obstacles (its own obstacles dropped)."""
+    from ..aerialist import load_test
+
     path = case_study_path(name)
-    test = load_competition_test(path)
+    test = load_test(path)
     if test.mission is None:
         raise InvalidTestCase(f"{path}: field 'mission_file': a case study needs a mission")
     return test.with_obstacles(())

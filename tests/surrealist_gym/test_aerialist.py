@@ -30,7 +30,6 @@ from surrealist_gym.aerialist import load_test, save_test
 from surrealist_gym.cli import main
 from surrealist_gym.competition.compete import tool_environment
 from surrealist_gym.competition.compete.locate import source_of
-from surrealist_gym.competition.rules import load_competition_test
 from surrealist_gym.errors import InvalidTestCase
 from surrealist_gym.logs import read_flight
 from surrealist_gym.results import export_test
@@ -155,7 +154,7 @@ def flights(tmp_path_factory, written):
     config = load_profile("px4-v1.12-sitl-iris").sim_config()
     out = []
     for i, path in enumerate(map(Path, tests)):
-        test = load_competition_test(path)
+        test = load_test(path)
         plain = simulate(test, runs=1, seed=0, config=config)[0]
         buffered = simulate(test, runs=1, seed=0, config=replace(config, competition_buffer_m=0.125))[0]
         assert np.array_equal(plain.local_position.x, buffered.local_position.x)  # the buffer flies nothing else

@@ -241,7 +241,7 @@ class SimulationServer:
             self.runaway.set()
 
     def _fly(self, request) -> dict:
-        from ..rules import load_competition_test
+        from ...aerialist import load_test
         from .translate import outside, write_test
 
         number = len(self._flights) + 1
@@ -259,7 +259,7 @@ class SimulationServer:
                 return self._record(Flight(number, agent, api, error=f"the test cannot be flown: its field {field!r} "
                                                                      f"names a file outside the tool's folder"))
             test_file = write_test(request.test, request.cwd, stem.with_suffix(".yaml"))
-            test = load_competition_test(test_file)
+            test = load_test(test_file)
         except (SurrealistError, ValueError, TypeError, OSError) as err:  # its words may quote a file: not sent
             return self._record(Flight(number, agent, api, error=f"the test cannot be flown ({type(err).__name__}: "
                                                                  f"not a test our loader reads)"))

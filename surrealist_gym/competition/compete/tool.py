@@ -187,7 +187,8 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
 def _case_study(tool: Path, name) -> tuple[str, Path]:
     """What the tool's cli.py is given for the case study, and its file; checked as our loader and Aerialist (paths
     relative to the tool's folder) would read it."""
-    from ..rules import case_study_path, load_competition_test
+    from ...aerialist import load_test
+    from ..rules import case_study_path
 
     given = Path(os.fspath(name))
     if given.suffix in (".yaml", ".yml"):
@@ -202,7 +203,7 @@ def _case_study(tool: Path, name) -> tuple[str, Path]:
     else:
         file = case_study_path(name).resolve()
         argument = str(file)
-    load_competition_test(file)
+    load_test(file)
     _check_relative_files(file, tool)
     return argument, file
 
@@ -435,12 +436,12 @@ def ulog_distance(ulg, test_file) -> float:
     """The competition distance [m] of a ULog's flight to the obstacles of a test (our YAML): the least over the
     boxes of the distance from the footprint to the polyline of Aerialist's 0.5 s trajectory of the log
     (:meth:`~surrealist_gym.trajectory.Trajectory.aerialist`; unbuffered)."""
+    from ...aerialist import load_test
     from ...geometry import competition_distance
     from ...logs import read_flight
     from ...trajectory import Trajectory
-    from ..rules import load_competition_test
 
-    test = load_competition_test(test_file)
+    test = load_test(test_file)
     p = read_flight(ulg).positions
     return float(competition_distance(Trajectory.aerialist(p.timestamp_us, p.x, p.y, p.z, p.heading), test.obstacles))
 

@@ -131,10 +131,11 @@ def _source_root() -> Path:
 
 def _case_study_files(name: str) -> list[Path]:
     """The case study's YAML and the mission, parameter and command files it names."""
-    from ..rules import case_study_path, load_competition_test
+    from ...aerialist import load_test
+    from ..rules import case_study_path
 
     path = case_study_path(name)
-    test = load_competition_test(path)
+    test = load_test(path)
     return [path] + [Path(f) for f in (test.mission_file, test.params_file, test.commands_file) if f]
 
 

@@ -102,7 +102,6 @@ def _by_hand(runs, boxes: int) -> float:
 @pytest.fixture(scope="module")
 def flown_suite():
     """CAMBA's three mission3 tests (short flights) as a suite, each with one real flight as the search's run."""
-    from surrealist_gym.competition.rules import load_competition_test
     from tests.conftest import SHARED_DATA
 
     camba = SHARED_DATA / "competition" / "camba-collection"
@@ -111,7 +110,7 @@ def flown_suite():
     config = load_profile("px4-v1.12-sitl-iris").sim_config()
     members, runs = [], []
     for i, name in enumerate(["02-12-16-24-05-5O9PN", "04-12-14-10-41-5O9PN", "26-11-13-35-31-5O9PN"]):
-        test = load_competition_test(camba / f"{name}.yaml")
+        test = load_test(camba / f"{name}.yaml")
         run = simulate(test, runs=1, seed=0, config=config)[0]
         members.append(Member(test, run.competition_distance, run.trajectory.xyz, i + 1, run.status.value))
         runs.append(run)

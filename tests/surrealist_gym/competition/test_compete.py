@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from surrealist_gym.aerialist import load_test
 from surrealist_gym.cli import main
 from surrealist_gym.competition.compete import prepare, run, tool_environment
 from surrealist_gym.competition.compete.locate import AERIALIST_ENV, find_aerialist, tool_apis
-from surrealist_gym.competition.rules import load_competition_test
 from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
 from surrealist_gym.geometry import competition_distances
 from surrealist_gym.logs import read_flight
@@ -101,7 +101,7 @@ def _our_distances(result, buffer: float, aerialist_windows: bool = False) -> li
             times = np.asarray(p.timestamp_us, dtype=np.int64) - 1
             times[0] += 1  # a sample on a window's end falls in that window, as in Aerialist
             trajectory = Trajectory.from_local_position(times, p.x, p.y, p.z)
-        obstacles = load_competition_test(flights[t.flight].test_file).obstacles
+        obstacles = load_test(flights[t.flight].test_file).obstacles
         out.append(competition_distances(trajectory, obstacles, buffer).tolist())
     return out
 
