@@ -14,6 +14,20 @@ REFERENCE_CSV = SHARED_DATA / "reference" / "case0_reference_trajectory.csv"
 CASE_STUDIES = SHARED_DATA / "competition" / "case_studies"
 
 
+def refused(capsys, argv, *names) -> str:
+    """Run the command line; assert exit 2 with exactly one ``error:`` line that names each of ``names`` and no
+    traceback; return that line."""
+    from surrealist_gym.cli import main
+
+    code = main([str(a) for a in argv])
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.startswith("error:")]
+    assert code == 2 and len(lines) == 1 and "Traceback" not in err, err
+    for name in names:
+        assert str(name) in lines[0], (name, lines[0])
+    return lines[0]
+
+
 def fly_the_python_outer_loop(mp: pytest.MonkeyPatch) -> None:
     """Let the compiled physics fly ``runner._fly_compiled_outer``, the compiled loop's bit-identical reference, which
     calls the Python classes (the navigator, both planners, the tree) that the compiled loop runs as kernels: for

@@ -16,21 +16,11 @@ import pytest
 
 import surrealist_gym as sg
 from surrealist_gym.cli import main
-from tests.conftest import CASE_STUDIES, ROOT, SHARED_DATA, sigint_as_a_terminal_gives_it
+from tests.conftest import CASE_STUDIES, ROOT, SHARED_DATA, refused, sigint_as_a_terminal_gives_it
 
 DATA = Path(sg.data_path("case0.plan")).parent
 STORE = ROOT / "tests" / "data" / "stores" / "rq2-rep0.sqlite"
 SEED_FILES = ("rq2-seed.yaml", "auto1.plan", "auto1-params.csv", "auto-commands.csv")
-
-
-def refused(capsys, argv, *names) -> str:
-    code = main([str(a) for a in argv])
-    err = capsys.readouterr().err
-    lines = [line for line in err.splitlines() if line.startswith("error:")]
-    assert code == 2 and len(lines) == 1 and "Traceback" not in err, err
-    for name in names:
-        assert str(name) in lines[0], (name, lines[0])
-    return lines[0]
 
 
 def _digest(folder: Path) -> dict:

@@ -19,24 +19,12 @@ import pytest
 
 import surrealist_gym as sg
 from surrealist_gym.cli import main
-from tests.conftest import SHARED_DATA
+from tests.conftest import SHARED_DATA, refused
 
 DATA = Path(sg.data_path("case0.plan")).parent
 RQ2 = DATA / "rq2-seed.yaml"
 CASE0 = DATA / "case0.ulg"
 STORE = Path(__file__).resolve().parents[2] / "data" / "stores" / "rq2-rep0.sqlite"
-
-
-def refused(capsys, argv: list[str], *names: str) -> str:
-    """Run the command line; assert exit 2 with exactly one ``error:`` line that names each of ``names`` and no
-    traceback; return that line."""
-    code = main([str(a) for a in argv])
-    err = capsys.readouterr().err
-    lines = [line for line in err.splitlines() if line.startswith("error:")]
-    assert code == 2 and len(lines) == 1 and "Traceback" not in err, err
-    for name in names:
-        assert str(name) in lines[0], (name, lines[0])
-    return lines[0]
 
 
 def nothing_in(folder: Path, *kept: str) -> bool:
