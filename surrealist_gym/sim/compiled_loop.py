@@ -404,7 +404,7 @@ def _notice_compiling() -> None:
               file=sys.stderr, flush=True)
 
 
-COMPILE_NOTE = "about 35 s on a 2-core laptop; later runs start in seconds"
+COMPILE_NOTE = "about 30 s on a 2-core laptop; later runs start in seconds"
 
 
 def _message(status: int, t: float, info: int, cfg, timeout: float) -> str:

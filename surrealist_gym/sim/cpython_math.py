@@ -18,7 +18,7 @@ from numba import njit
 NAN = math.nan
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _two_product(x, y):  # pragma: no cover - compiled
     """x * y as hi + lo exactly (Dekker's product with Veltkamp's split; CPython's ``dl_mul`` gets the same pair
     from an fma)."""

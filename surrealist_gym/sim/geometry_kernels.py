@@ -231,7 +231,7 @@ def boxes_overlap(c, axes, half, scene, j):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _support_vehicle(c, axes, half, d0, d1, d2):  # pragma: no cover - compiled
     x, y, z = c[0], c[1], c[2]
     for i in range(3):
@@ -242,7 +242,7 @@ def _support_vehicle(c, axes, half, d0, d1, d2):  # pragma: no cover - compiled
     return x, y, z
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _support_obstacle(scene, j, d0, d1, d2):  # pragma: no cover - compiled
     cx, cy = scene[j, COL_X], scene[j, COL_Y]
     z = scene[j, COL_Z1] if d2 >= 0.0 else scene[j, COL_Z0]
@@ -256,6 +256,15 @@ def _support_obstacle(scene, j, d0, d1, d2):  # pragma: no cover - compiled
         return cx, cy, z
     r = scene[j, COL_HX] / rho
     return cx + r * d0, cy + r * d1, z
+
+
+@njit(cache=True)
+def _copy_rows(dst, d0, src, s0, n):  # pragma: no cover - compiled
+    """``dst[d0:d0 + n, :3] = src[s0:s0 + n, :3]``, element by element (a slice assignment would compile numba's
+    shape-mismatch error path, seconds of the first simulation's compile)."""
+    for i in range(n):
+        for k in range(3):
+            dst[d0 + i, k] = src[s0 + i, k]
 
 
 @njit(cache=True)
@@ -273,7 +282,7 @@ def _closest_on_simplex(w, n):  # pragma: no cover - compiled
         if t <= 0.0:
             return ax, ay, az, 1
         if t >= 1.0:
-            w[0, :] = w[1, :]
+            _copy_rows(w, 0, w, 1, 1)
             return w[0, 0], w[0, 1], w[0, 2], 1
         return ax + t * ex, ay + t * ey, az + t * ez, 2
     if n == 3:
@@ -295,15 +304,17 @@ def _closest_on_simplex(w, n):  # pragma: no cover - compiled
         if s_o * s_v > 0.0:  # origin strictly on the vertex's side of this face
             continue
         outside_any = True
-        tmp[0, :], tmp[1, :], tmp[2, :] = w[i0, :], w[i1, :], w[i2, :]
+        _copy_rows(tmp, 0, w, i0, 1)
+        _copy_rows(tmp, 1, w, i1, 1)
+        _copy_rows(tmp, 2, w, i2, 1)
         x, y, z, m = _closest_on_triangle(tmp, 0, 1, 2)
         d = x * x + y * y + z * z
         if d < best:
             best, bx, by, bz, bn = d, x, y, z, m
-            keep[:m, :] = tmp[:m, :]
+            _copy_rows(keep, 0, tmp, 0, m)
     if not outside_any:
         return 0.0, 0.0, 0.0, 4
-    w[:bn, :] = keep[:bn, :]
+    _copy_rows(w, 0, keep, 0, bn)
     return bx, by, bz, bn
 
 

@@ -101,7 +101,7 @@ __all__ = ["nav_update", "CompiledNavigator"]
 
 NAN = math.nan
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _item_count(mission):  # pragma: no cover - compiled
     n = 0
     while n < mission.shape[0] and int(mission[n, M_COMMAND]) != NO_ITEM:

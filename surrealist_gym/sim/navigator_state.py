@@ -181,14 +181,14 @@ def phase_of(state: np.ndarray) -> Phase:
 
 
 # --- CPython's arithmetic -------------------------------------------------------------------------------------------
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def py_square(x, params):  # pragma: no cover - compiled
     """CPython's ``x ** 2``: libm's ``pow(x, 2.0)``, which is not always ``x * x``; the exponent comes from the
     params vector so that LLVM cannot rewrite the call to a multiplication."""
     return x ** params[P_SQUARE_EXPONENT]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def line_projection(px, py, ax, ay, bx, by):  # pragma: no cover - compiled
     """:func:`surrealist_gym.geometry.line_projection` of (px, py) on the line a -> b: (defined, fraction along,
     foot x, foot y); not defined (its None) when a and b (nearly) coincide."""
@@ -201,25 +201,25 @@ def line_projection(px, py, ax, ay, bx, by):  # pragma: no cover - compiled
 
 
 # --- accessors (the Navigator's properties) ---------------------------------------------------------------------
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_phase(state):  # pragma: no cover - compiled
     """The phase code (:data:`PHASES`)."""
     return int(state[S_PHASE])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_index(state):  # pragma: no cover - compiled
     """The current mission item (-1 before the first)."""
     return int(state[S_INDEX])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_cruise(state):  # pragma: no cover - compiled
     """The mission's current horizontal speed [m/s] (Navigator.cruise)."""
     return state[S_CRUISE]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_target(state):  # pragma: no cover - compiled
     """The current target (x, y, z up) [m] (Navigator.target's first three values, what ``goal()`` gives the
     planner)."""
@@ -229,32 +229,32 @@ def nav_target(state):  # pragma: no cover - compiled
 nav_goal = nav_target  #: Navigator.goal()
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_prev(state):  # pragma: no cover - compiled
     """The previous setpoint (Navigator.prev)."""
     return state[S_PREV], state[S_PREV + 1], state[S_PREV + 2]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_uses_planner(state):  # pragma: no cover - compiled
     """Navigator.uses_planner: the phase hands the horizontal flight to the avoidance planner."""
     return int(state[S_PHASE]) == PH_CRUISE
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_armed(state):  # pragma: no cover - compiled
     """Navigator.armed: every phase but DONE, and DONE after a mission that ended in the air."""
     return int(state[S_PHASE]) != PH_DONE or state[S_FINISHED_IN_AIR] != 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_on_ground_phase(state):  # pragma: no cover - compiled
     """Navigator.on_ground_phase: idle, landed, or done after landing."""
     ph = int(state[S_PHASE])
     return ph == PH_IDLE or ph == PH_LANDED or (ph == PH_DONE and state[S_FINISHED_IN_AIR] == 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def nav_mission_complete(state):  # pragma: no cover - compiled
     """Navigator.mission_complete: disarmed after landing, or the hold after the last item is over."""
     return int(state[S_PHASE]) == PH_DONE or (state[S_FINISHED_IN_AIR] != 0.0 and state[S_T] >= state[S_HOLD_UNTIL])

@@ -15,7 +15,7 @@ from numba import njit
 from .px4_avoidance_settings import N_E2, N_Z2, SUB_RES
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _atan2_deg(y, x):  # pragma: no cover - compiled
     """atan2 in degrees by a minimax polynomial (error < 1e-4 deg): 3x faster than math.atan2 here."""
     ax, ay = abs(x), abs(y)
@@ -35,7 +35,7 @@ def _atan2_deg(y, x):  # pragma: no cover - compiled
     return r * 57.29577951308232
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _hist_index(dx, dy, dz, res):  # pragma: no cover - compiled
     """(elevation index, azimuth index) of a direction in a histogram of ``res`` degree cells."""
     h = math.sqrt(dx * dx + dy * dy)

@@ -21,7 +21,7 @@ from .px4_avoidance_settings import _R2D, ALPHA_RES, N_E, N_Z
 from .px4_avoidance_smoothing import _conic_line, _conic_lines2, _conic_lines4
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mod360(x):  # pragma: no cover - compiled
     """``x % 360.0`` for x in (-360, 720) or NaN, the operations Python's modulo does there: x + 360 below 0, x - 360
     (exact: Sterbenz) from 360 on, x itself between (where Python gives -0.0 as 0.0; subtracting 180 then gives
@@ -34,7 +34,7 @@ def _mod360(x):  # pragma: no cover - compiled
     return x
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _atan2_deg_select(y, x):  # pragma: no cover - compiled
     """:func:`_atan2_deg` (the same bits) written with selects instead of branches, so that loops calling it
     vectorize: ``min / max`` is the ratio it picks; at the origin the 0 / 0 (NaN under ``error_model="numpy"``) is
@@ -50,7 +50,7 @@ def _atan2_deg_select(y, x):  # pragma: no cover - compiled
     return 0.0 if ax == 0.0 and ay == 0.0 else r * 57.29577951308232
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _cell_index(dx, dy, dz):  # pragma: no cover - compiled
     """The flat histogram cell ``ie * N_Z + iz`` of ``_hist_index(dx, dy, dz, ALPHA_RES)``, the same bits, with
     selects instead of branches (:func:`_atan2_deg_select`)."""
@@ -66,7 +66,7 @@ def _cell_index(dx, dy, dz):  # pragma: no cover - compiled
     return ie * N_Z + iz
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _next_row(row_cost, row_seen):  # pragma: no cover - compiled
     """The unseen row of least pitch cost, the lower index first among equal costs (then seen); -1 when none."""
     e = -1

@@ -12,7 +12,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _means(out, oi, n, length):  # pragma: no cover - compiled
     """``out[oi, :n] /= length`` (a loop that vectorizes). For a power of two (the default radius of 7 cells gives 8)
     as the product with its reciprocal, which is exact: both are the one rounding of the same real quotient, and a

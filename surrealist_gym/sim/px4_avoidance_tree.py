@@ -109,14 +109,14 @@ def tree_work(settings: KernelSettings) -> TreeWork:
     return _tree_work(settings.smoothing_radius, settings.children)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _heap_less(a, b, total):  # pragma: no cover - compiled
     """Whether node ``a`` comes before node ``b`` in the open set: the lower total cost, the lower index among
     equal costs (the node a scan in index order with a strict ``<`` finds first)."""
     return total[a] < total[b] or (total[a] == total[b] and a < b)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _heap_push(heap, n, node, total):  # pragma: no cover - compiled
     """Add ``node`` to the binary heap ``heap[:n]`` ordered by :func:`_heap_less`; returns the new size."""
     i = n
@@ -130,7 +130,7 @@ def _heap_push(heap, n, node, total):  # pragma: no cover - compiled
     return n + 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _heap_pop(heap, n, total):  # pragma: no cover - compiled
     """Remove the first node of the binary heap ``heap[:n]`` (n > 0); returns (it, the new size)."""
     top = heap[0]

@@ -168,7 +168,7 @@ def ground_contact(s, h, body, half):  # pragma: no cover - compiled
     return touched
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _inv_mass(r, ixx, iyy, izz, m, ox, oy, oz, nx, ny, nz):  # pragma: no cover - compiled
     cx, cy, cz = oy * nz - oz * ny, oz * nx - ox * nz, ox * ny - oy * nx  # o x n, world
     bx = r[0, 0] * cx + r[1, 0] * cy + r[2, 0] * cz
@@ -177,7 +177,7 @@ def _inv_mass(r, ixx, iyy, izz, m, ox, oy, oz, nx, ny, nz):  # pragma: no cover 
     return 1.0 / m + bx * bx / ixx + by * by / iyy + bz * bz / izz
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _apply(s, r, ixx, iyy, izz, m, ox, oy, oz, jx, jy, jz):  # pragma: no cover - compiled
     """Apply the world impulse (jx, jy, jz) at the world offset o from the centre of mass."""
     s[7] += jx / m
