@@ -432,3 +432,31 @@ def test_buffer_of_evaluate_and_generate(tmp_path, capsys):
         assert err.startswith("error: --buffer: expected a non-negative number of metres") and "\n" not in err
     assert not (tmp_path / "never").exists()
     assert math.isfinite(distances["0"])
+
+
+def test_aerialist_master_reads_the_bundled_case_studies_and_their_wind(tmp_path):
+    """The case studies that ship with the package, copied into a tool's case_studies/ as compete gives them, load in
+    Aerialist master from the tool's folder (its working folder, as the competition runs it), wind included."""
+    from surrealist_gym.competition.rules import bundled_case_studies
+
+    shutil.copytree(bundled_case_studies(), tmp_path / "tool" / "case_studies")
+    script = r'''
+import json, os, sys
+from aerialist.px4.aerialist_test import AerialistTest
+os.chdir(sys.argv[1])
+out = {}
+for name in ("mission1", "mission2", "mission3", "mission1-wind", "mission2-wind", "mission3-wind"):
+    test = AerialistTest.from_yaml(f"case_studies/{name}.yaml")
+    wind = test.simulation.wind
+    out[name] = [test.robot.mission_file, None if wind is None else
+                 [wind.velocity_mean, wind.velocity_max, list(wind.direction)]]
+print(json.dumps(out))
+'''
+    env = tool_environment(source_of(VERSIONS["master"]), "", b"", 1)
+    done = subprocess.run([sys.executable, "-c", script, str(tmp_path / "tool")], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    read = json.loads(done.stdout.strip().splitlines()[-1])
+    for n in (1, 2, 3):
+        assert read[f"mission{n}"] == [f"case_studies/mission{n}.plan", None]
+        assert read[f"mission{n}-wind"] == [f"case_studies/mission{n}.plan", [3, 5.0, [1, 0, 0]]]
