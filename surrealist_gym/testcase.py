@@ -107,11 +107,18 @@ class Obstacle:
                 "position": {"x": self.x, "y": self.y, "z": self.z, "r": self.r}}
 
 
+PAIRWISE_UP_TO = 32  # first_overlap tests this many obstacles pair by pair (cheaper than building a tree)
+
+
 def first_overlap(obstacles) -> tuple[int, int] | None:
-    """The first pair (i < j, in order) of obstacles that overlap, or None. Only the pairs whose footprints' bounding
-    boxes meet and whose heights overlap are tested (shapely's STRtree), so thousands of obstacles answer at once."""
+    """The first pair (i < j, in order) of obstacles that overlap, or None. A few obstacles (a test's usual 1-4) are
+    tested pair by pair; of more, only the pairs whose footprints' bounding boxes meet and whose heights overlap
+    (shapely's STRtree), so thousands of obstacles answer at once."""
     if len(obstacles) < 2:
         return None
+    if len(obstacles) <= PAIRWISE_UP_TO:
+        return next(((i, j) for i in range(len(obstacles)) for j in range(i + 1, len(obstacles))
+                     if obstacles[i].overlaps(obstacles[j])), None)
     import numpy as np
     from shapely import STRtree, box
 

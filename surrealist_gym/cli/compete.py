@@ -27,6 +27,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("case_study", metavar="CASE_STUDY",
                         help="mission1, mission2, mission3 (the tool's case_studies/ first) or an Aerialist YAML")
     parser.add_argument("budget", metavar="BUDGET", type=int, help="simulations the tool may fly (given to its cli.py)")
+    from ..competition.compete.process import ToolLimits
+    from ..competition.compete.toolenv import TOOL_ENV_MODES
     from .options import add_out_argument, add_random_seed_argument
 
     add_out_argument(parser, "compete", "output folder, must not exist")
@@ -40,14 +42,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_random_seed_argument(parser, "base seed of the runs' noise (default 0)")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default="px4-v1.12-sitl-iris",
                         help="UAV profile flown (default px4-v1.12-sitl-iris, the competition's PX4 SITL)")
-    parser.add_argument("--tool-env", choices=("auto", "own", "ours"), default="auto",
+    parser.add_argument("--tool-env", choices=TOOL_ENV_MODES, default="auto",
                         help="which Python runs the tool: ours, or an environment of its own built from its "
                              "requirements.txt and cached (default auto: ours when every module the tool imports is "
                              "installed here, else its own)")
-    parser.add_argument("--tool-timeout", metavar="SECONDS", type=float, default=7200.0,
+    parser.add_argument("--tool-timeout", metavar="SECONDS", type=float, default=ToolLimits.timeout_s,
                         help="wall time after which the tool and its processes are stopped (default 7200; its CPU "
                              "time is limited to 1.5 x this: the competition gives a tool 1.5 vCPU)")
-    parser.add_argument("--tool-memory", metavar="GB", type=float, default=8.0,
+    parser.add_argument("--tool-memory", metavar="GB", type=float, default=ToolLimits.memory_gb,
                         help="address space of each of the tool's processes (RLIMIT_AS, default 8)")
     parser.add_argument("--tool-env-cache", metavar="DIR", default=None,
                         help="where the tools' own environments are kept (default $SURREALIST_TOOL_ENVS, else "

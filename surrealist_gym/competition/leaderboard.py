@@ -149,6 +149,7 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     from ..aerialist import load_test
     from .compete import prepare
     from .reevaluation import compete_summary
+    from .rules import case_study_path
 
     ed = edition(edition_name, "--edition")
     budget = ed.budget if budget is None else budget
@@ -177,7 +178,7 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
         files = [prepare(tool.folder, case, budget, probe, seed=seed, uav=uav).case_study_file
                  for tool in named[:len(folders)]]  # the file each tool is given (its own case_studies/ first)
         files += [Path(file) for _, file, _ in ran if case_label(file) == case_label(case)]  # as its cell ran it
-        winds.append(load_test(files[0] if files else _case_file(case)).wind)
+        winds.append(load_test(files[0] if files else case_study_path(case)).wind)
     by_folder = {t.folder: t for t in named}
     given, count = [], {}
     for tool, file, folder in ran:
@@ -189,13 +190,6 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
                   tuple(given))
     _check_folder(board)
     return board
-
-
-def _case_file(case: str) -> Path:
-    """A case study's file: a YAML as given, else the look-up of ``compete`` (:func:`~.rules.case_study_path`)."""
-    from .rules import case_study_path
-
-    return Path(case) if Path(case).suffix in (".yaml", ".yml") else case_study_path(case)
 
 
 def _given_cells(tools: Sequence, budget: int, uav: str) -> list[tuple[str, str, Path]]:

@@ -75,12 +75,11 @@ def agreement_2024(summaries: Sequence[Summary]) -> dict:
     tools and the best tool agree."""
     from scipy.stats import spearmanr
 
-    table = PUBLISHED["2024"]
     cells = []
     for s in summaries:
-        name, cs = published_name(s.tool), CASE_STUDIES["2024"].get(s.case_study)
-        if name in table and cs in table[name]:
-            cells.append((s, name, cs, table[name][cs]))
+        cell = _published_cell("2024", s.tool, s.case_study)
+        if cell is not None:
+            cells.append((s, published_name(s.tool), CASE_STUDIES["2024"][s.case_study], cell))
     out: dict = {"cells": cells, "spearman": math.nan, "p": math.nan, "spearman_reported": math.nan, "studies": {}}
     if len(cells) >= 3:
         rho = spearmanr([s.score for s, *_ in cells], [c.score for *_, c in cells])

@@ -28,6 +28,10 @@ BISECTIONS = 12  # halvings of the way back to the seed: the flown action is wit
 class FlyableActions(SurrealistWrapper):
     """Fly the flyable test nearest each action (see the module); no step is refused."""
 
+    def __init__(self, env):
+        super().__init__(env)
+        self._bounds = self.inner.action_bounds()  # of the seed test and the mutators, which an env never changes
+
     @property
     def spec(self):
         """The registered env's spec: this wrapper is part of its entry point, not a wrapper added to it (and the
@@ -36,12 +40,11 @@ class FlyableActions(SurrealistWrapper):
 
     def repair(self, action) -> np.ndarray:
         """The action flown for ``action``: itself when its test is flyable, else its projection (module doc)."""
-        env = self.inner
-        low, high = env.action_bounds()
+        low, high = self._bounds
         wanted = np.clip(np.asarray(action, dtype=np.float64).reshape(-1), low, high)
         if self.flies(wanted):
             return wanted
-        seed = np.asarray(env.seed_action, dtype=np.float64)
+        seed = np.asarray(self.inner.seed_action, dtype=np.float64)
         near, far = 0.0, 1.0
         for _ in range(BISECTIONS):
             middle = (near + far) / 2

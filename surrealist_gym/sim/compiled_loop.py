@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+import threading
 from contextlib import contextmanager
 
 import numpy as np
@@ -369,31 +370,37 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
 QUICK_OPT = "1"  # numba's optimisation level for the loop: as fast as its default 3 here, and compiled sooner
 
 
+_FIRST_COMPILE = threading.Lock()  # numba's optimisation level is process-wide: one first simulation sets it
+
+
 @contextmanager
 def compiling():
-    """Around a simulation, whose kernels compile on first use: say so when no cached loop exists
-    (:func:`_notice_compiling`), and compile at numba's optimisation level :data:`QUICK_OPT` unless ``NUMBA_OPT`` is
-    set (the level is numba's process-wide setting, restored after; docs/compiled-loop.md has the measurement)."""
-    _notice_compiling()
+    """Around a simulation. Until the loop is compiled or loaded in this process, say so when no cached loop exists
+    (:func:`_notice_compiling`) and compile at numba's optimisation level :data:`QUICK_OPT`, unless ``NUMBA_OPT`` is
+    set (the level is numba's process-wide setting, restored after; docs/compiled-loop.md has the measurement).
+    Afterwards it does nothing: a process that later flies another planner compiles that one at numba's level."""
+    if fly_span.overloads:
+        yield
+        return
     from numba.core import config
 
     level = getattr(config, "_process_opt_level", None)  # numba's parser of NUMBA_OPT values
-    if level is None or os.environ.get("NUMBA_OPT"):
-        yield
-        return
-    before, config.OPT = config.OPT, level(QUICK_OPT)
-    try:
-        yield
-    finally:
-        config.OPT = before
+    with _FIRST_COMPILE:
+        _notice_compiling()
+        if level is None or os.environ.get("NUMBA_OPT"):
+            yield
+            return
+        before, config.OPT = config.OPT, level(QUICK_OPT)
+        try:
+            yield
+        finally:
+            config.OPT = before
 
 
 def _notice_compiling() -> None:
-    """Say on stderr, once per process, that the simulator is being compiled (no cached kernels yet: the first
+    """Say on stderr that the simulator is being compiled (no cached kernels yet: the first
     simulation after an install or an upgrade). Numba's cache layout is its own, so when it cannot be read, nothing
     is said."""
-    if fly_span.overloads:  # compiled or loaded in this process already
-        return
     try:
         cached = os.path.exists(fly_span._cache._cache_file._index_path)
     except AttributeError:

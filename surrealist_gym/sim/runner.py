@@ -152,7 +152,9 @@ def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None
 
 def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None) -> list[RunResult]:
     """Fly the runs with the given indices of a test case together (see :func:`simulate`)."""
-    with compiling():  # the first simulation of an install compiles the kernels, and says so
+    if (config or SimConfig()).physics == Physics.PYBULLET:
+        return _simulate_runs(test, indices, seed, config)
+    with compiling():  # the first simulation of an install compiles the loop, and says so
         return _simulate_runs(test, indices, seed, config)
 
 

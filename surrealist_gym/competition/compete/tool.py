@@ -400,17 +400,17 @@ def _written_tests(folder: Path, flights, work: Path) -> tuple[WrittenTest, ...]
     obstacles of the flight it came from (the tool copies our ULog as it is). A ULog is read only when its size is
     that of a ULog flown (then it is at most that large), never one over :data:`MAX_READ_BYTES`; links are not
     followed."""
-    by_size: dict[int, list[str]] = {}
+    sizes, by_log = set(), {}
     for flight in flights:
         for log in flight.logs:
             if Path(log).is_file():
-                by_size.setdefault(Path(log).stat().st_size, []).append(log)
-    by_log = {_digest(log): flight for flight in flights for log in flight.logs if Path(log).is_file()}
+                sizes.add(Path(log).stat().st_size)
+                by_log[_digest(log)] = flight
     tests = []
     for yaml_file in writing_order(y for y in folder.glob("*.yaml") if _own_file(y, work)):
         ulg, png = _own_file(yaml_file.with_suffix(".ulg"), work), _own_file(yaml_file.with_suffix(".png"), work)
         size = ulg.stat().st_size if ulg is not None else 0
-        flight = by_log.get(_digest(ulg)) if ulg is not None and size in by_size and size <= MAX_READ_BYTES \
+        flight = by_log.get(_digest(ulg)) if ulg is not None and size in sizes and size <= MAX_READ_BYTES \
             else None
         distance, points, note = None, None, ""
         if ulg is None:
