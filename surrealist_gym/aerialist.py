@@ -16,7 +16,7 @@ import warnings
 from dataclasses import fields
 from pathlib import Path
 
-from .errors import InvalidTestCase, MissionError, input_file, one_line, read_text, regular_file, text_lines
+from .errors import InvalidTestCase, MissionError, input_file, one_line, read_text, regular_file
 from .mission import read_mission
 from .sim.ranges import RANGES, UAV_SETTING_PREFIX, param_problem
 from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, _finite, _parse_shape
@@ -363,7 +363,7 @@ def _in_field(name: str, key: str, read, path: str):
 def _csv_rows(path: str, what: str) -> list[tuple[int, list[str]]]:
     """The numbered rows of a CSV file; a malformed one (a field over csv's limit, a NUL) is a one-line error."""
     try:
-        return list(enumerate(csv.reader(text_lines(path, InvalidTestCase, what)), start=1))
+        return list(enumerate(csv.reader(read_text(path, what, InvalidTestCase).splitlines()), start=1))
     except csv.Error as err:
         raise InvalidTestCase(f"{path}: not a {what} (CSV: {one_line(err, 60)})") from None
 

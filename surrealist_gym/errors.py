@@ -107,11 +107,6 @@ def read_text(path, what: str, error: type[SurrealistError] = SurrealistError, m
         raise error(f"{name}: not UTF-8 text (byte {err.start})") from None
 
 
-def text_lines(path, error: type[SurrealistError] = SurrealistError, what: str = "file") -> list[str]:
-    """The lines of a UTF-8 text file (:func:`read_text`), else a one-line ``error`` naming the file."""
-    return read_text(path, what, error).splitlines()
-
-
 #: The environment variable holding the folders (``os.pathsep``-separated) a test may read files under besides its
 #: YAML's folder and the working folder; ``--allow-outside PATH`` sets it (worker processes inherit it).
 ALLOW_OUTSIDE_ENV = "SURREALIST_ALLOW_OUTSIDE"
@@ -119,18 +114,30 @@ ALLOW_OUTSIDE_ENV = "SURREALIST_ALLOW_OUTSIDE"
 
 def allowed_folders(base, allow_outside=()) -> tuple:
     """The folders a test whose YAML is in ``base`` may read files under: ``base``, the working folder, the
-    competition's ``case_studies`` beside ``base`` (:data:`CASE_STUDIES`) and the folders of
+    competition's ``case_studies`` of a tool's folder (:func:`tool_folders`) and the folders of
     ``$SURREALIST_ALLOW_OUTSIDE`` and ``allow_outside`` (all with their links resolved)."""
     import os
     from pathlib import Path
 
     extra = [p for p in os.environ.get(ALLOW_OUTSIDE_ENV, "").split(os.pathsep) if p] + list(allow_outside)
-    return tuple(Path(p).expanduser().resolve() for p in (base, Path.cwd(), Path(base).parent / CASE_STUDIES, *extra))
+    layout = [folder / CASE_STUDIES for folder in tool_folders(base)]
+    return tuple(Path(p).expanduser().resolve() for p in (base, Path.cwd(), *layout, *extra))
 
 
 #: The competition's layout: a tool writes its tests into a folder of its own (``generated_tests/``) and names the
 #: case study's files from the tool's folder (``case_studies/mission1.plan``), Aerialist's working folder there.
 CASE_STUDIES = "case_studies"
+GENERATED_TESTS = "generated_tests"  # where the competition's tools write their tests, in folders of their own
+
+
+def tool_folders(base) -> list:
+    """The folders a competition test in ``base`` may name ``case_studies/...`` from: the folder above ``base`` (a
+    tool's ``generated_tests/``), and the tool's folder when ``base`` lies deeper in its ``generated_tests/`` (tools
+    write ``generated_tests/<time stamp>/``, and Aerialist resolves from the tool's folder, its working folder)."""
+    from pathlib import Path
+
+    base = Path(base)
+    return [base.parent] + [p.parent for p in base.parents if p.name == GENERATED_TESTS and p.parent != base.parent]
 
 
 def _a_tools_case_study(path, base) -> bool:
@@ -147,7 +154,7 @@ def input_file(value, base, where: str, error: type[SurrealistError] = Surrealis
     """The file a test's field names, resolved as Aerialist resolves it: an absolute path as it is, a relative one
     against the YAML's folder ``base``, then the working folder, then by its name in ``base`` (the paper's seeds name
     paths relative to their repository root: ``experiments/case0.plan``), and a path in the competition's
-    ``case_studies/`` also in the folder above ``base`` (:data:`CASE_STUDIES`). Never by walking up parents. The
+    ``case_studies/`` also from a tool's folder (:func:`tool_folders`). Never by walking up parents. The
     file must lie (links resolved) under :func:`allowed_folders` or in a tool's ``case_studies`` beside ``base``
     (:func:`_a_tools_case_study`), and be a regular file (:func:`regular_file`). Else
     a one-line ``error`` naming the field (``where``) and the path, never the file's contents; a file not found is
@@ -159,8 +166,8 @@ def input_file(value, base, where: str, error: type[SurrealistError] = Surrealis
     given = Path(value).expanduser()
     base = Path(base)
     tries = [given] if given.is_absolute() else [base / given, Path.cwd() / given, base / given.name]
-    if not given.is_absolute() and given.parts[0] == CASE_STUDIES:  # the competition's layout, one folder up only
-        tries.append(base.parent / given)
+    if not given.is_absolute() and given.parts[0] == CASE_STUDIES:  # the competition's layout: from a tool's folder
+        tries += [folder / given for folder in tool_folders(base)]
     found = [p.resolve() for p in tries if p.exists()]
     if not found:
         if missing_ok:

@@ -139,12 +139,15 @@ def test_the_paper_seeds_load_from_anywhere(tmp_path, monkeypatch, folder):
         assert os.path.dirname(test.mission_file) == str(base)
 
 
-def test_the_competition_layout_one_folder_up_only(tmp_path, monkeypatch):
+def test_the_competition_layout_from_the_tools_folder_only(tmp_path, monkeypatch):
     (tmp_path / "cwd").mkdir()
     monkeypatch.chdir(tmp_path / "cwd")  # the working folder holds none of the files
     shutil.copytree(CASE_STUDIES, tmp_path / "tool" / "case_studies")
     body = "robot:\n  mission_file: case_studies/mission1.plan\n"
     test = sg.load_test(_yaml(tmp_path / "tool" / "generated_tests", body))
+    assert test.mission_file == str(tmp_path / "tool" / "case_studies" / "mission1.plan")
+    # tools write into generated_tests/<time stamp>/ (CAMBA, the reference generator): still the tool's folder
+    test = sg.load_test(_yaml(tmp_path / "tool" / "generated_tests" / "28-11-19-56-47", body))
     assert test.mission_file == str(tmp_path / "tool" / "case_studies" / "mission1.plan")
     _refused(_yaml(tmp_path / "tool" / "a" / "b", body), "mission_file", "not found")
 
