@@ -46,10 +46,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="which Python runs the tool: ours, or an environment of its own built from its "
                              "requirements.txt and cached (default auto: ours when every module the tool imports is "
                              "installed here, else its own)")
-    parser.add_argument("--tool-timeout", metavar="SECONDS", type=float, default=ToolLimits.timeout_s,
+    parser.add_argument("--tool-timeout", metavar="SECONDS", type=float, default=ToolLimits().timeout_s,
                         help="wall time after which the tool and its processes are stopped (default 7200; its CPU "
                              "time is limited to 1.5 x this: the competition gives a tool 1.5 vCPU)")
-    parser.add_argument("--tool-memory", metavar="GB", type=float, default=ToolLimits.memory_gb,
+    parser.add_argument("--tool-memory", metavar="GB", type=float, default=ToolLimits().memory_gb,
                         help="address space of each of the tool's processes (RLIMIT_AS, default 8)")
     parser.add_argument("--tool-env-cache", metavar="DIR", default=None,
                         help="where the tools' own environments are kept (default $SURREALIST_TOOL_ENVS, else "
