@@ -5,11 +5,15 @@ argparse refuses, becomes one line on stderr and exit code 2; Ctrl-C exits with 
 """
 from __future__ import annotations
 
+import _thread
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import ALLOW_OUTSIDE_ENV, SurrealistError
@@ -100,7 +104,8 @@ def main(argv: list[str] | None = None) -> int:
 
         default_physics()  # a bad $SURREALIST_PHYSICS is refused before any work
         _allow_outside(args.allow_outside)
-        return importlib.import_module(args._module).run(args) or 0
+        with _ctrl_c_answered_once():
+            return importlib.import_module(args._module).run(args) or 0
     except SurrealistError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
@@ -112,6 +117,42 @@ def main(argv: list[str] | None = None) -> int:
             os.environ.pop(ALLOW_OUTSIDE_ENV, None)
         else:
             os.environ[ALLOW_OUTSIDE_ENV] = allowed
+
+
+@contextmanager
+def _ctrl_c_answered_once():
+    """While a command runs in the main thread, Ctrl-C raises KeyboardInterrupt once. A second Ctrl-C while the command
+    stores what it has and stops its workers is ignored, and so is one during the interpreter's exit (either would end
+    the process by the signal, exit code -2, mid clean-up). A Ctrl-C that lands in a C library's callback into Python
+    (llvmlite's, while numba loads its cache), where no exception can propagate, is raised again once that returns."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield  # not ours to answer (Ctrl-C ignored by the parent, or a caller's own handler)
+        return
+    state = {"answered": False, "retry": None}
+
+    def on_ctrl_c(signum, frame):
+        if not state["answered"]:
+            state["answered"] = True
+            raise KeyboardInterrupt
+
+    def lost(unraisable):
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            state["answered"] = False
+            state["retry"] = threading.Timer(0.05, _thread.interrupt_main)
+            state["retry"].start()
+        else:
+            sys.__unraisablehook__(unraisable)
+
+    signal.signal(signal.SIGINT, on_ctrl_c)
+    sys.unraisablehook = lost
+    try:
+        yield
+    finally:
+        if state["retry"] is not None:
+            state["retry"].cancel()
+        sys.unraisablehook = sys.__unraisablehook__
+        signal.signal(signal.SIGINT, signal.SIG_IGN if state["answered"] else signal.default_int_handler)
 
 
 def _allow_outside(folders: list[str]) -> None:

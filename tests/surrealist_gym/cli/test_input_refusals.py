@@ -147,6 +147,8 @@ def test_ctrl_c_with_two_workers_is_one_message(tmp_path):
         time.sleep(0.2)
     time.sleep(1.0)
     os.killpg(process.pid, signal.SIGINT)  # as the terminal sends it: to the command and its workers
+    time.sleep(0.02)
+    os.killpg(process.pid, signal.SIGINT)  # an impatient second Ctrl-C does not cut the clean-up short
     _, err = process.communicate(timeout=60)
     assert process.returncode == 130, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
