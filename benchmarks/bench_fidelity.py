@@ -28,11 +28,11 @@ CAMBA_FLIGHTS = ROOT / "benchmarks" / "data" / "camba-px4-flights.csv"
 
 def sequential(lset, n: int) -> float:
     """Tests per second of a plain loop: simulate one run and measure the competition distance, test by test."""
-    from surrealist_gym.fidelity.measure import sim_config_for
     from surrealist_gym.sim import simulate
+    from surrealist_gym.sim.uav import DEFAULT_UAV, decide_uav
 
     tests = lset.tests[:n]
-    config = sim_config_for(None)  # the harness's default UAV profile
+    config = decide_uav(uav=DEFAULT_UAV).config  # the harness's default UAV profile
     simulate(tests[0], runs=1, seed=0, config=config)  # warm-up: numba compilation, PyBullet client
     start = time.perf_counter()
     for test in tests:

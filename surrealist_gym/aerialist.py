@@ -1,6 +1,6 @@
 """The Aerialist test-case YAML: reading (:func:`load_test`) and writing (:func:`save_test`) the
-:class:`~surrealist_gym.testcase.TestCase` values, and the safe YAML loader for files from anywhere (:func:`safe_yaml`:
-no alias bombs, YAML 1.2 numbers, Aerialist's tags, numpy numbers).
+:class:`~surrealist_gym.testcase.TestCase` values, read with the safe YAML loader for files from anywhere
+(:func:`~surrealist_gym.errors.safe_yaml`).
 
 The YAML is Aerialist's, as both generations in use read and write it (docs/aerialist-yaml.md): :func:`save_test`
 writes what Aerialist master (``robot``/``mission``) and 0.2.x (``drone``/``test``) both load with geometry, and
@@ -11,15 +11,14 @@ error, one that Aerialist's own flight would not miss a one-line warning naming 
 from __future__ import annotations
 
 import csv
-import functools
 import warnings
 from dataclasses import fields
 from pathlib import Path
 
-from .errors import InvalidTestCase, MissionError, input_file, one_line, read_text, regular_file
+from .errors import InvalidTestCase, MissionError, input_file, one_line, read_text, regular_file, safe_yaml
 from .mission import read_mission
 from .sim.ranges import RANGES, UAV_SETTING_PREFIX, param_problem
-from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, _finite, _parse_shape
+from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, is_finite_number, parse_shape
 
 # --- YAML --------------------------------------------------------------------------------------------------------
 #: Top-level sections: Aerialist master's (robot, simulation, mission, assertion, agent), 0.2.x's (drone, test) and
@@ -106,12 +105,12 @@ def load_test(path, allow_outside=()) -> TestCase:
     if home is not None:
         if not (isinstance(home, list) and len(home) == 3):
             raise InvalidTestCase(f"{name}: field 'home_position': expected [lat, lon, alt], got {home!r}")
-        if not all(_finite(v) for v in home) or not (-90 <= home[0] <= 90 and -180 <= home[1] <= 180):
+        if not all(is_finite_number(v) for v in home) or not (-90 <= home[0] <= 90 and -180 <= home[1] <= 180):
             raise InvalidTestCase(f"{name}: field 'home_position': expected [lat, lon, alt] as numbers (lat in "
                                   f"[-90, 90], lon in [-180, 180]), got {home!r}")
         home = tuple(float(v) for v in home)
     timeout = sim.get("timeout")
-    if timeout is not None and not _finite(timeout):
+    if timeout is not None and not is_finite_number(timeout):
         raise InvalidTestCase(f"{name}: simulation.timeout: expected a number of seconds (0 or less: none), got "
                               f"{timeout!r}")
     log = assertion.get("log_file") if assertion.get("log_file") is not None else own.get("assertion_log")
@@ -217,7 +216,7 @@ def _check_run_settings(sim: dict, mis: dict, mission_key: str, assertion: dict,
     """Check the fields that say how Aerialist runs PX4, not what it flies (docs/aerialist-yaml.md: world, speed,
     headless, waypoints, agent, the assertion's variable); returns the simulation's speed factor."""
     def positive(where: str, value) -> float:
-        if not _finite(value) or value <= 0:
+        if not is_finite_number(value) or value <= 0:
             raise InvalidTestCase(f"{name}: {where}: expected a positive number, got {value!r}")
         return float(value)
 
@@ -229,7 +228,7 @@ def _check_run_settings(sim: dict, mis: dict, mission_key: str, assertion: dict,
             raise InvalidTestCase(f"{name}: simulation.{key}: expected {what}, got {sim[key]!r}")
     waypoints = mis.get("waypoints")
     if waypoints is not None and not (isinstance(waypoints, list) and all(
-            isinstance(w, dict) and _finite(w.get("x")) and _finite(w.get("y")) for w in waypoints)):
+            isinstance(w, dict) and is_finite_number(w.get("x")) and is_finite_number(w.get("y")) for w in waypoints)):
         raise InvalidTestCase(f"{name}: {mission_key}.waypoints: expected a list of positions {{x, y, z, r}}, got "
                               f"{waypoints!r}")
     if agent:
@@ -320,7 +319,7 @@ def parse_obstacles(raw, name, notes: list | None = None) -> tuple[Obstacle, ...
             raise InvalidTestCase(f"{where}: unknown field {sorted(bad)[0]!r}")
         try:
             given = item.get("shape")
-            shape = _parse_shape("box" if given is None else given)
+            shape = parse_shape("box" if given is None else given)
             if given not in (None, "box", "cylinder"):
                 odd.setdefault(f"shape {given!r} is read as {shape.value}, but Aerialist builds no geometry for it "
                                f"(write {shape.value!r})", []).append(i)
@@ -328,10 +327,10 @@ def parse_obstacles(raw, name, notes: list | None = None) -> tuple[Obstacle, ...
                 odd.setdefault("position.angle is read as r, which is what Aerialist reads", []).append(i)
             length, width = size.get("l"), size.get("w")
             radius = size.get("r", 0)
-            if not _finite(radius) or radius < 0:
+            if not is_finite_number(radius) or radius < 0:
                 raise InvalidTestCase(f"size 'r': expected a number >= 0 (a cylinder's radius), got {radius!r}")
             if shape == Shape.CYLINDER and radius > 0:
-                if any(_finite(v) and v and abs(v - 2 * radius) > 1e-9 for v in (length, width)):
+                if any(is_finite_number(v) and v and abs(v - 2 * radius) > 1e-9 for v in (length, width)):
                     odd.setdefault("a cylinder's l and w other than 2 r are ignored (its size is its radius r, as "
                                    "Aerialist measures it)", []).append(i)
                 length = width = 2 * radius
@@ -421,72 +420,3 @@ def _parse_commands(raw, name) -> tuple[RuntimeCommand, ...]:
 
 
 # --- safe loading ------------------------------------------------------------------------------------------------
-def safe_yaml(text: str, name: str):
-    """``yaml.safe_load`` for files from anywhere: aliases only while they expand to a small document (not an alias
-    bomb); nesting too deep is an error, not a crash; numbers as in YAML 1.2 (``1e9``) and numpy's (:func:`_loader`)."""
-    import yaml
-
-    try:
-        if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)) and \
-                _expanded(yaml.compose(text, Loader=_loader()), {}) > MAX_YAML_NODES:
-            raise InvalidTestCase(f"{name}: YAML aliases (*name) expand to more than {MAX_YAML_NODES} nodes")
-        return yaml.load(text, Loader=_loader())
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark else ""
-        raise InvalidTestCase(f"{name}: invalid YAML{where}") from None
-    except RecursionError:
-        raise InvalidTestCase(f"{name}: YAML nested too deeply") from None
-
-
-#: The tag Aerialist master's ``to_yaml`` gives an assertion's variable (its Trajectory class), read as its name.
-TRAJECTORY_TAG = "tag:yaml.org,2002:python/name:aerialist.px4.trajectory.Trajectory"
-
-
-MAX_YAML_NODES, _APPLY = 100_000, "tag:yaml.org,2002:python/object/apply:"  # a test YAML has some hundred nodes
-
-
-def _expanded(node, sizes: dict) -> int:
-    """How many nodes a composed YAML node stands for with its aliases expanded (a node within itself counts 0)."""
-    if id(node) not in sizes:
-        sizes[id(node)] = 0
-        items = node.value if isinstance(node.value, list) else []  # a scalar's value is its text
-        kids = [v for item in items for v in (item if isinstance(item, tuple) else (item,))]  # mappings: key, value
-        sizes[id(node)] = 1 + sum(_expanded(v, sizes) for v in kids)
-    return sizes[id(node)]
-
-
-def _numpy_scalar(loader, node):
-    """``!!python/object/apply:numpy...scalar [dtype, !!binary bytes]``: the number, when the dtype is numeric."""
-    import numpy as np
-    import yaml
-
-    try:
-        dtype_node, data = node.value
-        spec = {k.value: v for k, v in dtype_node.value}
-        dtype = np.dtype(spec["args"].value[0].value).newbyteorder(spec["state"].value[1].value)
-        if dtype_node.tag == _APPLY + "numpy.dtype" and dtype.kind in "biuf":
-            return np.frombuffer(loader.construct_yaml_binary(data), dtype=dtype, count=1)[0].item()
-    except (ValueError, TypeError, KeyError, IndexError, AttributeError):
-        pass
-    raise yaml.constructor.ConstructorError(None, None, "not a numpy number", node.start_mark)
-
-
-@functools.cache
-def _loader():
-    """A SafeLoader with YAML 1.2's floats (``1e9``, ``-2E-3``), Aerialist master's tag of the trajectory variable
-    read as ``trajectory``, and numpy numbers as PyYAML's full dumper writes them (PALM's tests: without calling
-    anything, :func:`_numpy_scalar`); no other Python tag."""
-    import re
-
-    import yaml
-
-    class Loader(yaml.SafeLoader):
-        pass
-
-    exponent = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
-    Loader.add_implicit_resolver("tag:yaml.org,2002:float", exponent, list("-+0123456789"))
-    Loader.add_constructor(TRAJECTORY_TAG, lambda loader, node: "trajectory")
-    for module in ("numpy._core.multiarray", "numpy.core.multiarray"):  # numpy 2 and 1
-        Loader.add_constructor(f"{_APPLY}{module}.scalar", _numpy_scalar)
-    return Loader

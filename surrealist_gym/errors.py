@@ -1,8 +1,11 @@
-"""Errors for bad input: each message is one line naming the file or field, the bad value and what was expected.
+"""Errors for bad input: each message is one line naming the file or field, the bad value and what was expected; and
+the safe reading of input files from anywhere (:func:`input_file`, :func:`read_text`, :func:`safe_yaml`).
 
 The command line turns any :class:`SurrealistError` into exit code 2 with its message on stderr.
 """
 from __future__ import annotations
+
+import functools
 
 
 class SurrealistError(Exception):
@@ -184,3 +187,74 @@ def input_file(value, base, where: str, error: type[SurrealistError] = Surrealis
         return regular_file(str(inside), "file", error)
     except SurrealistError as err:
         raise error(f"{where}: {err}") from None
+
+
+def safe_yaml(text: str, name: str):
+    """``yaml.safe_load`` for files from anywhere: aliases only while they expand to a small document (not an alias
+    bomb); nesting too deep is an error, not a crash; numbers as in YAML 1.2 (``1e9``) and numpy's (:func:`_loader`)."""
+    import yaml
+
+    try:
+        if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)) and \
+                _expanded(yaml.compose(text, Loader=_loader()), {}) > MAX_YAML_NODES:
+            raise InvalidTestCase(f"{name}: YAML aliases (*name) expand to more than {MAX_YAML_NODES} nodes")
+        return yaml.load(text, Loader=_loader())
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        raise InvalidTestCase(f"{name}: invalid YAML{where}") from None
+    except RecursionError:
+        raise InvalidTestCase(f"{name}: YAML nested too deeply") from None
+
+
+#: The tag Aerialist master's ``to_yaml`` gives an assertion's variable (its Trajectory class), read as its name.
+TRAJECTORY_TAG = "tag:yaml.org,2002:python/name:aerialist.px4.trajectory.Trajectory"
+
+
+MAX_YAML_NODES, _APPLY = 100_000, "tag:yaml.org,2002:python/object/apply:"  # a test YAML has some hundred nodes
+
+
+def _expanded(node, sizes: dict) -> int:
+    """How many nodes a composed YAML node stands for with its aliases expanded (a node within itself counts 0)."""
+    if id(node) not in sizes:
+        sizes[id(node)] = 0
+        items = node.value if isinstance(node.value, list) else []  # a scalar's value is its text
+        kids = [v for item in items for v in (item if isinstance(item, tuple) else (item,))]  # mappings: key, value
+        sizes[id(node)] = 1 + sum(_expanded(v, sizes) for v in kids)
+    return sizes[id(node)]
+
+
+def _numpy_scalar(loader, node):
+    """``!!python/object/apply:numpy...scalar [dtype, !!binary bytes]``: the number, when the dtype is numeric."""
+    import numpy as np
+    import yaml
+
+    try:
+        dtype_node, data = node.value
+        spec = {k.value: v for k, v in dtype_node.value}
+        dtype = np.dtype(spec["args"].value[0].value).newbyteorder(spec["state"].value[1].value)
+        if dtype_node.tag == _APPLY + "numpy.dtype" and dtype.kind in "biuf":
+            return np.frombuffer(loader.construct_yaml_binary(data), dtype=dtype, count=1)[0].item()
+    except (ValueError, TypeError, KeyError, IndexError, AttributeError):
+        pass
+    raise yaml.constructor.ConstructorError(None, None, "not a numpy number", node.start_mark)
+
+
+@functools.cache
+def _loader():
+    """A SafeLoader with YAML 1.2's floats (``1e9``, ``-2E-3``), Aerialist master's tag of the trajectory variable
+    read as ``trajectory``, and numpy numbers as PyYAML's full dumper writes them (PALM's tests: without calling
+    anything, :func:`_numpy_scalar`); no other Python tag."""
+    import re
+
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    exponent = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", exponent, list("-+0123456789"))
+    Loader.add_constructor(TRAJECTORY_TAG, lambda loader, node: "trajectory")
+    for module in ("numpy._core.multiarray", "numpy.core.multiarray"):  # numpy 2 and 1
+        Loader.add_constructor(f"{_APPLY}{module}.scalar", _numpy_scalar)
+    return Loader

@@ -20,7 +20,8 @@ import numpy as np
 from .aerialist import save_test
 from .errors import SurrealistError
 from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
-from .sim.profiles import save_profile, test_uav_settings
+from .sim.profiles import save_profile
+from .sim.uav import uav_settings
 from .store import EvaluationStore
 from .testcase import TestCase
 from .trajectory import Profile, profile
@@ -61,7 +62,7 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
         "best_unsafe_rate": best_outcomes.unsafe_rate, "best_crash_rate": best_outcomes.crash_rate,
         "best_stuck_rate": best_outcomes.blocked_rate,
     }
-    settings = test_uav_settings(best_eval.test)
+    settings = uav_settings(best_eval.test)
     summary["best_uav_settings"] = settings
     if settings and getattr(env, "uav_profile", None) is not None:  # the UAV configuration the search found
         save_profile(env.uav_profile.with_settings(settings, name=f"{env.uav_profile.name}-found",
@@ -74,6 +75,7 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
     profiles = search_profiles(seed_eval, best_eval, reference, goal)
     summary["profiles"] = {k: p.summary() for k, p in profiles.items()}
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_jsonable) + "\n")
+    env.uav.write(out)
     plot_search(out, seed_eval, best_eval, result.history, reference, measure, goal=goal, profiles=profiles)
     return summary
 

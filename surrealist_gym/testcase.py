@@ -61,7 +61,7 @@ class Obstacle:
                                       f"{getattr(self, name):g}")
         if self.z < 0:
             raise InvalidTestCase(f"obstacle position 'z' (base height) must be >= 0, got {self.z:g}")
-        object.__setattr__(self, "shape", _parse_shape(self.shape))
+        object.__setattr__(self, "shape", parse_shape(self.shape))
         if self.shape == Shape.CYLINDER:
             object.__setattr__(self, "w", self.l)  # a cylinder's size is its diameter l
 
@@ -137,7 +137,8 @@ def first_overlap(obstacles) -> tuple[int, int] | None:
     return None
 
 
-def _parse_shape(value) -> Shape:
+def parse_shape(value) -> Shape:
+    """A :class:`Shape` from its value or name (``box``, ``cylinder``); another raises InvalidTestCase."""
     if isinstance(value, Shape):
         return value
     shape = _SHAPE_NAMES.get(value.lower()) if isinstance(value, str) else None
@@ -172,7 +173,7 @@ class RuntimeCommand:
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
-            if not _finite(value):
+            if not is_finite_number(value):
                 raise InvalidTestCase(f"command field {f.name!r}: expected a finite number, got {value!r}")
         if self.timestamp < 0:
             raise InvalidTestCase(f"command field 'timestamp': expected a number >= 0 [s], got {self.timestamp:g}")
@@ -233,7 +234,7 @@ class Wind:
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name.endswith("direction"):
-                if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(_finite(c) for c in v)):
+                if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(is_finite_number(c) for c in v)):
                     raise InvalidTestCase(f"wind field {f.name!r}: expected 3 finite numbers, got {v!r}")
                 if not any(c != 0 for c in v):
                     prefix = f.name[:-len("direction")]
@@ -243,7 +244,7 @@ class Wind:
                     v = (1.0, 0.0, 0.0)  # no wind this way: Aerialist master writes a gust it lacks as [0, 0, 0]
                 object.__setattr__(self, f.name, tuple(float(c) for c in v))
                 continue
-            if not _finite(v) or v < 0:
+            if not is_finite_number(v) or v < 0:
                 raise InvalidTestCase(f"wind field {f.name!r}: expected a finite number >= 0, got {v!r}")
             bound, expected = _wind_bound(f.name)
             if v > bound:
@@ -302,7 +303,7 @@ class TestCase:
 
     def __post_init__(self):
         if self.timeout is not None:
-            if not _finite(self.timeout) or self.timeout <= 0:
+            if not is_finite_number(self.timeout) or self.timeout <= 0:
                 raise InvalidTestCase(f"timeout: expected a positive number of seconds, got {self.timeout!r}")
             object.__setattr__(self, "timeout", float(self.timeout))
         obstacles = tuple(self.obstacles)
@@ -351,5 +352,6 @@ class TestCase:
         return json.dumps(what, sort_keys=True)
 
 
-def _finite(value) -> bool:
+def is_finite_number(value) -> bool:
+    """Whether ``value`` is a finite int or float (not a bool)."""
     return not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)

@@ -117,8 +117,7 @@ def _named_folders(path: Path) -> list[str]:
     commands and reference log, where the model was trained): the model's own file may read there."""
     import os
 
-    from surrealist_gym.aerialist import safe_yaml
-    from surrealist_gym.errors import SurrealistError
+    from surrealist_gym.errors import SurrealistError, safe_yaml
 
     try:
         doc = safe_yaml(path.read_text(encoding="utf-8"), str(path))

@@ -130,12 +130,10 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
 
         make_agent(options.agent)  # an unknown agent fails here, before any folder or worker exists
     changes = {}
-    if options.uav is not None:
-        from ..sim.profiles import PRESETS, resolve_uav
+    if options.uav is not None:  # a bad profile fails here, before any folder exists
+        from ..sim.uav import recorded_choice
 
-        resolve_uav(options.uav)  # a bad profile fails here, before any folder exists
-        if options.uav not in PRESETS:
-            changes["uav"] = str(Path(options.uav).resolve())
+        changes["uav"] = recorded_choice(options.uav)
     from ..envs.replicate import SEEDS
 
     seed = getattr(options, "seed", None)
@@ -253,15 +251,3 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
     print(f"results in {out}/: best.yaml, evaluations.csv, summary.json, figure1.png, fitness.png, "
           f"min_distances.png")
     return 0
-
-
-def sim_config_of(options: SearchOptions):
-    """The search's SimConfig: its noise mode, flown by its UAV profile when it names one."""
-    from ..sim import SimConfig
-
-    config = SimConfig(common_noise=options.common_noise)
-    if options.uav is not None:
-        from ..sim.profiles import resolve_uav
-
-        config = resolve_uav(options.uav).sim_config(config)
-    return config

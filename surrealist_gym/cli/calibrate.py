@@ -35,7 +35,8 @@ def run(args) -> int:
     from ..executors import LocalPoolExecutor
     from ..fidelity.calibration import calibrate, format_calibration, plot_calibration
     from ..logs import read_flight
-    from ..sim.profiles import resolve_uav, save_profile
+    from ..sim.profiles import save_profile
+    from ..sim.uav import decide_uav
 
     check_at_least(args, runs=1, workers=1)
     out = check_writable(args.out, "--out", "file", (".yaml", ".yml"))  # before any log is read or flown
@@ -46,7 +47,7 @@ def run(args) -> int:
         if flight.damage:
             raise SurrealistError(f"{flight.path}: {flight.damage}; a flight cut short cannot be calibrated on")
         flights.append(flight)
-    base = resolve_uav(args.uav or None, flight=flights[0])  # --uav, else the first log's vehicle
+    base = decide_uav(uav=args.uav or None, flight=flights[0]).profile  # --uav, else the first log's vehicle
     seed = load_test(args.seed) if args.seed else None
     start = time.perf_counter()
     executor = LocalPoolExecutor(args.workers)

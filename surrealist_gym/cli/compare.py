@@ -89,7 +89,7 @@ def run(args) -> int:
         env_kwargs["case_study"] = (str(path.resolve()) if Path(args.case_study).suffix in (".yaml", ".yml")
                                     else args.case_study)
     if case_study:  # the UAV generate --case-study flies, with or without --common-noise
-        from ..competition.case_study_env import DEFAULT_UAV
+        from ..sim.uav import DEFAULT_UAV
 
         env_kwargs["uav"] = DEFAULT_UAV
     if args.seed:

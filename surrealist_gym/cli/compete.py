@@ -40,8 +40,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="Aerialist's folder (default: the folders in $SURREALIST_AERIALIST holding the API the "
                              "tool imports, then the installed aerialist)")
     add_random_seed_argument(parser, "base seed of the runs' noise (default 0)")
-    parser.add_argument("--uav", metavar="NAME_OR_YAML", default="px4-v1.12-sitl-iris",
-                        help="UAV profile flown (default px4-v1.12-sitl-iris, the competition's PX4 SITL)")
+    from ..sim.uav import DEFAULT_UAV
+
+    parser.add_argument("--uav", metavar="NAME_OR_YAML", default=DEFAULT_UAV,
+                        help=f"UAV profile flown (default {DEFAULT_UAV}, the competition's PX4 SITL)")
     parser.add_argument("--tool-env", choices=TOOL_ENV_MODES, default="auto",
                         help="which Python runs the tool: ours, or an environment of its own built from its "
                              "requirements.txt and cached (default auto: ours when every module the tool imports is "

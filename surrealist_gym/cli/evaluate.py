@@ -29,6 +29,7 @@ from pathlib import Path
 
 from ..competition.scoring import EDITIONS, Draw
 from ..errors import SurrealistError
+from ..sim.uav import recorded_choice, write_record
 from .options import RUN_FILE, default_out
 
 STORE_FILE = "evaluations.sqlite"
@@ -64,7 +65,7 @@ class EvaluateOptions:
             draw_folder(folder, ed, args.random_seed)
             for folder in dict.fromkeys(str(Path(t).absolute()) for t in args.tests))  # each folder once
         return cls(tuple(str(Path(t).absolute()) for t in args.tests), runs, args.random_seed,
-                   _uav_option(args.uav), args.any_layout, args.workers, ed and ed.name, draws, args.buffer)
+                   recorded_choice(args.uav), args.any_layout, args.workers, ed and ed.name, draws, args.buffer)
 
     @property
     def files(self) -> tuple[str, ...]:
@@ -88,12 +89,6 @@ class EvaluateOptions:
                           "draws": tuple(Draw.from_json(d) for d in values.get("draws", ()))})
         except (OSError, UnicodeDecodeError, ValueError, TypeError, KeyError, AttributeError) as err:
             raise SurrealistError(f"{path}: not a readable run file ({type(err).__name__})") from None
-
-
-def _uav_option(uav: str | None) -> str | None:
-    from ..sim.profiles import PRESETS
-
-    return uav if uav is None or uav in PRESETS else str(Path(uav).absolute())
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -151,9 +146,9 @@ def _m(value, digits: int = 2) -> str:
 def run(args: argparse.Namespace) -> int:
     """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
     summary and write the report."""
-    from ..competition.reevaluation import flight_configs, load_tests, rule_broken
+    from ..competition.reevaluation import load_tests, rule_broken, uav_decisions
     from ..competition.scoring import edition
-    from ..sim.profiles import resolve_uav
+    from ..sim.uav import decide_uav
     from ._search import _unlock
     from .options import check_at_least, check_buffer
 
@@ -169,12 +164,12 @@ def run(args: argparse.Namespace) -> int:
         _distinct(args.tests, "TESTS")
         out = _empty_folder(Path(args.out or default_out("evaluate")))
         options = EvaluateOptions.from_args(args)
-    uav = None if options.uav is None else resolve_uav(options.uav if args.resume else args.uav)  # named as given
+    uav = None if options.uav is None else decide_uav(uav=options.uav if args.resume else args.uav).profile
     scored = bool(options.competition)  # a drawn test that breaks the rules is not flown and scores 0
     tests = load_tests(args.tests if not (args.resume or scored) else options.files,
                        any_layout=options.any_layout or scored)
     tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
-    flight_configs(tests, [resolve_uav(uav, test=test) for _, test in tests])  # uav.* settings the UAV takes
+    decisions = uav_decisions(tests, uav)  # uav.* settings the UAV takes, before anything flies
     rules = edition(options.competition).rules if scored else None
     invalid = {path: broken for path, test in tests if scored and not options.any_layout
                and (broken := rule_broken(test, rules))}
@@ -192,6 +187,7 @@ def run(args: argparse.Namespace) -> int:
                                       f"or choose another folder") from None
             except OSError as err:
                 raise SurrealistError(f"--out {out}: cannot write {RUN_FILE} ({err.strerror or err})") from None
+        write_record(out, {str(path): decision for (path, _), decision in zip(tests, decisions)})
         return _evaluate(out, options, tests, uav, invalid, args.dask_scheduler)
     finally:
         _unlock(out)
@@ -259,7 +255,7 @@ def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
               "it cannot be resumed: start a new evaluation with each once")
     flags = getattr(args, "_flags", frozenset())
     given = {"tests": (tuple(str(Path(t).absolute()) for t in args.tests) if args.tests else None, None),
-             "runs": (args.runs, None), "random_seed": (args.random_seed, 0), "uav": (_uav_option(args.uav), None),
+             "runs": (args.runs, None), "random_seed": (args.random_seed, 0), "uav": (recorded_choice(args.uav), None),
              "any_layout": (args.any_layout, False), "competition": (args.competition, None),
              "buffer": (args.buffer, 0.0)}
     for name, (value, default) in given.items():

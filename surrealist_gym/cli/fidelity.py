@@ -114,10 +114,11 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from ..fidelity.measure import load_labelled_set, measure_fidelity, sim_config_for, write_report
+    from ..fidelity.measure import load_labelled_set, measure_fidelity, write_report
+    from ..sim.uav import DEFAULT_UAV, decide_uav
 
     _check(args)
-    sim_config_for(args.uav)
+    uav = decide_uav(uav=args.uav or DEFAULT_UAV)  # a bad profile fails before anything is read
     lset = load_labelled_set(args.labels_set, args.labels, args.mission)  # bad input fails before the progress bar
     bar = tqdm(total=None, unit="test", desc="fidelity", dynamic_ncols=True, file=sys.stderr, disable=None)
 
@@ -133,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     paths = write_report(report, args.out)
+    uav.write(paths["json"].parent)
     if args.json:
         print(json.dumps({**report.to_dict(), "files": {k: str(v) for k, v in paths.items()}}, indent=2))
         return 0

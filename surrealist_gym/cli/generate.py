@@ -5,7 +5,7 @@ exported for Aerialist and re-flown to give each its failure probability.
 """
 from __future__ import annotations
 
-from ._search import run_search, search_folder, sim_config_of
+from ._search import run_search, search_folder
 from .options import CASE_STUDY_DEFAULTS, GenerateOptions, refuse_inapplicable
 
 
@@ -27,8 +27,8 @@ def run(args) -> int:
     if args.case_study and not args.resume:
         return _case_study(args)
     if args.uav is None and not args.resume:  # the seed test's default UAV, recorded in run.json
-        from ..sim.profiles import resolve_uav
-        args.uav = resolve_uav(test=load_test(args.test or data_path("rq2-seed.yaml"))).name
+        from ..sim.uav import decide_uav
+        args.uav = decide_uav(load_test(args.test or data_path("rq2-seed.yaml"))).name
     with search_folder(args, GenerateOptions) as (out, options):
         if options.case_study:
             return _case_study_search(out, options)
@@ -43,7 +43,7 @@ def run(args) -> int:
             env = GenerateEnv(seed_test=options.test, runs=options.runs, budget=options.budget, mutators=mutators,
                               aggregate=options.aggregate, executor=options.dask_scheduler,
                               store=out / "evaluations.sqlite", random_seed=options.random_seed,
-                              workers=options.workers, sim_config=_sim_config(options))
+                              workers=options.workers, uav=options.uav, sim_config=_overrides(options))
         except InvalidTestCase as err:  # a uav.* field of the seed test: name its file
             if options.test and not str(err).startswith(str(options.test)):
                 raise InvalidTestCase(f"{options.test}: {err}") from None
@@ -51,11 +51,9 @@ def run(args) -> int:
         return run_search(env, options, out, "generate")
 
 
-def _sim_config(options):
-    """The search's SimConfig (``sim_config_of``) with its ``--buffer``."""
-    from dataclasses import replace
-
-    return replace(sim_config_of(options), competition_buffer_m=options.buffer)
+def _overrides(options) -> dict:
+    """What the search sets of the SimConfig beyond its UAV: the noise mode and the competition distance's buffer."""
+    return {"common_noise": options.common_noise, "competition_buffer_m": options.buffer}
 
 
 def _case_study(args) -> int:
@@ -70,8 +68,8 @@ def _case_study(args) -> int:
     for name, value in CASE_STUDY_DEFAULTS.items():
         if f"--{name}" not in getattr(args, "_flags", frozenset()):
             setattr(args, name, value)
-    if args.uav is None:
-        from ..competition.case_study_env import DEFAULT_UAV
+    if args.uav is None:  # recorded in run.json
+        from ..sim.uav import DEFAULT_UAV
         args.uav = DEFAULT_UAV
     with search_folder(args, GenerateOptions) as (out, options):
         return _case_study_search(out, options)
@@ -85,7 +83,7 @@ def _case_study_search(out, options) -> int:
                                    budget=options.budget, aggregate=options.aggregate,
                                    executor=options.dask_scheduler, store=out / "evaluations.sqlite",
                                    random_seed=options.random_seed, workers=options.workers,
-                                   sim_config=_sim_config(options), wind=options.wind))
+                                   uav=options.uav, sim_config=_overrides(options), wind=options.wind))
     code = run_search(env, options, out, "generate")
     if code == 0:
         _write_suite(out, env.suite, options)

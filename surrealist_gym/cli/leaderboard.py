@@ -48,8 +48,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="cells run at once, and processes flying the scoring's runs (default: all cores, at "
                              "most 8)")
     add_dask_argument(parser)
-    parser.add_argument("--uav", metavar="NAME_OR_YAML", default="px4-v1.12-sitl-iris",
-                        help="UAV profile flown (default px4-v1.12-sitl-iris, the competition's PX4 SITL)")
+    from ..sim.uav import DEFAULT_UAV
+
+    parser.add_argument("--uav", metavar="NAME_OR_YAML", default=DEFAULT_UAV,
+                        help=f"UAV profile flown (default {DEFAULT_UAV}, the competition's PX4 SITL)")
     add_out_argument(parser, "leaderboard", "output folder: new, or one holding this board (then it resumes)")
 
 

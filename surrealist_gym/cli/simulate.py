@@ -21,7 +21,7 @@ from pathlib import Path
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist simulate``."""
-    from .options import add_out_argument, add_random_seed_argument
+    from .options import _Refused, add_out_argument, add_random_seed_argument
 
     parser.add_argument("test", metavar="TEST.yaml", help="Aerialist test case")
     parser.add_argument("--runs", type=int, default=5, help="number of runs (default 5)")
@@ -33,8 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     reference.add_argument("--no-reference", action="store_true",
                            help="do not compare with the test's assertion log")
     add_out_argument(parser, "simulate")
-    parser.add_argument("--vehicle", choices=["px4_vision", "iris"], default=None,
-                        help="fly this vehicle preset with the simulator's default planner instead of a UAV profile")
+    parser.add_argument("--vehicle", dest="_refused_vehicle", action=_Refused, default=None,
+                        instead="--uav names the UAV that flies: a preset, or a profile YAML whose 'vehicle:' is "
+                                "px4_vision or iris")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
                         help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
                              "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a test with a "
@@ -74,7 +75,7 @@ def _params(items: list[str]) -> dict:
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from .. import load_test
-    from ..sim import SimConfig, simulate
+    from ..sim import simulate
     from .options import check_at_least, check_writable, default_out
 
     check_at_least(args, runs=1, random_seed=0)
@@ -88,26 +89,20 @@ def run(args: argparse.Namespace) -> int:
         reference = read_flight(ref_path)
         if args.reference:
             test = replace(test, reference_log=str(Path(args.reference).resolve()))
-    config = SimConfig(avoidance=args.avoidance, params=params)
-    if args.uav is not None and args.vehicle is not None:
-        from ..errors import SimulationError
-        raise SimulationError("--vehicle: give either --vehicle or --uav (the profile names its vehicle)")
-    if args.vehicle is not None:
-        config = replace(config, vehicle=args.vehicle)
-    else:
-        from ..sim.profiles import resolve_uav
-        config = resolve_uav(args.uav, test=test).sim_config(config)
     from ..errors import InvalidTestCase
-    from ..sim.profiles import test_uav_settings, with_uav_settings
+    from ..sim.uav import decide_uav
 
-    try:  # the test's uav.* settings, checked before anything flies
-        with_uav_settings(config, test_uav_settings(test))
+    try:  # the UAV and the test's uav.* settings, checked before anything flies
+        given = {"avoidance": args.avoidance} if args.avoidance is not None else {}
+        uav = decide_uav(test, args.uav, config={**given, **({"params": params} if params else {})})
     except InvalidTestCase as err:
         raise InvalidTestCase(f"{args.test}: {err}") from None
+    config = uav.config
     start = time.perf_counter()
     results = simulate(test, runs=args.runs, seed=args.random_seed, config=config)
     wall = time.perf_counter() - start
     out.mkdir(parents=True, exist_ok=True)
+    uav.write(out)
     stem = Path(args.test).stem
     rows = []
     for r in results:

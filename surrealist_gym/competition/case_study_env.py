@@ -29,8 +29,6 @@ from ..outcomes import Measure
 from ..testcase import Obstacle, TestCase
 from .rules import RULES, check_rules, endpoint_failure, layout_mutators, load_case_study, seed_layout
 
-DEFAULT_UAV = "px4-v1.12-sitl-iris"
-
 
 class CaseStudyEnv(SurrealistEnv):
     """Generate failing tests for one case study of the competition."""
@@ -53,8 +51,6 @@ class CaseStudyEnv(SurrealistEnv):
         if wind:
             from ..mutators import wind_mutators
             mutators += wind_mutators()
-        if uav is None and sim_config is None:
-            uav = DEFAULT_UAV
         setup = EnvSetup(runs=runs, random_seed=random_seed, sim_config=sim_config, uav=uav, executor=executor,
                          workers=workers, store=store)
         super().__init__(seed, mutators, budget, setup=setup, render_mode=render_mode)

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from ..errors import SurrealistError
+from ..sim.uav import DEFAULT_UAV
 from .reevaluation_report import _r
 from .scoring import Edition, SuiteScore, edition, standings
 
@@ -141,7 +142,7 @@ class Board:
 
 
 def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: int | None = None,
-         repetitions: int = 3, runs: int | None = None, seed: int = 0, uav: str = "px4-v1.12-sitl-iris",
+         repetitions: int = 3, runs: int | None = None, seed: int = 0, uav: str = DEFAULT_UAV,
          out) -> Board:
     """Check every input before anything runs (one-line SurrealistError): the edition, the numbers, each tool on each
     case study (:func:`~surrealist_gym.competition.compete.prepare`), and the folder: new, or holding this very board

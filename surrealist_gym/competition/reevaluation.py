@@ -145,21 +145,22 @@ def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, Te
     return out
 
 
-def flight_configs(tests: Sequence[tuple[Path, TestCase]], profiles: Sequence) -> list:
-    """The SimConfig each test flies with (its profile's); a test whose ``uav.*`` settings its UAV cannot take
-    (an unknown planner field, a value out of range) is a one-line InvalidTestCase naming its file, before any
+def uav_decisions(tests: Sequence[tuple[Path, TestCase]], uav=None, buffer: float = 0.0) -> list:
+    """The UAV each test flies (:func:`~surrealist_gym.sim.uav.decide_uav`: ``uav``, else the test's own), with the
+    competition distance's ``buffer``; a bad profile fails once, and a test whose ``uav.*`` settings its UAV cannot
+    take (an unknown planner field, a value out of range) is a one-line InvalidTestCase naming its file, before any
     flight."""
-    from ..sim.profiles import test_uav_settings, with_uav_settings
+    from ..sim.uav import decide_uav
 
-    configs = []
-    for (path, test), profile in zip(tests, profiles):
-        config = profile.sim_config()
+    if uav is not None:
+        uav = decide_uav(uav=uav).profile
+    decisions = []
+    for path, test in tests:
         try:
-            with_uav_settings(config, test_uav_settings(test))
+            decisions.append(decide_uav(test, uav, config={"competition_buffer_m": buffer}))
         except InvalidTestCase as err:
             raise InvalidTestCase(f"{path}: {err}") from None
-        configs.append(config)
-    return configs
+    return decisions
 
 
 def rule_broken(test: TestCase, rules=None) -> str:
@@ -292,7 +293,7 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     """Fly ``runs`` runs of each (file, test) (from :func:`load_tests`) and compute the report's figures.
 
     ``uav``: a profile name, YAML or :class:`~surrealist_gym.sim.profiles.UavProfile` for every test (default: each
-    test's own, :func:`~surrealist_gym.sim.profiles.resolve_uav`). ``store``: an SQLite file
+    test's own, :func:`~surrealist_gym.sim.uav.decide_uav`). ``store``: an SQLite file
     (:class:`~surrealist_gym.store.EvaluationStore`) that holds this evaluation's runs: those it holds are read back,
     not flown, and each chunk flown is written to it as it completes. It records the evaluation's identity
     (:func:`evaluation_identity`, with ``identity``: anything else the runs depend on), so a store of another
@@ -301,14 +302,12 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
     ``distributed.Client`` or an executor (:func:`~surrealist_gym.executors.make_executor`; default ``workers``
     local processes, all cores and at most 8; 1: this process)."""
     from ..executors import executor_for, fly_many
-    from ..sim.profiles import resolve_uav
     from .suite import Suite
 
     if runs < 1:
         raise SurrealistError(f"runs: expected a whole number >= 1, got {runs!r}")
-    given = None if uav is None else resolve_uav(uav)  # a bad profile fails once, before any test flies
-    profiles = [resolve_uav(given, test=test) for _, test in tests]
-    configs = [replace(c, competition_buffer_m=buffer) for c in flight_configs(tests, profiles)]
+    decisions = uav_decisions(tests, uav, buffer)
+    configs = [d.config for d in decisions]
     have: list[dict] = [{} for _ in tests]
     db = None
     with executor_for(executor, workers) as flying:
@@ -328,9 +327,9 @@ def evaluate(tests: Sequence[tuple[Path, TestCase]], runs: int = 5, seed: int = 
         finally:
             if db is not None:
                 db.close()
-    stats = [summarise_test(path, test, records, profile.name)
-             for (path, test), records, profile in zip(tests, flown, profiles)]
-    return _with_suite(Evaluation(runs, seed, None if given is None else given.name, tuple(stats), Suite(),
+    stats = [summarise_test(path, test, records, decision.name)
+             for (path, test), records, decision in zip(tests, flown, decisions)]
+    return _with_suite(Evaluation(runs, seed, None if uav is None else decisions[0].name, tuple(stats), Suite(),
                                   FrozenDict(), flying.workers, wall, sum(map(len, have))))
 
 

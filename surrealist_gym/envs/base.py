@@ -52,7 +52,7 @@ class EnvSetup:
         sim_config: a :class:`~surrealist_gym.sim.config.SimConfig` (or a mapping of its fields, e.g.
             ``{"common_noise": True}``); the UAV below is applied to it.
         uav: the UAV profile (preset name, YAML path or profile); None: the seed test's
-            (:func:`~surrealist_gym.sim.profiles.resolve_uav`), with a mapping ``sim_config`` applied to it, unless
+            (:func:`~surrealist_gym.sim.uav.decide_uav`), with a mapping ``sim_config`` applied to it, unless
             ``sim_config`` is a full :class:`~surrealist_gym.sim.config.SimConfig`, which is then the UAV as given.
         executor: where the runs fly (:mod:`surrealist_gym.executors`); None: a pool of ``workers`` local
             processes (all cores when ``workers`` is None too), except in a daemonic process (a worker of
@@ -121,18 +121,11 @@ class SurrealistEnv(gym.Env):
         store, sim_config, uav = setup.store, setup.sim_config, setup.uav
         executor = _executor_for(setup)
         store = EvaluationStore(store) if isinstance(store, (str, Path)) else store
-        from ..sim.config import SimConfig
-        from ..sim.profiles import resolve_uav, test_uav_settings, with_uav_settings
-
-        self.uav_profile = None  # the UavProfile flown, None for a bare SimConfig
-        if uav is not None or not isinstance(sim_config, SimConfig):  # the UAV chosen, else the seed's default
-            self.uav_profile = resolve_uav(uav, test=seed_test)
-            sim_config = self.uav_profile.sim_config(SimConfig.coerce(sim_config))
-
         # a seed whose uav.* settings are invalid fails here in one line, not as error runs in the workers
-        with_uav_settings(SimConfig.coerce(sim_config), test_uav_settings(seed_test))
-        self.evaluator = Evaluator(self._objective(), runs=setup.runs, seed=setup.random_seed, sim_config=sim_config,
-                                   executor=executor, store=store)
+        self.uav = self._decide_uav(seed_test, setup)
+        self.uav_profile = self.uav.profile  # the UavProfile flown, None for a SimConfig given as it is
+        self.evaluator = Evaluator(self._objective(), runs=setup.runs, seed=setup.random_seed,
+                                   sim_config=self.uav.config, executor=executor, store=store)
         n = len(self._mutators)
         low = np.array([m.low for m in self._mutators], dtype=np.float64)
         high = np.array([m.high for m in self._mutators], dtype=np.float64)
@@ -167,6 +160,13 @@ class SurrealistEnv(gym.Env):
     def mutators(self) -> tuple[PropertyMutator, ...]:
         """The mutators, in the order of the action vector."""
         return self._mutators
+
+    def _decide_uav(self, seed_test, setup: EnvSetup):
+        """The UAV that flies (:func:`~surrealist_gym.sim.uav.decide_uav`); an env that knows more (a log's vehicle)
+        says so here."""
+        from ..sim.uav import decide_uav
+
+        return decide_uav(seed_test, setup.uav, config=setup.sim_config)
 
     @property
     def seed_test(self) -> TestCase:

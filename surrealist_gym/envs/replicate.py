@@ -15,8 +15,8 @@ from ..aerialist import load_test
 from ..errors import InvalidTestCase, LogFormatError
 from ..evaluation import ReplicationObjective
 from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_mutators_of
-from ..sim.config import SimConfig
-from ..sim.profiles import resolve_uav
+from ..sim.profiles import default_profile
+from ..sim.uav import decide_uav
 from ..testcase import Obstacle, TestCase
 from .base import EnvSetup, SurrealistEnv
 
@@ -62,12 +62,11 @@ class ReplicateEnv(SurrealistEnv):
             seed_test = replace(seed_test or seed_for(self.flight, seed_kind), reference_log=str(self.flight.path))
             self.reference = self.flight.trajectory
         self.averaging = averaging
-        if uav is None and self.flight is not None and not isinstance(sim_config, SimConfig):
-            uav = resolve_uav(flight=self.flight)
+        self.uav = decide_uav(seed_test, uav, flight=self.flight, config=sim_config)
         mutators = tuple(mutators or default_mutators(seed_test, AUTHORS_ORDER))
         if uav_mutators:
             if uav_mutators is True or all(isinstance(m, str) for m in uav_mutators):
-                profile = resolve_uav(uav, test=seed_test)
+                profile = self.uav.profile or default_profile(seed_test)  # a SimConfig given as it is: the seed's UAV
                 names = None if uav_mutators is True else list(uav_mutators)
                 uav_mutators = uav_mutators_of(profile, names)
             mutators += tuple(uav_mutators)
@@ -77,6 +76,9 @@ class ReplicateEnv(SurrealistEnv):
 
     def _objective(self):
         return ReplicationObjective(self.reference, self.averaging)
+
+    def _decide_uav(self, seed_test, setup):
+        return self.uav  # decided with the log's vehicle
 
     def _reference(self):
         return self.reference

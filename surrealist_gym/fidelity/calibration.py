@@ -27,9 +27,10 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
-from ..sim.config import UAV_SETTING_PREFIX, AvoidanceModel, SimConfig
-from ..sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, resolve_uav, vehicle_of
+from ..sim.config import UAV_SETTING_PREFIX, AvoidanceModel
+from ..sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, vehicle_of
 from ..sim.ranges import FrozenDict
+from ..sim.uav import decide_uav
 from ..testcase import TestCase
 from ..trajectory import Phases, Trajectory, phases, profile as time_profile
 
@@ -110,8 +111,8 @@ def _mission_test(flight, seed_test: TestCase | None) -> TestCase:
 def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: TestCase | None = None, runs: int = 2,
               executor=None, grid: int = 5, passes: int = 2, seed: int = 0,
               progress: Callable[[str], None] | None = None) -> Calibration:
-    """Fit the settings of ``base`` (default: the first log's vehicle, :func:`resolve_uav`) that the logs' PX4
-    parameters do not fix, to the logs' phases.
+    """Fit the settings of ``base`` (default: the first log's vehicle, :func:`~surrealist_gym.sim.uav.decide_uav`)
+    that the logs' PX4 parameters do not fix, to the logs' phases.
 
     Args:
         flights: :class:`~surrealist_gym.logs.FlightLog` values of one UAV.
@@ -128,14 +129,15 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
         raise LogFormatError("calibrate: no log given")
     for flight in flights:
         check_multirotor(flight)
-    base = resolve_uav(base, flight=flights[0])
+    uav = decide_uav(uav=base, flight=flights[0], config={"common_noise": True})
+    base = uav.profile
     for flight in flights:
         _check_vehicle(flight, base)
     executor = executor or InlineExecutor()
     tests = [_mission_test(f, seed_test) for f in flights]
     real = [phases(f.trajectory, str(f.path)) for f in flights]
     goals = [tuple(f.mission.waypoints[-1]) for f in flights]
-    config = base.sim_config(SimConfig(common_noise=True))
+    config = uav.config
     settings = {s.name: s for s in SETTINGS[base.avoidance_model]}
     values = {fit.setting: settings[fit.setting].value(base) for fit in FITS[base.avoidance_model]}
     count = [0]

@@ -29,17 +29,16 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from search.statistics import vargha_delaney_a12
-
 from ..errors import SurrealistError
 from ..outcomes import BLOCKED as _BLOCKED, UNSAFE_DISTANCE_M, RunRecord, RunStatus, status_counts, statuses_text
 from ..sim.ranges import FrozenDict
+from ..sim.uav import DEFAULT_UAV, decide_uav
 from ..trajectory import airborne_time  # noqa: F401 - the airborne time of the report, named here too
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
 
 __all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "TestRow",
            "airborne_time", "build_report", "fly_labelled_set", "format_figure", "load_labelled_set",
-           "measure_fidelity", "plot_report", "region_stats", "sim_config_for", "write_report"]
+           "measure_fidelity", "plot_report", "region_stats", "write_report"]
 
 DISTANCE_NAME = "2-D competition distance"
 TARGET_PRECISION = 0.6    # the best recall is sought at this precision or above
@@ -52,15 +51,6 @@ STATUS_ORDER = tuple(s.value for s in (RunStatus.SUCCESS, RunStatus.TIMEOUT, Run
 
 
 # --- flying ------------------------------------------------------------------------------------------------------
-def sim_config_for(uav=None, config=None):
-    """The one place where a UAV profile becomes a SimConfig: ``uav`` (a preset name, a YAML path or a
-    :class:`~surrealist_gym.sim.profiles.UavProfile`; default the PX4 SITL Iris that produced the competition's
-    labels) applied to ``config``."""
-    from ..sim.profiles import resolve_uav
-
-    return resolve_uav(uav).sim_config(config)
-
-
 def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,
                      buffer: float = 0.0, progress: Callable[[int, int], None] | None = None, executor=None
                      ) -> list[tuple[RunRecord, ...]]:
@@ -223,11 +213,13 @@ def _spearman(a, b) -> float:
 
 def _auc(positive: np.ndarray, scores: np.ndarray) -> float:
     """P(score of a positive < score of a negative), ties half: Vargha-Delaney A12 of the negatives over the
-    positives."""
+    positives, the Mann-Whitney U of the negatives over the pairs."""
+    from scipy.stats import mannwhitneyu
+
     pos, neg = scores[positive], scores[~positive]
     if not pos.size or not neg.size:
         return math.nan
-    return vargha_delaney_a12(neg, pos)
+    return float(mannwhitneyu(neg, pos).statistic / (neg.size * pos.size))
 
 
 def _best_recall(positive: np.ndarray, scores: np.ndarray) -> tuple[float, float]:
@@ -328,7 +320,7 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
     if runs < 1 or every < 1 or (limit is not None and limit < 1) or close <= 0 or buffer < 0:
         raise ValueError(f"invalid options: runs={runs}, every={every}, limit={limit}, close={close}, "
                          f"buffer={buffer}")
-    config = sim_config_for(uav, config)
+    config = decide_uav(uav=uav or DEFAULT_UAV, config=config).config
     lset = path if isinstance(path, LabelledSet) else load_labelled_set(path, labels, mission)
     lset = lset.subset(limit, every)
     start = time.perf_counter()

@@ -19,7 +19,8 @@ _EXPORTS = {
     "VehicleModel": "config",
     "Clearance": "runner", "LocalPosition": "runner", "RunResult": "runner", "RunStatus": "runner",
     "simulate": "runner", "simulate_runs": "runner",
-    "IRIS": "vehicle", "PRESETS": "vehicle", "PX4_VISION": "vehicle", "VehicleParams": "vehicle", "preset": "vehicle",
+    "DEFAULT_UAV": "uav", "UavDecision": "uav", "decide_uav": "uav",
+    "IRIS": "vehicle", "VEHICLES": "vehicle", "PX4_VISION": "vehicle", "VehicleParams": "vehicle", "preset": "vehicle",
 }
 
 
@@ -36,6 +37,6 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_EXPORTS))
 
 
-__all__ = ["Clearance", "IRIS", "LocalPosition", "NoiseConfig", "PRESETS", "PX4_DEFAULTS", "PX4_VISION",
-           "Physics", "RunResult", "RunStatus", "SimConfig", "VehicleModel", "VehicleParams", "preset", "simulate",
-           "simulate_runs"]
+__all__ = ["Clearance", "DEFAULT_UAV", "IRIS", "LocalPosition", "NoiseConfig", "PX4_DEFAULTS", "PX4_VISION",
+           "Physics", "RunResult", "RunStatus", "SimConfig", "UavDecision", "VEHICLES", "VehicleModel", "VehicleParams",
+           "decide_uav", "preset", "simulate", "simulate_runs"]

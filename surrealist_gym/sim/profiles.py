@@ -15,10 +15,8 @@ A profile is saved as YAML (every key optional except ``name``)::
     timeout_s: 500                     # simulated-time limit [s]; null = the mission's default
     obstacle_collision_scale: 0.8      # obstacles collide at this share of their footprint (Gazebo boxes: 0.8)
 
-Presets: :data:`PRESETS` (``px4-v1.12-sitl-iris``, ``px4-vision-case0``, ``px4-vision-sitl``). :func:`resolve_uav` is
-the one place that decides which UAV flies (the user's choice, else the log's vehicle, else the test's default);
-:func:`load_profile` reads a preset's name or a YAML path; :meth:`UavProfile.sim_config` turns a profile into a
-:class:`~surrealist_gym.sim.config.SimConfig`.
+Presets: :data:`PRESETS` (``px4-v1.12-sitl-iris``, ``px4-vision-case0``, ``px4-vision-sitl``); :func:`load_profile`
+reads a preset's name or a YAML path. Which UAV flies a test is decided in one place, :mod:`surrealist_gym.sim.uav`.
 """
 from __future__ import annotations
 
@@ -34,7 +32,7 @@ from .config import AvoidanceModel, SimConfig, VehicleModel
 from .ranges import UAV_TIMINGS, FrozenDict, param_problem, problem
 
 __all__ = ["PRESETS", "SETTINGS", "Setting", "UavProfile", "check_multirotor", "default_profile", "load_profile",
-           "profile_for_flight", "resolve_uav", "save_profile", "test_uav_settings", "vehicle_of", "with_uav_settings"]
+           "profile_for_flight", "save_profile", "test_uav_settings", "vehicle_of", "with_uav_settings"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -366,35 +364,9 @@ def check_multirotor(flight) -> None:
                              f"and calibrated")
 
 
-def resolve_uav(choice=None, *, test=None, flight=None, option: str = "--uav") -> UavProfile:
-    """The UAV that flies: the one rule every command, env and report follows.
-
-    ==============================  ==========  ===================================  ================================
-    ``choice`` (``--uav``)          ``flight``  ``test``                             UAV flown
-    ==============================  ==========  ===================================  ================================
-    a preset name, YAML or profile  any         any                                  that one (:func:`load_profile`)
-    None                            a log       any                                  the log's vehicle
-                                                                                     (:func:`profile_for_flight`)
-    None                            None        replicates a flight (reference log)  ``px4-vision-case0``
-    None                            None        any other test, or None              ``px4-v1.12-sitl-iris``
-    ==============================  ==========  ===================================  ================================
-
-    A choice that is no preset, or a YAML that cannot be read or is no valid profile, raises a one-line
-    :class:`~surrealist_gym.errors.InvalidProfile` naming ``option``.
-    """
-    if choice is not None:
-        try:
-            return load_profile(choice)
-        except InvalidProfile as err:
-            raise InvalidProfile(f"{option} {err}") from None
-    if flight is not None:
-        return profile_for_flight(flight)
-    return default_profile(test) if test is not None else SITL_IRIS
-
-
 def load_profile(name_or_path) -> UavProfile:
-    """A preset by name, or a profile YAML file (what :func:`resolve_uav` reads a choice with; it names the option
-    in the error)."""
+    """A preset by name, or a profile YAML file (what :func:`~surrealist_gym.sim.uav.decide_uav` reads a choice with;
+    it names the option in the error)."""
     if isinstance(name_or_path, UavProfile):
         return name_or_path
     key = str(name_or_path)
@@ -403,7 +375,7 @@ def load_profile(name_or_path) -> UavProfile:
     path = Path(key)
     if path.suffix.lower() not in (".yaml", ".yml"):
         raise InvalidProfile(f"{key!r}: not a preset ({', '.join(PRESETS)}) nor a .yaml file")
-    from ..aerialist import safe_yaml
+    from ..errors import safe_yaml
 
     regular_file(path, "profile", InvalidProfile)
     try:

@@ -129,8 +129,8 @@ def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None
         test: a :class:`~surrealist_gym.testcase.TestCase` with a mission.
         runs: number of runs (flown together in one world).
         seed: base seed.
-        config: simulator configuration (default: the test's UAV,
-            :func:`~surrealist_gym.sim.profiles.resolve_uav`).
+        config: simulator configuration (default: the test's UAV, as
+            :func:`~surrealist_gym.sim.uav.decide_uav` decides).
 
     Returns:
         One :class:`RunResult` per run, in run order.
@@ -145,8 +145,8 @@ def simulate(test, runs: int = 5, seed: int = 0, config: SimConfig | None = None
     if runs < 1:
         raise ValueError(f"runs must be >= 1, got {runs}")
     if config is None:
-        from .profiles import resolve_uav
-        config = resolve_uav(test=test).sim_config()
+        from .uav import decide_uav
+        config = decide_uav(test).config
     return simulate_runs(test, range(runs), seed, config)
 
 
@@ -159,9 +159,9 @@ def simulate_runs(test, indices, seed: int = 0, config: SimConfig | None = None)
 
 
 def _simulate_runs(test, indices, seed: int, config: SimConfig | None) -> list[RunResult]:
-    from .profiles import test_uav_settings, with_uav_settings
+    from .uav import flown_config
 
-    cfg = with_uav_settings(config or SimConfig(), test_uav_settings(test))  # the test's uav.* params
+    cfg = flown_config(config or SimConfig(), test)  # the test's uav.* params
     indices = [int(i) for i in indices]
     mission = test.mission
     if mission is None or not any(it.has_position for it in mission.items):

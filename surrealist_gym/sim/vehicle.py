@@ -95,9 +95,9 @@ PX4_VISION = VehicleParams(
     size=(0.45, 0.45, 0.16),
 )
 
-PRESETS: dict[VehicleModel, VehicleParams] = {VehicleModel.PX4_VISION: PX4_VISION, VehicleModel.IRIS: IRIS}
+VEHICLES: dict[VehicleModel, VehicleParams] = {VehicleModel.PX4_VISION: PX4_VISION, VehicleModel.IRIS: IRIS}
 
 
 def preset(model: VehicleModel | str) -> VehicleParams:
     """The parameters of a vehicle preset (``"px4_vision"`` or ``"iris"``)."""
-    return PRESETS[VehicleModel(model)]
+    return VEHICLES[VehicleModel(model)]

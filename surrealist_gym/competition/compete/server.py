@@ -20,8 +20,8 @@ flights.
 
 Example::
 
-    >>> from surrealist_gym.sim.profiles import resolve_uav                        # doctest: +SKIP
-    >>> with SimulationServer(folder, budget=10, config=resolve_uav("px4-v1.12-sitl-iris").sim_config()) as s:
+    >>> from surrealist_gym.sim.uav import decide_uav                             # doctest: +SKIP
+    >>> with SimulationServer(folder, budget=10, config=decide_uav(uav="px4-v1.12-sitl-iris").config) as s:
     ...     run_the_tool(s.address, s.authkey)                                    # doctest: +SKIP
     >>> s.spent, [f.statuses for f in s.flights]                                  # doctest: +SKIP
 """

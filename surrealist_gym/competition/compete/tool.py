@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Callable
 
 from ...errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, one_line
+from ...sim.uav import DEFAULT_UAV, decide_uav
 from ..scoring import writing_order
 from .locate import AerialistSource, find_aerialist, tool_apis
 from .process import ToolLimits, ending_with_us, start, stop, wait
@@ -44,7 +45,6 @@ from .toolcopy import check_folder, copy_folder
 from .toolenv import EnvChoice, ToolEnv, choose_env, own_env, top_level_imports
 
 SHIM = Path(__file__).resolve().parent / "shim"
-DEFAULT_UAV = "px4-v1.12-sitl-iris"
 COMPAT_EXTRA = "pip install -e '.[compete]'"
 #: Made in the tool's working folder before it runs, as the competition's Dockerfile does (``mkdir -p``).
 PREPARED_FOLDERS = ("logs", "results", "generated_tests")
@@ -157,8 +157,6 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         tool_env_cache: where the tools' own environments are kept (default ``toolenv.default_cache()``).
         limits: what the tool's process may use (time, memory, file size, CPU time; ``process.ToolLimits``).
     """
-    from ...sim.profiles import resolve_uav
-
     for name, value in (("budget", budget), ("--runs-per-test", runs_per_test), ("--workers", workers)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise SurrealistError(f"{name}: expected a whole number >= 1, got {value!r}")
@@ -171,7 +169,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
     out = (Path(out) if out is not None else Path("results") / f"compete-{datetime.now():%Y%m%d-%H%M%S}").absolute()
     if out.exists() or out.is_symlink():
         raise SurrealistError(f"--out {out}: exists; give a new folder")
-    resolve_uav(uav)  # a bad profile fails here, before any folder exists
+    decide_uav(uav=uav)  # a bad profile fails here, before any folder exists
     argument, file = _case_study(tool.resolve(), case_study)
     apis = tool_apis(tool)
     if len(apis) > 1:
@@ -274,8 +272,6 @@ def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs
 def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) -> CompeteResult:
     """Run the tool (see the module docstring); ``on_flight`` is called with each Flight as the server records it.
     ``plan.out`` must not exist, or be empty but for the ``.lock`` the command line holds in it."""
-    from ...sim.profiles import resolve_uav
-
     start_s = time.perf_counter()
     _claim(plan.out)
     tool_env = own_env(plan.env, plan.out / "tool-env.txt") if plan.env.kind == "own" else \
@@ -285,7 +281,9 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     for folder in PREPARED_FOLDERS:  # as the competition's Dockerfile prepares the tool's working folder
         (work / folder).mkdir(exist_ok=True)
     stdout, stderr = plan.out / "tool-stdout.txt", plan.out / "tool-stderr.txt"
-    config = resolve_uav(plan.uav).sim_config()
+    uav = decide_uav(uav=plan.uav)
+    uav.write(plan.out)
+    config = uav.config
     command = [str(tool_env.python), "cli.py", "generate", plan.case_study, str(plan.budget)]
     roots = (work, plan.case_study_file.parent,  # where the files a test names may be: and those the case study names
              *(Path(v) for _, v in _named_files(plan.case_study_file) if os.path.isabs(v)))

@@ -12,7 +12,7 @@ from numba.typed import Dict
 from surrealist_gym import load_test
 from surrealist_gym.sim import avoidance_cycle as kc, simulate
 from surrealist_gym.sim.avoidance import LocalPlanner
-from surrealist_gym.sim.profiles import resolve_uav
+from surrealist_gym.sim.uav import decide_uav
 from tests.conftest import EXPERIMENTS, fly_the_python_outer_loop
 
 
@@ -33,7 +33,7 @@ def _recorded_cycles(test, monkeypatch):
 
     monkeypatch.setattr(LocalPlanner, "update", recording)
     fly_the_python_outer_loop(monkeypatch)
-    simulate(test, runs=1, seed=0, config=resolve_uav(test=test).sim_config())
+    simulate(test, runs=1, seed=0, config=decide_uav(test).config)
     monkeypatch.undo()
     return planners[0], calls
 

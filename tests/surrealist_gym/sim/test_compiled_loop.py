@@ -15,7 +15,7 @@ from surrealist_gym import Mission, MissionItem, Obstacle, TestCase
 from surrealist_gym.mission import Command
 from surrealist_gym.sim import NoiseConfig, Physics, RunStatus, SimConfig, runner, simulate
 from surrealist_gym.sim.noise import NoiseSource, run_seed_sequence
-from surrealist_gym.sim.profiles import resolve_uav
+from surrealist_gym.sim.uav import decide_uav
 from tests.surrealist_gym.sim.test_compiled_physics import _rilast, _scenarios
 
 
@@ -74,7 +74,7 @@ def test_compiled_loop_equals_the_python_outer_loop(monkeypatch):
     with PX4-Avoidance: 1-3 boxes, cylinders, wind): the same results bit for bit."""
     total = 0
     for name, test in _scenarios().items():
-        old, new = _fly_both(test, 2, resolve_uav(test=test).sim_config(), monkeypatch)
+        old, new = _fly_both(test, 2, decide_uav(test).config, monkeypatch)
         _assert_same(old, new, name)
         total += len(new)
     assert total == 14
@@ -88,7 +88,7 @@ def test_compiled_loop_equals_the_python_outer_loop_with_the_sitl_timing(monkeyp
 
     total = 0
     for name, test in _scenarios().items():
-        config = resolve_uav(test=test).sim_config()
+        config = decide_uav(test).config
         config = dataclasses.replace(config, noise=dataclasses.replace(config.noise, **SITL_TIMING))
         old, new = _fly_both(test, 2, config, monkeypatch)
         _assert_same(old, new, name)
@@ -107,11 +107,11 @@ def test_compiled_loop_collision_timeout_and_stuck(monkeypatch):
         assert [r.status for r in new] == [RunStatus.COLLISION] * 2
         _assert_same(old, new, "collision")
     test = _rilast("random_run3_194")
-    cfg = dataclasses.replace(resolve_uav(test=test).sim_config(), timeout_s=21.37)
+    cfg = dataclasses.replace(decide_uav(test).config, timeout_s=21.37)
     old, new = _fly_both(test, 2, cfg, monkeypatch)
     assert [r.status for r in new] == [RunStatus.TIMEOUT] * 2
     _assert_same(old, new, "timeout")
-    cfg = dataclasses.replace(resolve_uav(test=test).sim_config(), stuck_window_s=2.0, stuck_distance_m=3.0)
+    cfg = dataclasses.replace(decide_uav(test).config, stuck_window_s=2.0, stuck_distance_m=3.0)
     old, new = _fly_both(test, 1, cfg, monkeypatch)
     assert new[0].status == RunStatus.STUCK
     _assert_same(old, new, "stuck")
@@ -124,7 +124,7 @@ def test_compiled_loop_without_noise(monkeypatch):
     scenarios = _scenarios()
     for name in ("rq1-seed1", "rilast 2 boxes"):
         test = scenarios[name]
-        base = resolve_uav(test=test).sim_config()
+        base = decide_uav(test).config
         for noise in (NoiseConfig.off(), dataclasses.replace(base.noise, sensor=False)):
             old, new = _fly_both(test, 1, dataclasses.replace(base, noise=noise), monkeypatch)
             _assert_same(old, new, name)

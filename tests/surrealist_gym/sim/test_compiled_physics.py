@@ -24,7 +24,7 @@ from surrealist_gym.evaluation import search_identity
 from surrealist_gym.mission import Command
 from surrealist_gym.sim import NoiseConfig, Physics, RunStatus, SimConfig, simulate
 from surrealist_gym.sim.config import PHYSICS_ENV
-from surrealist_gym.sim.profiles import resolve_uav
+from surrealist_gym.sim.uav import decide_uav
 from surrealist_gym.store import EvaluationStore
 from tests.conftest import CASE_STUDIES, EXPERIMENTS, SHARED_DATA
 
@@ -114,7 +114,7 @@ def test_agreement_over_shipped_scenarios():
     (measured: 25 mm at most, in the landing of an rq2-seed run, where the ground contacts differ)."""
     total = 0
     for name, test in _scenarios().items():
-        a, b = _both(test, 2, resolve_uav(test=test).sim_config())
+        a, b = _both(test, 2, decide_uav(test).config)
         for ra, rb in zip(a, b):
             assert ra.status == rb.status, (name, ra.message, rb.message)
             if math.isfinite(ra.competition_distance):

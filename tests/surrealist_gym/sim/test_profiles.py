@@ -11,21 +11,16 @@ from surrealist_gym import load_test
 from surrealist_gym.cli import main
 from surrealist_gym.errors import InvalidProfile
 from surrealist_gym.geometry import competition_distance
-from surrealist_gym.logs import read_flight
 from surrealist_gym.sim import RunStatus, simulate
 from surrealist_gym.sim.config import AvoidanceModel, VehicleModel, resolve_params
 from surrealist_gym.sim.profiles import (
     PRESETS,
-    SITL_IRIS,
-    VISION_CASE0,
     default_profile,
     load_profile,
-    profile_for_flight,
-    resolve_uav,
     save_profile,
 )
 from surrealist_gym.testcase import Obstacle
-from tests.conftest import CASE0_ULG, EXPERIMENTS, SHARED_DATA
+from tests.conftest import SHARED_DATA
 
 MISSION1 = SHARED_DATA / "competition" / "case_studies" / "mission1.yaml"
 
@@ -51,54 +46,6 @@ def test_default_profile_follows_the_test(shared_data):
     assert default_profile(load_test(MISSION1)).name == "px4-v1.12-sitl-iris"
     assert default_profile(load_test(SHARED_DATA / "surrealist" / "experiments" / "rq1-seed1.yaml")).name == \
         "px4-vision-case0"
-
-
-RQ1_SEED = SHARED_DATA / "surrealist" / "experiments" / "rq1-seed1.yaml"  # replicates case0.ulg
-
-
-def test_resolve_uav_user_preset_wins(shared_data):
-    """A preset named by the user flies, whatever the log or the test."""
-    assert resolve_uav("px4-v1.12-sitl-iris", test=load_test(RQ1_SEED), flight=read_flight(CASE0_ULG)) is SITL_IRIS
-    assert resolve_uav("px4-vision-case0", test=load_test(MISSION1)) is VISION_CASE0
-    assert resolve_uav(VISION_CASE0) is VISION_CASE0  # a profile value passes through
-
-
-def test_resolve_uav_user_yaml_wins(tmp_path, shared_data):
-    path = tmp_path / "narrow.yaml"
-    save_profile(dataclasses.replace(SITL_IRIS, name="narrow", sensor={**SITL_IRIS.sensor, "fov_h_deg": 40.0}), path)
-    profile = resolve_uav(path, test=load_test(RQ1_SEED), flight=read_flight(CASE0_ULG))
-    assert profile.name == "narrow" and profile.sensor["fov_h_deg"] == 40.0
-
-
-def test_resolve_uav_log_vehicle(shared_data):
-    """No choice and a log: the log's own vehicle (over the test's default)."""
-    assert resolve_uav(flight=read_flight(CASE0_ULG), test=load_test(MISSION1)) == VISION_CASE0
-    m0 = read_flight(EXPERIMENTS / "m0.ulg")  # PX4 SITL Iris, on the ground longer than the preset
-    assert resolve_uav(flight=m0) == profile_for_flight(m0)
-    assert resolve_uav(flight=m0).vehicle == SITL_IRIS.vehicle
-
-
-def test_resolve_uav_seed_test_with_reference_log(shared_data):
-    assert load_test(RQ1_SEED).replicates_flight
-    assert resolve_uav(test=load_test(RQ1_SEED)) is VISION_CASE0
-
-
-def test_resolve_uav_plain_competition_test(shared_data):
-    assert resolve_uav(test=load_test(MISSION1)) is SITL_IRIS
-    assert resolve_uav() is SITL_IRIS  # nothing known: the competition's UAV
-
-
-@pytest.mark.parametrize("choice, message", [
-    ("no-such-uav",
-     "--uav 'no-such-uav': not a preset (px4-v1.12-sitl-iris, px4-vision-case0, px4-vision-sitl) nor a .yaml file"),
-    ("missing.yaml", "--uav missing.yaml: cannot read profile"),
-])
-def test_resolve_uav_bad_choice_is_one_line_naming_the_option(choice, message):
-    with pytest.raises(InvalidProfile) as err:
-        resolve_uav(choice, test=None)
-    assert str(err.value).startswith(message) and "\n" not in str(err.value)
-    with pytest.raises(InvalidProfile, match=r"^uav 'no-such-uav'"):
-        resolve_uav("no-such-uav", option="uav")
 
 
 def test_yaml_round_trip(tmp_path):

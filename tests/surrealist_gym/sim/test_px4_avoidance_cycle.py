@@ -10,9 +10,9 @@ import pytest
 
 from surrealist_gym import Obstacle, load_test
 from surrealist_gym.sim import px4_avoidance_cycle as kc, simulate
-from surrealist_gym.sim.profiles import resolve_uav
 from surrealist_gym.sim.px4_avoidance import Px4LocalPlanner
 from surrealist_gym.sim.px4_avoidance_settings import MAX_NODES
+from surrealist_gym.sim.uav import decide_uav
 from tests.conftest import CASE_STUDIES, SHARED_DATA, fly_the_python_outer_loop
 
 RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
@@ -43,7 +43,7 @@ def _recorded_cycles(test, monkeypatch):
 
     monkeypatch.setattr(Px4LocalPlanner, "update", recording)
     fly_the_python_outer_loop(monkeypatch)
-    simulate(test, runs=1, seed=0, config=resolve_uav(test=test).sim_config())
+    simulate(test, runs=1, seed=0, config=decide_uav(test).config)
     monkeypatch.undo()
     return planners[0], calls
 
