@@ -110,7 +110,9 @@ def main() -> int:
         print(f"needs the shared data folder {COMPETITION}", file=sys.stderr)
         return 1
     from surrealist_gym.cli.evaluate import summary_text
-    from surrealist_gym.competition.reevaluation import evaluate, load_tests, write_report
+    from surrealist_gym.competition.reevaluation import evaluate
+    from surrealist_gym.competition.reevaluation_report import write_report
+    from surrealist_gym.competition.tool_output import load_tests
     from surrealist_gym.executors import fly_records
 
     load = os.getloadavg()[0]

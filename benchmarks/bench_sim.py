@@ -142,7 +142,7 @@ def _stats(traj) -> dict:
 
 def realism(runs: int, img: Path) -> None:
     import surrealist_gym as sg
-    from surrealist_gym.cli.plots import plot_trajectories
+    from surrealist_gym.logs.plots import plot_trajectories
     from surrealist_gym.sim import SimConfig, simulate
 
     real = sg.read_flight(EXPERIMENTS / "case0.ulg").trajectory

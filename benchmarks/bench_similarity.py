@@ -31,9 +31,10 @@ CAMBA = ROOT.parent / "shared" / "data" / "competition" / "camba-collection"
 
 
 def main() -> None:
-    from surrealist_gym.competition.reevaluation import evaluate, load_tests
+    from surrealist_gym.competition.reevaluation import evaluate
     from surrealist_gym.competition.scoring import SIMILAR_FLIGHT_M, case_study_of
     from surrealist_gym.competition.suite import trajectory_distance
+    from surrealist_gym.competition.tool_output import load_tests
     from surrealist_gym.fitness import average_runs
     from surrealist_gym.metrics import dtw
 

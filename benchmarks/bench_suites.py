@@ -65,7 +65,7 @@ def one_search(mission: str, agent: str, rep: int, budget: int, confirm: int, ou
         picked = np.random.default_rng(rep).choice(len(paths), confirm_max, replace=False)
         checked = [paths[i] for i in sorted(picked)]
     if checked and confirm:
-        from surrealist_gym.competition.reevaluation import load_tests
+        from surrealist_gym.competition.tool_output import load_tests
 
         ev = evaluate(load_tests(checked), runs=confirm, seed=rep + 1, workers=1)
         ps = [s.p for s in ev.tests]

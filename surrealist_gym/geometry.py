@@ -11,6 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .errors import SurrealistError
 from .testcase import Obstacle, Shape
 
 
@@ -135,3 +136,11 @@ def _lowest_z_inside(pts: np.ndarray, area) -> float:
     frac = np.where(length2 > 0, np.einsum("ij,ij->i", xy - a[seg, :2], d) / np.where(length2 > 0, length2, 1), 0)
     z = a[seg, 2] + np.clip(frac, 0.0, 1.0) * (b[seg, 2] - a[seg, 2])
     return float(z.min())
+
+
+def check_buffer(value, where: str = "--buffer") -> float:
+    """``value`` if it is a polyline buffer [m] for :func:`competition_distance` (a finite number >= 0), else a
+    one-line SurrealistError naming ``where``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
+        raise SurrealistError(f"{where}: expected a non-negative number of metres, got {value!r}")
+    return float(value)

@@ -146,11 +146,13 @@ def _m(value, digits: int = 2) -> str:
 def run(args: argparse.Namespace) -> int:
     """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
     summary and write the report."""
-    from ..competition.reevaluation import load_tests, rule_broken, uav_decisions
+    from ..competition.reevaluation import uav_decisions
     from ..competition.scoring import edition
+    from ..competition.tool_output import load_tests, rule_broken
+    from ..geometry import check_buffer
     from ..sim.uav import decide_uav
     from ._search import _unlock
-    from .options import check_at_least, check_buffer
+    from .options import check_at_least
 
     check_at_least(args, runs=1, workers=1)
     check_buffer(args.buffer)

@@ -46,7 +46,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _check(args) -> None:
     from pathlib import Path
 
-    from .options import check_at_least, check_buffer, check_writable, default_out
+    from ..geometry import check_buffer
+    from .options import check_at_least, check_writable, default_out
 
     check_at_least(args, runs=1, every=1, workers=1, limit=1, random_seed=0)
     if args.mission is not None and Path(args.labels_set).is_dir():

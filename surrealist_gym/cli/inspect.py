@@ -128,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
     flight = read_flight(args.log)
     info = summary(flight)
     if out is not None:
-        from .plots import plot_flight
+        from ..logs.plots import plot_flight
 
         try:
             plot_flight(flight, out)

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from ..errors import SurrealistError
+from ..geometry import check_buffer
 
 RUN_FILE = "run.json"
 SCREEN_RULES = ("auto", "lowfi", "ei", "pi", "none")  # surrogates.config.RULES, without importing torch here
@@ -338,13 +339,6 @@ def add_dask_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS", help=DASK_HELP)
 
 
-def check_buffer(value, where: str = "--buffer") -> float:
-    """``value`` if it is a buffer [m] (a finite number >= 0), else a one-line SurrealistError naming ``where``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < float("inf"):
-        raise SurrealistError(f"{where}: expected a non-negative number of metres, got {value!r}")
-    return float(value)
-
-
 def check_at_least(args: argparse.Namespace, **lowest) -> None:
     """One line for a whole-number option below its lowest value (``--runs: expected a whole number >= 1, got 0``),
     worded as the search options' check; an option left unset (None) passes."""
@@ -395,5 +389,5 @@ def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tu
 
 __all__ = ["BUFFER_HELP", "CASE_STUDY_DEFAULTS", "DASK_HELP", "GenerateOptions", "OUT_PATTERN", "PROBLEM_DEFAULTS",
            "PROBLEM_ENVS", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "add_buffer_argument",
-           "add_dask_argument", "add_out_argument", "add_random_seed_argument", "check_at_least", "check_buffer",
+           "add_dask_argument", "add_out_argument", "add_random_seed_argument", "check_at_least",
            "check_writable", "default_out", "out_help", "race_stages", "refuse_inapplicable"]

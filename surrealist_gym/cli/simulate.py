@@ -121,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         rows.append(row)
     plot = None
     if not args.no_plot:
-        from .plots import plot_trajectories
+        from ..logs.plots import plot_trajectories
         plot = out / f"{stem}.png"
         plot_trajectories(plot, [r.trajectory for r in results], obstacles=test.obstacles,
                           title=f"{stem}: {len(results)} simulated runs (random seed {args.random_seed})",

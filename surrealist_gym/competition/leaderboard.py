@@ -37,8 +37,8 @@ from typing import Callable, Sequence
 
 from ..errors import SurrealistError
 from ..sim.uav import DEFAULT_UAV
-from .reevaluation_report import _r
 from .scoring import Edition, SuiteScore, edition, standings
+from .tables import rounded
 
 __all__ = ["BOARD_FILE", "Board", "BoardRow", "Cell", "Tool", "cell_folder", "name_tools", "plan", "run_cell",
            "rank", "score_cell", "set_aside", "start"]
@@ -149,8 +149,8 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     (then the run resumes)."""
     from ..aerialist import load_test
     from .compete import prepare
-    from .reevaluation import compete_summary
     from .rules import case_study_path
+    from .tool_output import compete_summary
 
     ed = edition(edition_name, "--edition")
     budget = ed.budget if budget is None else budget
@@ -196,7 +196,7 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
 def _given_cells(tools: Sequence, budget: int, uav: str) -> list[tuple[str, str, Path]]:
     """The compete output folders among TOOL_DIR: (the tool's folder, the case study's file, the folder) each,
     checked to have run with the board's budget and UAV."""
-    from .reevaluation import compete_summary
+    from .tool_output import compete_summary
 
     out = []
     for given in tools:
@@ -358,9 +358,10 @@ class BoardRow:
         row.update(reported_tests=self.reported_tests, evaluated_tests=self.evaluated_tests,
                    failing_tests=self.failing_tests)
         if ed.name == "2024":
-            row["suite_score"] = _r(self.suite_score, 6)
+            row["suite_score"] = rounded(self.suite_score, 6)
         else:
-            row.update(failure_score=_r(self.failure_score, 6), diversity=_r(self.diversity, 6), R=_r(self.r, 6))
+            row.update(failure_score=rounded(self.failure_score, 6), diversity=rounded(self.diversity, 6),
+                       R=rounded(self.r, 6))
         row.update(rank=self.rank, simulations=self.simulations, refused=self.refused, problem=self.problem)
         return row
 
@@ -390,8 +391,9 @@ def score_cell(board: Board, cell: Cell, summary: dict, wind: str = "", workers:
     breaks the edition's rules on boxes is not flown and scores 0, as the organisers checked each for compliance
     before running it. A cell with no test, or whose tests cannot be read, scores 0, with the reason in
     ``problem``."""
-    from .reevaluation import evaluate, load_tests, rule_broken
+    from .reevaluation import evaluate
     from .scoring import draw_folder, score_suite
+    from .tool_output import load_tests, rule_broken
 
     ed, seed, folder = board.edition, board.seed + cell.repetition, board.folder(cell)
     reported, problem = len(summary.get("tests") or []), summary.get("problem") or ""

@@ -22,7 +22,7 @@ import numpy as np
 
 from .leaderboard import Board, BoardRow
 from .published import CASE_STUDIES, PUBLISHED, published_name, rerun_share
-from .reevaluation_report import _f, _write_csv
+from .tables import fixed, write_csv
 
 __all__ = ["Summary", "agreement_2024", "summarise", "write_report"]
 
@@ -111,8 +111,8 @@ def report_lines(board: Board, rows: Sequence[BoardRow]) -> list[str]:
             group = [s for s in summaries if (s.case_study, s.wind) == (label, wind)]
             for s, place in zip(group, _places(group, year)):
                 lines.append(f"| {label} | " + (f"{wind} | " if board.edition.wind else "") + f"{s.tool} | {place} | "
-                             + (f"{_f(s.score)} | " if year == "2024" else
-                                f"{_f(s.score)} | {_f(s.diversity)} | {_f(s.r)} | ")
+                             + (f"{fixed(s.score)} | " if year == "2024" else
+                                f"{fixed(s.score)} | {fixed(s.diversity)} | {fixed(s.r)} | ")
                              + f"{s.reported:.1f} | {s.failing}/{s.evaluated}"
                              + (f" ({100 * s.rerun:.0f}%) |" if s.evaluated else " |"))
     lines += ["", "## Overall", ""]
@@ -137,10 +137,10 @@ def _px4_lines(board: Board, summaries: Sequence[Summary]) -> list[str]:
         lines = ["## Against PX4 (2024 report, Table 1)", "",
                  "| case study | tool | tests reported: ours (mean) | PX4 | suite score: ours (mean) | PX4 |",
                  "|---|---|---|---|---|---|"]
-        lines += [f"| {s.case_study} ({cs}) | {name} | {s.reported:.1f} | {c.reported} | {_f(s.score)} | "
-                  f"{_f(c.score)} |" for s, name, cs, c in agree["cells"]]
-        lines += ["", f"Spearman over the {len(agree['cells'])} cells: suite scores {_f(agree['spearman'])} "
-                      f"(p {_f(agree['p'], 3)}), tests reported {_f(agree['spearman_reported'])}."]
+        lines += [f"| {s.case_study} ({cs}) | {name} | {s.reported:.1f} | {c.reported} | {fixed(s.score)} | "
+                  f"{fixed(c.score)} |" for s, name, cs, c in agree["cells"]]
+        lines += ["", f"Spearman over the {len(agree['cells'])} cells: suite scores {fixed(agree['spearman'])} "
+                      f"(p {fixed(agree['p'], 3)}), tests reported {fixed(agree['spearman_reported'])}."]
         for cs, v in agree["studies"].items():
             lines.append(f"- {cs}: ours {' > '.join(v['ours'])}; PX4 {' > '.join(v['report'])}: "
                          f"{'the same order' if v['same_order'] else 'another order'}; the report's best "
@@ -154,7 +154,7 @@ def _px4_lines(board: Board, summaries: Sequence[Summary]) -> list[str]:
         mine = [s for s in summaries if s.tool == tool.name and s.wind in ("", "without")]
         failing, evaluated = sum(s.failing for s in mine), sum(s.evaluated for s in mine)
         name = published_name(tool.name)
-        px4 = (f"{_f(100 * rerun_share(table[name]), 0)}% ({name})" if name in table else "-")
+        px4 = (f"{fixed(100 * rerun_share(table[name]), 0)}% ({name})" if name in table else "-")
         share = f"{100 * failing / evaluated:.0f}%" if evaluated else "-"
         lines.append(f"| {tool.name} | {failing}/{evaluated} | {share} | {px4} |")
     return lines
@@ -211,7 +211,7 @@ def write_report(board: Board, rows: Sequence[BoardRow]) -> dict:
     out = Path(board.out)
     paths = {"csv": out / "leaderboard.csv", "png": out / "leaderboard.png", "report": out / "report.md"}
     draft = paths["csv"].with_name(paths["csv"].name + ".tmp")
-    _write_csv(draft, [row.to_row(board.edition) for row in rows])
+    write_csv(draft, [row.to_row(board.edition) for row in rows])
     os.replace(draft, paths["csv"])  # whole or not at all
     plot_board(board, rows, paths["png"])
     lines = report_lines(board, rows)

@@ -42,109 +42,18 @@ from ..errors import InvalidTestCase, SurrealistError, one_line
 from ..outcomes import RunRecord, statuses_text
 from ..sim.ranges import FrozenDict
 from ..testcase import TestCase
-from .reevaluation_report import (  # noqa: F401 - the report, re-exported
-    REPORT_FILES,
-    SCORING_FILES,
-    _f,
-    _leaderboard_row,
-    _p_text,
-    _r,
-    _scoring_section,
-    _test_score_row,
-    _write_csv,
-    report_text,
-    scoring_lines,
-    suite_lines,
-    write_report,
-)
+from .tables import rounded
 
 if TYPE_CHECKING:
     from .suite import Suite
 
-__all__ = ["CONFIDENCE", "Evaluation", "TestStats", "evaluate", "evaluation_identity", "find_tests", "load_tests",
-           "compete_summary", "regroup", "stored_runs", "summarise_test", "tool_output",
-           "write_report"]
+__all__ = ["CONFIDENCE", "Evaluation", "TestStats", "evaluate", "evaluation_identity", "regroup", "stored_runs",
+           "summarise_test", "uav_decisions"]
 
 CONFIDENCE = 0.95  # of the failure probability's Clopper-Pearson interval
-COMPETE_SUMMARY = "summary.json"  # what ``surrealist compete`` writes beside the tool's folder
-_SUFFIXES = (".yaml", ".yml")
 
 
-# --- input ---------------------------------------------------------------------------------------------------------
-def compete_summary(folder) -> dict | None:
-    """The ``summary.json`` of a ``surrealist compete`` output folder (the tool, case study, budget, output folder,
-    ...), or None when the folder is not one."""
-    import json
-
-    try:
-        summary = json.loads((Path(os.fspath(folder)) / COMPETE_SUMMARY).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
-    keys = {"tool", "case_study", "budget", "output_folder"}
-    return summary if isinstance(summary, dict) and keys <= summary.keys() else None
-
-
-def tool_output(folder) -> Path:
-    """The folder of tests that ``folder`` stands for: a ``surrealist compete`` output folder (its ``summary.json``
-    names the tool's output folder, inside its ``tool/``) stands for the tool's output folder; any other folder for
-    itself. A compete folder whose tool named no output folder, or whose output folder is gone, is a one-line
-    error."""
-    path = Path(os.fspath(folder))
-    summary = compete_summary(path)
-    if summary is None:
-        return path
-    named = summary["output_folder"]
-    if not named:
-        raise SurrealistError(f"{path}: a compete output folder whose tool wrote no output folder "
-                              f"({summary.get('problem') or 'no tests'})")
-    named = Path(str(named))
-    parts = named.parts
-    candidates = [named] + [path.joinpath(*parts[i:]) for i, part in enumerate(parts) if part == "tool"]
-    found = next((c for c in candidates if c.is_dir()), None)
-    if found is None:
-        raise SurrealistError(f"{path}: the tool's output folder its {COMPETE_SUMMARY} names ({named}) is gone")
-    return found
-
-
-def find_tests(paths: Sequence) -> list[Path]:
-    """The YAML files named by ``paths``: files as given, folders' ``*.yaml``/``*.yml`` (not recursive), each once; a
-    ``surrealist compete`` output folder's are those of the tool's output folder (:func:`tool_output`)."""
-    out, seen = [], set()
-    for given in paths:
-        path = Path(os.fspath(given))
-        if path.is_dir():
-            path = tool_output(path)
-            found = sorted(p for p in path.iterdir() if p.suffix.lower() in _SUFFIXES and p.is_file())
-            if not found:
-                raise SurrealistError(f"{os.fspath(given)}: no test YAML (*.yaml, *.yml) in this folder")
-        elif path.is_file():
-            found = [path]
-        else:
-            raise SurrealistError(f"{os.fspath(given)}: no such file or folder")
-        for p in found:
-            if p.resolve() not in seen:
-                seen.add(p.resolve())
-                out.append(p)
-    return out
-
-
-def load_tests(paths: Sequence, any_layout: bool = False) -> list[tuple[Path, TestCase]]:
-    """Load the tests named by ``paths`` (see :func:`find_tests`) and check them; unless ``any_layout``, against
-    the competition's rules (:func:`~surrealist_gym.competition.rules.violations`). Raises a one-line
-    :class:`~surrealist_gym.errors.InvalidTestCase` naming the file and field of the first bad test."""
-    from ..aerialist import load_test
-
-    out = []
-    for path in find_tests(paths):
-        test = load_test(path)
-        if test.mission is None or not any(item.has_position for item in test.mission.items):
-            raise InvalidTestCase(f"{path}: mission_file: no mission item with a position to fly to")
-        if not any_layout and (broken := rule_broken(test)):
-            raise InvalidTestCase(f"{path}: {broken}; --any-layout skips the competition's rules")
-        out.append((path, test))
-    return out
-
-
+# --- flying -------------------------------------------------------------------------------------------------------
 def uav_decisions(tests: Sequence[tuple[Path, TestCase]], uav=None, buffer: float = 0.0) -> list:
     """The UAV each test flies (:func:`~surrealist_gym.sim.uav.decide_uav`: ``uav``, else the test's own), with the
     competition distance's ``buffer``; a bad profile fails once, and a test whose ``uav.*`` settings its UAV cannot
@@ -161,15 +70,6 @@ def uav_decisions(tests: Sequence[tuple[Path, TestCase]], uav=None, buffer: floa
         except InvalidTestCase as err:
             raise InvalidTestCase(f"{path}: {err}") from None
     return decisions
-
-
-def rule_broken(test: TestCase, rules=None) -> str:
-    """The first of the competition's rules (``rules``, default :data:`~surrealist_gym.competition.rules.RULES`) the
-    test breaks (and how many more), or "" when it keeps them all."""
-    from .rules import RULES, violations
-
-    broken = violations(test, rules or RULES)
-    return broken[0] + (f" (and {len(broken) - 1} more)" if len(broken) > 1 else "") if broken else ""
 
 
 # --- statistics ----------------------------------------------------------------------------------------------------
@@ -230,10 +130,10 @@ class TestStats:
     def to_row(self) -> dict:
         """The row of ``evaluation.csv``."""
         return {"file": self.file, "runs": len(self.runs), "failures": self.failures, "errors": self.errors,
-                "p": _r(self.p), "ci_low": _r(self.ci_low), "ci_high": _r(self.ci_high),
-                "points_mean": _r(self.points_mean),
+                "p": rounded(self.p), "ci_low": rounded(self.ci_low), "ci_high": rounded(self.ci_high),
+                "points_mean": rounded(self.points_mean),
                 "points_median_run": "" if self.points_median_run is None else self.points_median_run,
-                "min_distance": _r(self.min_distance), "median_distance": _r(self.median_distance),
+                "min_distance": rounded(self.min_distance), "median_distance": rounded(self.median_distance),
                 "statuses": self.statuses, "uav": self.uav, "suite": self.suite}
 
 

@@ -5,7 +5,6 @@ figures (:mod:`surrealist_gym.competition.report_plots`) and ``report.md``, with
 """
 from __future__ import annotations
 
-import csv
 import math
 import os
 import shutil
@@ -17,26 +16,12 @@ import numpy as np
 
 from ..errors import SurrealistError
 from ..outcomes import UNSAFE_DISTANCE_M
+from .tables import fixed, rounded, write_csv
 
 if TYPE_CHECKING:
     from .reevaluation import Evaluation, TestStats
 
 __all__ = ["REPORT_FILES", "SCORING_FILES", "report_text", "scoring_lines", "suite_lines", "write_report"]
-
-def _r(value, digits: int = 4):
-    return "" if value is None or not math.isfinite(value) else round(float(value), digits)
-
-
-def _f(value, digits: int = 2) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
-
-
-def _write_csv(path: Path, rows: list[dict]) -> None:
-    with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-
 
 def _p_text(t: TestStats) -> str:
     """``0.40 [0.05, 0.85]``: p and its interval; ``- (no run flown)`` when every run ended in error."""
@@ -59,8 +44,8 @@ def suite_lines(ev: Evaluation) -> list[str]:
     return lines + [
         f"distinct failures: {len(ev.suite)} of {len(ev.failing)} failing tests (alike: flights < "
         f"{ev.suite.min_flight_m:g} m apart and the boxes they failed at < {ev.suite.min_layout_m:g} m apart)",
-        f"diversity of the failing tests' closest runs: flight mean {_f(d['flight_mean_m'])} m (min "
-        f"{_f(d['flight_min_m'])} m), layout mean {_f(d['layout_mean_m'])} m (min {_f(d['layout_min_m'])} m)"
+        f"diversity of the failing tests' closest runs: flight mean {fixed(d['flight_mean_m'])} m (min "
+        f"{fixed(d['flight_min_m'])} m), layout mean {fixed(d['layout_mean_m'])} m (min {fixed(d['layout_min_m'])} m)"
         if d["members"] > 1 else "diversity: needs two failing tests"]
 
 
@@ -91,17 +76,17 @@ def write_report(ev: Evaluation, out, board: Sequence | None = None) -> dict[str
             shutil.rmtree(stale, ignore_errors=True)
         tmp = Path(tempfile.mkdtemp(prefix=".report-", dir=out))
         draft = {key: tmp / name for key, name in files.items()}
-        _write_csv(draft["evaluation"], [t.to_row() for t in ev.tests])
-        _write_csv(draft["runs"], [{"file": t.file, "run": r.index, "status": r.status, "distance": _r(r.distance),
+        write_csv(draft["evaluation"], [t.to_row() for t in ev.tests])
+        write_csv(draft["runs"], [{"file": t.file, "run": r.index, "status": r.status, "distance": rounded(r.distance),
                                     "failed": int(r.failed) if r.flown else "", "points": r.points if r.flown else "",
-                                    "duration_s": _r(r.duration, 2), "message": r.message}
+                                    "duration_s": rounded(r.duration, 2), "message": r.message}
                                    for t in ev.tests for r in t.runs])
         plot_distances(ev, draft["distances"])
         plot_top_views(ev, draft["top_views"])
         plot_suite_map(ev, draft["suite_map"])
         if board:
-            _write_csv(draft["leaderboard"], [_leaderboard_row(row) for row in board])
-            _write_csv(draft["test_scores"], [_test_score_row(row.suite, i, t) for row in board
+            write_csv(draft["leaderboard"], [_leaderboard_row(row) for row in board])
+            write_csv(draft["test_scores"], [_test_score_row(row.suite, i, t) for row in board
                                               for i, t in enumerate(row.suite.drawn)])
             plot_leaderboard(board, draft["leaderboard_plot"])
         draft["report"].write_text(report_text(ev, board), encoding="utf-8")
@@ -125,18 +110,18 @@ def _leaderboard_row(row) -> dict:
     """The row of ``leaderboard.csv``."""
     s = row.suite
     return {"case_study": s.case_study, "folder": s.folder, "edition": s.edition, "tests": s.tests,
-            "drawn": len(s.drawn), "failing": s.failing, "alike": s.alike, "failure": _r(s.failure, 6),
-            "rest": _r(s.rest, 6), "sim_pen": _r(s.sim_pen, 6), "score": _r(s.score, 6),
-            "diversity": _r(s.diversity, 6), "r_f": row.r_f, "r_d": "" if row.r_d is None else row.r_d,
-            "r": _r(row.r), "rank": row.rank}
+            "drawn": len(s.drawn), "failing": s.failing, "alike": s.alike, "failure": rounded(s.failure, 6),
+            "rest": rounded(s.rest, 6), "sim_pen": rounded(s.sim_pen, 6), "score": rounded(s.score, 6),
+            "diversity": rounded(s.diversity, 6), "r_f": row.r_f, "r_d": "" if row.r_d is None else row.r_d,
+            "r": rounded(row.r), "rank": row.rank}
 
 
 def _test_score_row(s, i: int, t) -> dict:
     """The row of ``test-scores.csv``: one drawn test of a folder."""
     return {"case_study": s.case_study, "folder": s.folder, "position": i, "file": t.file, "obstacles": t.obstacles,
-            "runs_scored": len(t.points), "points_mean": _r(float(np.mean(t.points)) if t.points else math.nan, 6),
-            "minutes_mean": _r(float(np.mean(t.durations_s)) / 60 if t.durations_s else math.nan, 6),
-            "test_score": _r(t.score, 6), "counted": int(t.counted),
+            "runs_scored": len(t.points), "points_mean": rounded(float(np.mean(t.points)) if t.points else math.nan, 6),
+            "minutes_mean": rounded(float(np.mean(t.durations_s)) / 60 if t.durations_s else math.nan, 6),
+            "test_score": rounded(t.score, 6), "counted": int(t.counted),
             "same_as": "" if t.same_as is None else t.same_as, "invalid": t.invalid}
 
 
@@ -156,7 +141,7 @@ def scoring_lines(board: Sequence) -> list[str]:
             lines.append(head + f"score {s.score:.2f} = ({s.failure:.2f} + rest {s.rest:.2f}) x sim_pen "
                                 f"{s.sim_pen:.2f} ({s.alike} flying alike); rank {row.rank}")
         else:
-            lines.append(head + f"failure {s.failure:.2f}, diversity {_f(s.diversity)}"
+            lines.append(head + f"failure {s.failure:.2f}, diversity {fixed(s.diversity)}"
                                 + (f" ({s.alike} duplicates counted once)" if s.alike else "")
                                 + f"; R_F {row.r_f}, R_D {row.r_d}, R {row.r:g}, rank {row.rank}")
     for row in board:
@@ -192,8 +177,8 @@ def report_text(ev: Evaluation, board: Sequence | None = None) -> str:
               "| test | failures | errors | p [95% CI] | points per run | median run | min distance [m] | "
               "median distance [m] | statuses | suite |", "|---|---|---|---|---|---|---|---|---|---|"]
     for t in ev.tests:
-        lines.append(f"| {t.name} | {t.failures}/{t.flown} | {t.errors} | {_p_text(t)} | {_f(t.points_mean, 1)} | "
-                     f"{_f(t.points_median_run, 0)} | {_f(t.min_distance)} | {_f(t.median_distance)} | "
+        lines.append(f"| {t.name} | {t.failures}/{t.flown} | {t.errors} | {_p_text(t)} | {fixed(t.points_mean, 1)} | "
+                     f"{fixed(t.points_median_run, 0)} | {fixed(t.min_distance)} | {fixed(t.median_distance)} | "
                      f"{t.statuses} | {t.suite or '-'} |")
     lines += ["", "## Figures", "",
               "**Closest approach per run** (`distances.png`): one row per test, each dot a run's competition "
@@ -236,7 +221,7 @@ def _scoring_section(board: Sequence, runs: int) -> list[str]:
                f"footprints). Per case study R_F ranks the failure score, R_D the diversity (1 the best, equal "
                f"values share a rank), R = 0.75 R_F + 0.25 R_D, and rank orders R."]
         table = _board_table(board, ["duplicates", "failure", "diversity", "R_F", "R_D", "R", "rank"],
-                             lambda r: [f"{r.suite.alike}", f"{r.suite.failure:.2f}", _f(r.suite.diversity),
+                             lambda r: [f"{r.suite.alike}", f"{r.suite.failure:.2f}", fixed(r.suite.diversity),
                                         f"{r.r_f}", f"{r.r_d}", f"{r.r:g}", f"{r.rank}"])
     return (["## Competition scoring", ""] + how + [""] + table + [""]
             + [f"- {line}" for line in scoring_lines(board)[len(board):]]

@@ -9,12 +9,13 @@ from __future__ import annotations
 import inspect
 import math
 import os
+from typing import Sequence
 
 import numpy as np
 
 from ..outcomes import UNSAFE_DISTANCE_M
 
-__all__ = ["plot_distances", "plot_leaderboard", "plot_suite_map", "plot_top_views"]
+__all__ = ["plot_distances", "plot_leaderboard", "plot_suite", "plot_suite_map", "plot_top_views"]
 
 _PASS, _FAIL, _BOX = "tab:blue", "tab:red", "0.55"
 
@@ -172,3 +173,27 @@ def plot_leaderboard(board, path) -> None:
                                                      else "; ranked by score per case study"), fontsize="medium")
     fig.tight_layout()
     fig.savefig(os.fspath(path), dpi=100)
+
+
+def plot_suite(suite, path, order: Sequence[int] | None = None, columns: int = 4) -> None:
+    """A top view of each member of a :class:`~surrealist_gym.competition.suite.Suite`, in ``order`` (as
+    :func:`~surrealist_gym.competition.suite_export.export_suite` names them): its boxes and the flight that came
+    closest (x north up, y east right)."""
+    from .suite_export import member_name
+
+    order = list(range(len(suite.members)) if order is None else order)
+    n = max(1, len(order))
+    cols = min(columns, n)
+    fig = _figure(3.2 * cols, 3.4 * math.ceil(n / columns))
+    for k, i in enumerate(order):
+        member = suite.members[i]
+        ax = fig.add_subplot(math.ceil(n / columns), cols, k + 1)
+        _boxes(ax, member.test.obstacles, facecolor=_BOX, edgecolor="0.3")
+        ax.plot(member.trajectory[:, 1], member.trajectory[:, 0], color=_FAIL, linewidth=1.2)
+        ax.set_title(f"{member_name(k)}: {member.distance:.2f} m, {member.points} pt", fontsize=9)
+        ax.set_xlabel("y east [m]", fontsize=8)
+        ax.set_ylabel("x north [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        _top_axes(ax)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)

@@ -143,7 +143,7 @@ class Draw:
 def draw_folder(folder, ed: Edition, seed: int = 0) -> Draw:
     """Load every test of a tool's output folder (one-line errors: no YAML, a broken test), check that they belong
     to one case study, and draw the edition's tests."""
-    from .reevaluation import load_tests
+    from .tool_output import load_tests
 
     path = Path(os.fspath(folder))
     if not path.is_dir():

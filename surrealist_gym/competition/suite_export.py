@@ -60,26 +60,3 @@ def _nearest(member: Member, members) -> tuple[float, float]:
 
 def _fmt(value: float) -> str:
     return "" if not math.isfinite(value) else f"{value:.2f}"
-
-
-def plot_suite(suite: Suite, path, order: Sequence[int] | None = None, columns: int = 4) -> None:
-    """A top view of each member, in ``order`` (as :func:`export_suite` names them): its boxes and the flight that
-    came closest (x north up, y east right)."""
-    from .report_plots import _BOX, _FAIL, _boxes, _figure, _top_axes
-
-    order = list(range(len(suite.members)) if order is None else order)
-    n = max(1, len(order))
-    cols = min(columns, n)
-    fig = _figure(3.2 * cols, 3.4 * math.ceil(n / columns))
-    for k, i in enumerate(order):
-        member = suite.members[i]
-        ax = fig.add_subplot(math.ceil(n / columns), cols, k + 1)
-        _boxes(ax, member.test.obstacles, facecolor=_BOX, edgecolor="0.3")
-        ax.plot(member.trajectory[:, 1], member.trajectory[:, 0], color=_FAIL, linewidth=1.2)
-        ax.set_title(f"{member_name(k)}: {member.distance:.2f} m, {member.points} pt", fontsize=9)
-        ax.set_xlabel("y east [m]", fontsize=8)
-        ax.set_ylabel("x north [m]", fontsize=8)
-        ax.tick_params(labelsize=7)
-        _top_axes(ax)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)

@@ -118,7 +118,7 @@ class SurrealistEnv(gym.Env):
         self._mutators = tuple(mutators)
         self._budget = int(budget)
         self.setup = setup
-        store, sim_config, uav = setup.store, setup.sim_config, setup.uav
+        store = setup.store
         executor = _executor_for(setup)
         store = EvaluationStore(store) if isinstance(store, (str, Path)) else store
         # a seed whose uav.* settings are invalid fails here in one line, not as error runs in the workers
@@ -320,7 +320,7 @@ class SurrealistEnv(gym.Env):
         """The top view of the last test evaluated, as an image array (None before ``reset``)."""
         if self._shown is None:
             return None
-        from ..cli.plots import top_view_image
+        from ..logs.plots import top_view_image
 
         shown = self._shown
         flights = [Trajectory.from_array(r.trajectory) for r in shown.runs

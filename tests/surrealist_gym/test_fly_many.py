@@ -22,7 +22,7 @@ RILAST = COMPETITION / "rilast-mission1" / "tests.csv"
 
 @pytest.fixture(scope="module")
 def tests(camba_fast_folder):
-    from surrealist_gym.competition.reevaluation import load_tests
+    from surrealist_gym.competition.tool_output import load_tests
 
     return [test for _, test in load_tests([camba_fast_folder])][:2]
 

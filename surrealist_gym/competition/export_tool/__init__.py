@@ -57,7 +57,7 @@ class ToolSettings:
 
     def check(self) -> "ToolSettings":
         """Check every setting (one-line errors naming export-tool's flag); returns self."""
-        from ...cli.options import check_buffer
+        from ...geometry import check_buffer
 
         lowest = {"sim_budget_factor": 1, "obstacles": 1, "confirm": 0, "seed": 0, "workers": 1}
         for name, low in lowest.items():

@@ -9,7 +9,8 @@ import pytest
 
 from surrealist_gym.aerialist import load_test, save_test
 from surrealist_gym.cli import main
-from surrealist_gym.competition.reevaluation import load_tests, summarise_test
+from surrealist_gym.competition.reevaluation import summarise_test
+from surrealist_gym.competition.tool_output import load_tests
 from surrealist_gym.outcomes import RunRecord
 from surrealist_gym.testcase import Obstacle
 from tests.conftest import SHARED_DATA

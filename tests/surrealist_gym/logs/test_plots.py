@@ -1,9 +1,9 @@
-"""Plots of real and simulated flights (surrealist_gym/cli/plots.py draws FlightLogs and trajectories)."""
+"""Plots of real and simulated flights (surrealist_gym/logs/plots.py draws FlightLogs and trajectories)."""
 import pytest
 
 from surrealist_gym import Obstacle, Shape
-from surrealist_gym.cli.plots import plot_flight, plot_trajectories
 from surrealist_gym.logs import read_flight
+from surrealist_gym.logs.plots import plot_flight, plot_trajectories
 from tests.conftest import CASE0_ULG
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
