@@ -111,7 +111,7 @@ def main() -> int:
         return 1
     from surrealist_gym.cli.evaluate import summary_text
     from surrealist_gym.competition.reevaluation import evaluate
-    from surrealist_gym.competition.reevaluation_report import write_report
+    from surrealist_gym.competition.reports.evaluation import write_report
     from surrealist_gym.competition.tool_output import load_tests
     from surrealist_gym.executors import fly_records
 

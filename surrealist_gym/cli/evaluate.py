@@ -123,7 +123,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def summary_text(ev) -> str:
     """The table ``surrealist evaluate`` prints: one row per test, then the suite's figures."""
-    from ..competition.reevaluation_report import suite_lines
+    from ..competition.reports.evaluation import suite_lines
 
     width = max([len("test"), *(len(t.name) for t in ev.tests)])
     head = (f"{'test':{width}}  {'fail':>5}  {'err':>3}  {'p':>5}  {'95% CI':>12}  {'pts/run':>7}  {'median':>6}  "
@@ -278,7 +278,7 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict, da
     from tqdm import tqdm
 
     from ..competition.reevaluation import evaluate
-    from ..competition.reevaluation_report import scoring_lines, write_report
+    from ..competition.reports.evaluation import scoring_lines, write_report
 
     store = out / STORE_FILE
     resume = f"surrealist evaluate --resume {out}"

@@ -99,8 +99,8 @@ def _write_suite(out, suite, options) -> None:
     from tqdm import tqdm
 
     from ..competition.reevaluation import evaluate, regroup, stored_runs
-    from ..competition.reevaluation_report import write_report
-    from ..competition.report_plots import plot_suite
+    from ..competition.reports.evaluation import write_report
+    from ..competition.reports.plots import plot_suite
     from ..competition.scoring import EDITIONS, Draw, case_study_of, score_suite, test_score
     from ..competition.suite import diversity
     from ..competition.suite_export import export_suite, member_name

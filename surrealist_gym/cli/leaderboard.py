@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     import os
 
     from ..competition import leaderboard as lb
-    from ..competition.leaderboard_report import write_report
+    from ..competition.reports.leaderboard import write_report
     from ..errors import SurrealistError
     from ._search import _lock, _unlock
     from .options import check_at_least, check_writable, default_out

@@ -6,7 +6,7 @@
 - :mod:`~surrealist_gym.competition.suite`, :mod:`~surrealist_gym.competition.suite_env`,
   :mod:`~surrealist_gym.competition.suite_export`: suites of distinct failures, the wrapper that keeps one from any
   search, and a suite as Aerialist files;
-- :mod:`~surrealist_gym.competition.reevaluation` (its report: ``reevaluation_report``, ``report_plots``) and
+- :mod:`~surrealist_gym.competition.reevaluation` (its report: ``reports/``) and
   :mod:`~surrealist_gym.competition.scoring`: re-flying tests and scoring folders as an edition did;
 - :mod:`~surrealist_gym.competition.compete`: a competition tool's own ``cli.py`` run on our simulator (the
   Aerialist bridge); :mod:`~surrealist_gym.competition.export_tool`: surrealist-gym as such a tool.

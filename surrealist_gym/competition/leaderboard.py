@@ -21,7 +21,7 @@ A cell's figures depend on its tool, case study, repetition and the board's sett
 UAV), not on the other tools: a board grows (more tools, case studies or repetitions) into the same folder, and
 what it holds is reused.
 
-Rows (:class:`BoardRow`) go to ``leaderboard.csv``; :mod:`~surrealist_gym.competition.leaderboard_report` writes the
+Rows (:class:`BoardRow`) go to ``leaderboard.csv``; :mod:`~surrealist_gym.competition.reports.leaderboard` writes the
 report and the figure.
 """
 from __future__ import annotations
@@ -37,8 +37,8 @@ from typing import Callable, Sequence
 
 from ..errors import SurrealistError
 from ..sim.uav import DEFAULT_UAV
+from .reports.tables import rounded
 from .scoring import Edition, SuiteScore, edition, standings
-from .tables import rounded
 
 __all__ = ["BOARD_FILE", "Board", "BoardRow", "Cell", "Tool", "cell_folder", "name_tools", "plan", "run_cell",
            "rank", "score_cell", "set_aside", "start"]

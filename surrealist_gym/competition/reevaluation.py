@@ -15,9 +15,8 @@ The tests are flown by :func:`~surrealist_gym.executors.fly_many` on local worke
 time, so every worker stays busy: whole tests (their runs in one world) first, the last round split run by run so that
 no worker idles at the end; each run is a :class:`~surrealist_gym.outcomes.RunRecord`. Given a ``store``, each chunk
 of runs is written to it (an :class:`~surrealist_gym.store.EvaluationStore`) as it completes, and the runs it holds
-already are read back instead of flown: an interrupted evaluation resumes and loses nothing. :func:`write_report`
-writes the report whole or not at all (:mod:`surrealist_gym.competition.reevaluation_report`, its names re-exported
-here).
+already are read back instead of flown: an interrupted evaluation resumes and loses nothing.
+:func:`~surrealist_gym.competition.reports.evaluation.write_report` writes the report whole or not at all.
 
 Example::
 
@@ -42,7 +41,7 @@ from ..errors import InvalidTestCase, SurrealistError, one_line
 from ..outcomes import RunRecord, statuses_text
 from ..sim.ranges import FrozenDict
 from ..testcase import TestCase
-from .tables import rounded
+from .reports.tables import rounded
 
 if TYPE_CHECKING:
     from .suite import Suite

@@ -149,7 +149,7 @@ def test_full_disk_leaves_no_half_report_and_resume_writes_it(camba_fast_folder,
     if not mounted:  # no tmpfs here: the figure that does not fit is a full disk raised by the writing function
         def full(*args, **kwargs):
             raise OSError(errno.ENOSPC, "No space left on device")
-        monkeypatch.setattr("surrealist_gym.competition.report_plots.plot_suite_map", full)
+        monkeypatch.setattr("surrealist_gym.competition.reports.plots.plot_suite_map", full)
     out = disk / "out"
     try:
         assert main(["evaluate", str(camba_fast_folder), *ARGS, "--out", str(out)]) == 2

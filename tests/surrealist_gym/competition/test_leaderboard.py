@@ -238,7 +238,7 @@ def test_the_published_reruns_are_the_reports():
 
 
 def test_the_2024_agreement_compares_our_cells_with_table_1():
-    from surrealist_gym.competition.leaderboard_report import Summary, agreement_2024
+    from surrealist_gym.competition.reports.leaderboard import Summary, agreement_2024
 
     def summary(tool, case, score):
         row = BoardRow(tool, case, 0, "", int(score * 3), 20, 5, score, score, float("nan"), 1.0, 1, 200, 0, "")

@@ -13,7 +13,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..outcomes import UNSAFE_DISTANCE_M
+from ...outcomes import UNSAFE_DISTANCE_M
 
 __all__ = ["plot_distances", "plot_leaderboard", "plot_suite", "plot_suite_map", "plot_top_views"]
 
@@ -179,7 +179,7 @@ def plot_suite(suite, path, order: Sequence[int] | None = None, columns: int = 4
     """A top view of each member of a :class:`~surrealist_gym.competition.suite.Suite`, in ``order`` (as
     :func:`~surrealist_gym.competition.suite_export.export_suite` names them): its boxes and the flight that came
     closest (x north up, y east right)."""
-    from .suite_export import member_name
+    from ..suite_export import member_name
 
     order = list(range(len(suite.members)) if order is None else order)
     n = max(1, len(order))

@@ -1,5 +1,5 @@
 """The report of a re-evaluation (:mod:`surrealist_gym.competition.reevaluation`): ``evaluation.csv``, ``runs.csv``, the
-figures (:mod:`surrealist_gym.competition.report_plots`) and ``report.md``, with the competition's scoring
+figures (:mod:`surrealist_gym.competition.reports.plots`) and ``report.md``, with the competition's scoring
 (``leaderboard.csv``, ``test-scores.csv``, ``leaderboard.png``) when given a board. Every name here is importable from
 :mod:`surrealist_gym.competition.reevaluation` too.
 """
@@ -14,12 +14,12 @@ from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
-from ..errors import SurrealistError
-from ..outcomes import UNSAFE_DISTANCE_M
+from ...errors import SurrealistError
+from ...outcomes import UNSAFE_DISTANCE_M
 from .tables import fixed, rounded, write_csv
 
 if TYPE_CHECKING:
-    from .reevaluation import Evaluation, TestStats
+    from ..reevaluation import Evaluation, TestStats
 
 __all__ = ["REPORT_FILES", "SCORING_FILES", "report_text", "scoring_lines", "suite_lines", "write_report"]
 
@@ -57,14 +57,14 @@ SCORING_FILES = {"leaderboard": "leaderboard.csv", "test_scores": "test-scores.c
 
 def write_report(ev: Evaluation, out, board: Sequence | None = None) -> dict[str, Path]:
     """Write ``evaluation.csv`` (one row per test), ``runs.csv`` (one row per run), the figures
-    (:mod:`surrealist_gym.competition.report_plots`) and ``report.md`` to the folder ``out``; returns their paths. With
+    (:mod:`surrealist_gym.competition.reports.plots`) and ``report.md`` to the folder ``out``; returns their paths. With
     ``board`` (:func:`~surrealist_gym.competition.scoring.standings` of the folders scored as an edition did) also
     ``leaderboard.csv``, ``test-scores.csv`` and ``leaderboard.png``, and the report has a section on them.
 
     Whole or not at all: the files are written to a temporary folder inside ``out`` and then moved into place
     (``report.md`` last); if that fails (a full disk), the temporary folder and any report file moved are removed and
     a one-line SurrealistError says why."""
-    from .report_plots import plot_distances, plot_leaderboard, plot_suite_map, plot_top_views
+    from .plots import plot_distances, plot_leaderboard, plot_suite_map, plot_top_views
 
     out = Path(out)
     files = {**(SCORING_FILES if board else {}), **REPORT_FILES}  # report.md last
@@ -128,7 +128,7 @@ def _test_score_row(s, i: int, t) -> dict:
 def scoring_lines(board: Sequence) -> list[str]:
     """The folders' scores and ranks, one line per folder (the CLI's summary and the report share them), and a line
     for each folder with fewer tests than the edition draws."""
-    from .scoring import EDITIONS
+    from ..scoring import EDITIONS
 
     if not board:
         return []
@@ -196,7 +196,7 @@ def report_text(ev: Evaluation, board: Sequence | None = None) -> str:
 
 def _scoring_section(board: Sequence, runs: int) -> list[str]:
     """The report's section on the competition's scoring: what the edition draws and computes, and the table."""
-    from .scoring import EDITIONS, SIMILAR_FLIGHT_M
+    from ..scoring import EDITIONS, SIMILAR_FLIGHT_M
 
     ed = EDITIONS[board[0].suite.edition]
     flown = f"each flown {runs} time{'s' if runs != 1 else ''} (the edition: {ed.runs})"

@@ -20,8 +20,8 @@ from typing import Sequence
 
 import numpy as np
 
-from .leaderboard import Board, BoardRow
-from .published import CASE_STUDIES, PUBLISHED, published_name, rerun_share
+from ..leaderboard import Board, BoardRow
+from ..published import CASE_STUDIES, PUBLISHED, published_name, rerun_share
 from .tables import fixed, write_csv
 
 __all__ = ["Summary", "agreement_2024", "summarise", "write_report"]
@@ -50,7 +50,7 @@ class Summary:
 
 def summarise(board: Board, rows: Sequence[BoardRow]) -> list[Summary]:
     """Each (case study, wind, tool) over the repetitions, case studies in the board's order, tools by place."""
-    from .leaderboard import case_label
+    from ..leaderboard import case_label
 
     year = board.edition.name
     out = []
@@ -63,7 +63,7 @@ def summarise(board: Board, rows: Sequence[BoardRow]) -> list[Summary]:
 
 
 def _places(group: Sequence[Summary], year: str) -> list[int]:
-    from .scoring import ranks
+    from ..scoring import ranks
 
     return list(ranks([s.score for s in group]) if year == "2024" else ranks([s.r for s in group],
                                                                               higher_is_better=False))
