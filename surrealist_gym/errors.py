@@ -194,17 +194,22 @@ def safe_yaml(text: str, name: str):
     bomb); nesting too deep is an error, not a crash; numbers as in YAML 1.2 (``1e9``) and numpy's (:func:`_loader`)."""
     import yaml
 
-    try:
-        if any(isinstance(token, yaml.AliasToken) for token in yaml.scan(text)) and \
-                _expanded(yaml.compose(text, Loader=_loader()), {}) > MAX_YAML_NODES:
+    loader = None
+    try:  # one parse: the node graph is composed once, measured, then constructed
+        loader = _loader()(text)
+        node = loader.get_single_node()
+        if node is not None and _expanded(node, {}) > MAX_YAML_NODES:
             raise InvalidTestCase(f"{name}: YAML aliases (*name) expand to more than {MAX_YAML_NODES} nodes")
-        return yaml.load(text, Loader=_loader())
+        return None if node is None else loader.construct_document(node)
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark else ""
         raise InvalidTestCase(f"{name}: invalid YAML{where}") from None
     except RecursionError:
         raise InvalidTestCase(f"{name}: YAML nested too deeply") from None
+    finally:
+        if loader is not None:
+            loader.dispose()
 
 
 #: The tag Aerialist master's ``to_yaml`` gives an assertion's variable (its Trajectory class), read as its name.
