@@ -30,6 +30,9 @@ _MISSION_KEYS = {"commands", "commands_file", "speed", "waypoints"}
 _ASSERT_KEYS = {"log_file", "variable"}
 _AGENT_KEYS = {"engine", "count", "path", "id"}
 _OWN_KEYS = {"assertion_log"}
+#: The fields that name a file, by section (both generations' section names: robot/drone, mission/test).
+FILE_FIELDS = {"robot": ("params_file", "mission_file"), "drone": ("params_file", "mission_file"),
+               "mission": ("commands_file",), "test": ("commands_file",)}
 #: Aerialist's PX4 ports (RobotConfig, DroneConfig) by the names both generations read; 14550 is a real vehicle's.
 PORTS = {"sitl": 14540, "sim": 14540, "px4_sitl": 14540, "ros": 14541, "avoidance": 14541, "px4_ros": 14541,
          "cf": 14550, "hw": 14550, "px4_cf": 14550}

@@ -35,6 +35,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Callable
 
+from ...aerialist import FILE_FIELDS
 from ...errors import DependencyNotInstalled, InvalidTestCase, SurrealistError, one_line
 from ...sim.uav import DEFAULT_UAV, decide_uav
 from ..scoring import writing_order
@@ -53,8 +54,6 @@ MAX_READ_BYTES = 512 * 2 ** 20
 _LINE = 64 * 1024  # a line of the tool's stdout is read up to this many characters
 #: Aerialist's modules that only its LocalAgent imports (PX4's and ROS's Python modules: mavsdk, rospy, ...).
 LOCAL_AGENT_MODULES = ("local_agent", "drone", "simulator", "tools")
-_FILE_FIELDS = (("robot", "drone", "mission_file"), ("robot", "drone", "params_file"),
-                ("mission", "test", "commands_file"))
 
 
 @dataclass(frozen=True, slots=True)
@@ -219,13 +218,13 @@ def _named_files(file: Path) -> tuple[tuple[str, str], ...]:
     import yaml
 
     doc = yaml.safe_load(Path(file).read_text(encoding="utf-8")) or {}
-    named = []
-    for section, legacy, key in _FILE_FIELDS:
-        part = doc.get(section) or doc.get(legacy) or {}
-        value = part.get(key) if isinstance(part, dict) else None
-        if isinstance(value, str):
-            named.append((key, value))
-    return tuple(named)
+    named = {}
+    for section, keys in FILE_FIELDS.items():
+        part = doc.get(section)
+        for key in keys if isinstance(part, dict) else ():
+            if isinstance(part.get(key), str):
+                named.setdefault(key, part[key])  # a section's current name before its legacy one
+    return tuple(named.items())
 
 
 def _check_imports(source: AerialistSource) -> None:

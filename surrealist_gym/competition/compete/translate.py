@@ -17,11 +17,8 @@ import os
 from pathlib import Path
 from typing import Mapping
 
+from ...aerialist import FILE_FIELDS
 from ...errors import InvalidTestCase
-
-#: The file fields of each section (current and legacy names).
-_FILE_FIELDS = {"robot": ("params_file", "mission_file"), "drone": ("params_file", "mission_file"),
-                "mission": ("commands_file",), "test": ("commands_file",)}
 
 
 def aerialist_doc(test: Mapping, cwd) -> dict:
@@ -30,7 +27,7 @@ def aerialist_doc(test: Mapping, cwd) -> dict:
     if not isinstance(test, Mapping):
         raise InvalidTestCase(f"expected an Aerialist test (a mapping of sections), got {test!r}")
     doc = {key: value for key, value in test.items() if key not in ("assertion", "agent")}
-    for section, keys in _FILE_FIELDS.items():
+    for section, keys in FILE_FIELDS.items():
         part = doc.get(section)
         if isinstance(part, Mapping):
             doc[section] = {**part, **{key: _absolute(part[key], cwd, key) for key in keys
@@ -44,7 +41,7 @@ def outside(test: Mapping, cwd, roots) -> str | None:
     if not roots:
         return None
     doc = aerialist_doc(test, cwd)
-    for section, keys in _FILE_FIELDS.items():
+    for section, keys in FILE_FIELDS.items():
         part = doc.get(section)
         for key in keys if isinstance(part, Mapping) else ():
             if part.get(key) is not None and not any(Path(os.path.realpath(part[key])).is_relative_to(root)
