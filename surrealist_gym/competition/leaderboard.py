@@ -357,7 +357,7 @@ class BoardRow:
             row["wind"] = self.wind
         row.update(reported_tests=self.reported_tests, evaluated_tests=self.evaluated_tests,
                    failing_tests=self.failing_tests)
-        if ed.name == "2024":
+        if not ed.ranks_diversity:
             row["suite_score"] = rounded(self.suite_score, 6)
         else:
             row.update(failure_score=rounded(self.failure_score, 6), diversity=rounded(self.diversity, 6),

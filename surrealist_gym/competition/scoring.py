@@ -47,7 +47,8 @@ __all__ = ["EDITIONS", "SIMILAR_FLIGHT_M", "Draw", "Edition", "ScoredTest", "Sta
 class Edition:
     """An edition's rules: the ``budget`` of simulations a tool had per case study, the most boxes a test may hold,
     the ``tests`` it evaluated of a suite (``draw``: ``random`` or ``first``), ``runs`` each, and whether each suite
-    was evaluated twice, with the case study's wind and without (``wind``: 2026)."""
+    was evaluated twice, with the case study's wind and without (``wind``: 2026); whether the tools were ranked on
+    failures and diversity (``ranks_diversity``: 2025 on), or on the suite score alone (2024)."""
 
     name: str
     tests: int
@@ -56,6 +57,7 @@ class Edition:
     budget: int = 100
     max_obstacles: int = 3
     wind: bool = False
+    ranks_diversity: bool = True  # R = 0.75 R_F + 0.25 R_D (2025 on); 2024 ranked the suite score alone
 
     @property
     def rules(self):
@@ -68,7 +70,7 @@ class Edition:
 #: 2024 (SBFT): budget 200, up to 4 boxes, 20 tests drawn at random, 5 runs each; 2025 (ICST, SBFT): budget 100, up to
 #: 3 boxes, the first 20 tests, 3 runs each; 2026: the 2025 rules, each suite evaluated with and without wind
 #: (``shared/COMPETITION.md`` sections 3, 5 and 6).
-EDITIONS = {"2024": Edition("2024", 20, 5, "random", budget=200, max_obstacles=4),
+EDITIONS = {"2024": Edition("2024", 20, 5, "random", budget=200, max_obstacles=4, ranks_diversity=False),
             "2025": Edition("2025", 20, 3, "first"),
             "2026": Edition("2026", 20, 3, "first", wind=True)}
 
@@ -275,7 +277,7 @@ class SuiteScore:
     @property
     def failing(self) -> int:
         """Drawn tests (duplicates once in 2025) with a score above 0: the reports' ``#tests (failing)``."""
-        return sum(t.score > 0 and (self.edition == "2024" or t.counted) for t in self.drawn)
+        return sum(t.score > 0 and (not EDITIONS[self.edition].ranks_diversity or t.counted) for t in self.drawn)
 
     @property
     def alike(self) -> int:
@@ -293,7 +295,7 @@ def score_suite(ed: Edition, d: Draw, tests: Sequence[tuple[object, Sequence, st
         scored.append(ScoredTest(file, len(test.obstacles), points, durations,
                                  test_score(points, durations, len(test.obstacles)), invalid))
     layouts = [test.obstacles for test, _, _ in tests]
-    if ed.name == "2024":
+    if not ed.ranks_diversity:
         same = similar_flights([[r.trajectory for r in runs if r.flown] if not invalid else []
                                 for _, runs, invalid in tests])
         scored = [_with_same(t, s) for t, s in zip(scored, same)]
@@ -349,7 +351,7 @@ def standings(scores: Sequence[SuiteScore]) -> tuple[Standing, ...]:
     for study in sorted({s.case_study for s in scores}):
         group = [s for s in scores if s.case_study == study]
         r_f = ranks([s.score for s in group])
-        if group[0].edition == "2024":
+        if not EDITIONS[group[0].edition].ranks_diversity:
             r_d: Sequence[int | None] = [None] * len(group)
             r = [float(f) for f in r_f]
         else:

@@ -137,7 +137,7 @@ def scoring_lines(board: Sequence) -> list[str]:
     for row in board:
         s = row.suite
         head = (f"{s.case_study}: {s.name}: {len(s.drawn)} of {s.tests} tests drawn, {s.failing} failing; ")
-        if ed.name == "2024":
+        if not ed.ranks_diversity:
             lines.append(head + f"score {s.score:.2f} = ({s.failure:.2f} + rest {s.rest:.2f}) x sim_pen "
                                 f"{s.sim_pen:.2f} ({s.alike} flying alike); rank {row.rank}")
         else:
@@ -202,7 +202,7 @@ def _scoring_section(board: Sequence, runs: int) -> list[str]:
     flown = f"each flown {runs} time{'s' if runs != 1 else ''} (the edition: {ed.runs})"
     score = ("test_score = avg_point x 10 / (n_obstacles^2 x avg_time), avg_time the mean flight time in minutes "
              "(simulated, from arming to the end of the run).")
-    if ed.name == "2024":
+    if not ed.ranks_diversity:
         how = [f"Scored as the 2024 edition (SBFT) did: {ed.tests} tests drawn at random from each folder (seeded by "
                f"the base seed), {flown}. {score} A folder of more than {ed.tests} tests earns half the mean test "
                f"score for each test beyond them (rest). Two drawn tests are similar when the DBA averages of their "

@@ -32,9 +32,9 @@ class Summary:
 
     __slots__ = ("tool", "case_study", "wind", "rows", "score", "diversity", "r", "failing", "evaluated", "reported")
 
-    def __init__(self, tool: str, case_study: str, wind: str, rows: Sequence[BoardRow], year: str):
+    def __init__(self, tool: str, case_study: str, wind: str, rows: Sequence[BoardRow], ranks_diversity: bool):
         self.tool, self.case_study, self.wind, self.rows = tool, case_study, wind, tuple(rows)
-        self.score = float(np.mean([r.suite_score if year == "2024" else r.failure_score for r in rows]))
+        self.score = float(np.mean([r.failure_score if ranks_diversity else r.suite_score for r in rows]))
         diversities = [r.diversity for r in rows if not math.isnan(r.diversity)]
         self.diversity = float(np.mean(diversities)) if diversities else math.nan
         self.r = float(np.mean([r.r for r in rows]))
@@ -52,20 +52,20 @@ def summarise(board: Board, rows: Sequence[BoardRow]) -> list[Summary]:
     """Each (case study, wind, tool) over the repetitions, case studies in the board's order, tools by place."""
     from ..leaderboard import case_label
 
-    year = board.edition.name
+    by_r = board.edition.ranks_diversity
     out = []
     for label in (case_label(c) for c in board.case_studies):
         for wind in board.variants:
             here = [Summary(t.name, label, wind, [r for r in rows if (r.tool, r.case_study, r.wind) ==
-                                                  (t.name, label, wind)], year) for t in board.tools]
-            out += sorted(here, key=lambda s: (s.r, -s.score) if year != "2024" else (-s.score,))
+                                                  (t.name, label, wind)], by_r) for t in board.tools]
+            out += sorted(here, key=lambda s: (s.r, -s.score) if by_r else (-s.score,))
     return out
 
 
-def _places(group: Sequence[Summary], year: str) -> list[int]:
+def _places(group: Sequence[Summary], ranks_diversity: bool) -> list[int]:
     from ..scoring import ranks
 
-    return list(ranks([s.score for s in group]) if year == "2024" else ranks([s.r for s in group],
+    return list(ranks([s.score for s in group]) if not ranks_diversity else ranks([s.r for s in group],
                                                                               higher_is_better=False))
 
 
@@ -99,28 +99,27 @@ def agreement_2024(summaries: Sequence[Summary]) -> dict:
 
 def report_lines(board: Board, rows: Sequence[BoardRow]) -> list[str]:
     """The tables of ``report.md`` (the command prints them too)."""
-    year = board.edition.name
     summaries = summarise(board, rows)
     lines = [f"## Per case study (mean over {board.repetitions} repetitions)", ""]
     head = ("| case study | " + ("wind | " if board.edition.wind else "") + "tool | place | "
-            + ("suite score | " if year == "2024" else "failure score | diversity | R | ")
+            + ("suite score | " if not board.edition.ranks_diversity else "failure score | diversity | R | ")
             + "tests reported | failing of evaluated (re-run) |")
     lines += [head, "|" + "---|" * (head.count("|") - 1)]
     for label in dict.fromkeys(s.case_study for s in summaries):
         for wind in board.variants:
             group = [s for s in summaries if (s.case_study, s.wind) == (label, wind)]
-            for s, place in zip(group, _places(group, year)):
+            for s, place in zip(group, _places(group, board.edition.ranks_diversity)):
                 lines.append(f"| {label} | " + (f"{wind} | " if board.edition.wind else "") + f"{s.tool} | {place} | "
-                             + (f"{fixed(s.score)} | " if year == "2024" else
+                             + (f"{fixed(s.score)} | " if not board.edition.ranks_diversity else
                                 f"{fixed(s.score)} | {fixed(s.diversity)} | {fixed(s.r)} | ")
                              + f"{s.reported:.1f} | {s.failing}/{s.evaluated}"
                              + (f" ({100 * s.rerun:.0f}%) |" if s.evaluated else " |"))
     lines += ["", "## Overall", ""]
     for wind in board.variants:
-        totals = {t.name: sum(s.score if year == "2024" else s.r for s in summaries
+        totals = {t.name: sum(s.score if not board.edition.ranks_diversity else s.r for s in summaries
                               if s.tool == t.name and s.wind == wind) for t in board.tools}
-        order = sorted(totals, key=lambda t: -totals[t] if year == "2024" else totals[t])
-        what = "sum of mean suite scores" if year == "2024" else "sum of mean R (lower is better)"
+        order = sorted(totals, key=lambda t: -totals[t] if not board.edition.ranks_diversity else totals[t])
+        what = "sum of mean suite scores" if not board.edition.ranks_diversity else "sum of mean R (lower is better)"
         lines.append((f"{wind} wind: " if wind else "") + f"{what}: "
                      + ", ".join(f"{i + 1}. {t} {totals[t]:.2f}" for i, t in enumerate(order)))
     lines += ["", *_px4_lines(board, summaries)]
@@ -128,8 +127,7 @@ def report_lines(board: Board, rows: Sequence[BoardRow]) -> list[str]:
 
 
 def _px4_lines(board: Board, summaries: Sequence[Summary]) -> list[str]:
-    year = board.edition.name
-    if year == "2024":
+    if not board.edition.ranks_diversity:
         agree = agreement_2024(summaries)
         if not agree["cells"]:
             return ["## Against PX4", "", "No tool and case study of the 2024 report's Table 1 is on this board "
@@ -182,8 +180,8 @@ def plot_board(board: Board, rows: Sequence[BoardRow], path) -> None:
         group = [s for s in summaries if (s.case_study, s.wind) == (label, wind)]
         ys = np.arange(len(group))[::-1]
         ax.barh(ys, [s.score for s in group], color="0.8", height=0.6)
-        for y, s, place in zip(ys, group, _places(group, year)):
-            values = [r.suite_score if year == "2024" else r.failure_score for r in s.rows]
+        for y, s, place in zip(ys, group, _places(group, board.edition.ranks_diversity)):
+            values = [r.suite_score if not board.edition.ranks_diversity else r.failure_score for r in s.rows]
             ax.plot(values, [y] * len(values), "o", color="tab:red", markersize=4,
                     label="each repetition" if y == ys[0] else None)
             px4 = _published_cell(year, s.tool, label)
@@ -192,7 +190,7 @@ def plot_board(board: Board, rows: Sequence[BoardRow], path) -> None:
             ax.text(max([s.score, *values, *([px4.score] if px4 else [])]), y, f"  #{place}", va="center",
                     fontsize="small")
         ax.set_yticks(ys, [s.tool for s in group], fontsize="small")
-        ax.set_xlabel("suite score" if year == "2024" else "failure score", fontsize="small")
+        ax.set_xlabel("suite score" if not board.edition.ranks_diversity else "failure score", fontsize="small")
         ax.set_title(label + (f", {wind} wind" if wind else ""), fontsize="small")
         ax.grid(True, axis="x", linewidth=0.3)
         handles, names = ax.get_legend_handles_labels()

@@ -146,9 +146,12 @@ def plot_leaderboard(board, path) -> None:
     study: a bar per folder of its score (2024: the suite score; 2025: the failure score, and its diversity beside),
     labelled with its rank."""
     studies = list(dict.fromkeys(row.suite.case_study for row in board))
+    from ..scoring import EDITIONS
+
     year = board[0].suite.edition
+    by_r = EDITIONS[year].ranks_diversity
     panels = [("failure", "failure score (sum of test scores)"), ("diversity", "diversity (1 - mean area IoU)")] \
-        if year != "2024" else [("score", "suite score ((sum test_score + rest) x sim_pen)")]
+        if by_r else [("score", "suite score ((sum test_score + rest) x sim_pen)")]
     most = max(sum(row.suite.case_study == study for row in board) for study in studies)
     fig = _figure(5.2 * len(panels), 0.9 + len(studies) * (0.9 + 0.35 * most))
     axes = np.atleast_2d(fig.subplots(len(studies), len(panels), squeeze=False))
@@ -161,7 +164,7 @@ def plot_leaderboard(board, path) -> None:
             ax.barh(ys, [0 if math.isnan(v) else v for v in values], color=colours, height=0.6)
             for y, v, row in zip(ys, values, rows):
                 rank = f"R_D {row.r_d}" if field == "diversity" else (
-                    f"R_F {row.r_f}, R {row.r:g}, rank {row.rank}" if year != "2024" else f"rank {row.rank}")
+                    f"R_F {row.r_f}, R {row.r:g}, rank {row.rank}" if by_r else f"rank {row.rank}")
                 ax.text(0 if math.isnan(v) else v, y, f"  {'-' if math.isnan(v) else f'{v:.2f}'}  ({rank})",
                         va="center", fontsize="small")
             ax.set_yticks(ys, [row.suite.name for row in rows], fontsize="small")
@@ -169,7 +172,7 @@ def plot_leaderboard(board, path) -> None:
                         if field != "diversity" else 1.45)
             ax.set_title(f"{study}: {label}", fontsize="small")
             ax.grid(True, axis="x", linewidth=0.3)
-    fig.suptitle(f"scored as the {year} edition" + ("; R = 0.75 R_F + 0.25 R_D per case study" if year != "2024"
+    fig.suptitle(f"scored as the {year} edition" + ("; R = 0.75 R_F + 0.25 R_D per case study" if by_r
                                                      else "; ranked by score per case study"), fontsize="medium")
     fig.tight_layout()
     fig.savefig(os.fspath(path), dpi=100)
