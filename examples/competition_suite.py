@@ -13,10 +13,11 @@ import gymnasium as gym
 
 import surrealist_gym  # noqa: F401  (registers Surrealist-CaseStudy-v1)
 from search.novelty import SuiteSearch
-from surrealist_gym.competition.reevaluation import evaluate, load_tests
+from surrealist_gym.competition.reevaluation import evaluate
 from surrealist_gym.competition.suite import diversity
 from surrealist_gym.competition.suite_env import RecordSuite
 from surrealist_gym.competition.suite_export import export_suite
+from surrealist_gym.competition.tool_output import load_tests
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("case_study", help="a case study's YAML (or mission1-3 when $SURREALIST_CASE_STUDIES is set)")
