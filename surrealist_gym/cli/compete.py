@@ -29,8 +29,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("budget", metavar="BUDGET", type=int, help="simulations the tool may fly (given to its cli.py)")
     from ..competition.compete.process import ToolLimits
     from ..competition.compete.toolenv import TOOL_ENV_MODES
-    from .options import (WORKERS_ONE_HELP, add_dask_argument, add_out_argument, add_random_seed_argument,
-                          add_workers_argument, refuse_argument)
+    from .options import (
+        WORKERS_ONE_HELP,
+        add_dask_argument,
+        add_out_argument,
+        add_random_seed_argument,
+        add_workers_argument,
+        refuse_argument,
+    )
 
     add_out_argument(parser, "compete", "output folder, must not exist")
     parser.add_argument("--runs", type=int, default=1, metavar="N",

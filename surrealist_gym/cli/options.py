@@ -121,12 +121,14 @@ def refuse_leftover(args: argparse.Namespace, name: str) -> None:
                               f"TEST.yaml)")
 
 
-def add_random_seed_argument(parser: argparse.ArgumentParser, help: str, default: int = 0) -> None:
+def add_random_seed_argument(parser: argparse.ArgumentParser, help: str, default: int = 0,
+                             seed_test: bool = False) -> None:
     """``--random-seed N``, the seed of the simulation noise in every command; ``--seed`` (which names a seed test
-    elsewhere) is refused in one line."""
+    elsewhere) is refused in one line, unless the command takes a seed test (``seed_test``)."""
     parser.add_argument("--random-seed", type=int, default=default, metavar="N", help=help)
-    refuse_argument(parser, "--seed", "use --random-seed (the noise seed); --seed names a seed test in other "
-                                      "commands")
+    if not seed_test:
+        refuse_argument(parser, "--seed", "use --random-seed (the noise seed); --seed names a seed test in "
+                                          "other commands")
 
 
 def refuse_inapplicable(args: argparse.Namespace, rules) -> None:

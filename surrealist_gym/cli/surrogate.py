@@ -14,7 +14,7 @@ def add_arguments(parser) -> None:
     train = sub.add_parser("train", help="train a model on one or more evaluation stores",
                            description="train a model on one or more evaluation stores (.sqlite)")
     train.add_argument("stores", nargs="+", metavar="STORE", help="evaluation stores of one problem")
-    train.add_argument("--out", required=True, metavar="MODEL", help="model folder to write (weights.pt, meta.json): "
+    train.add_argument("--out", required=True, metavar="DIR", help="model folder to write (weights.pt, meta.json): "
                        "new or empty unless --overwrite")
     train.add_argument("--overwrite", action="store_true", help="replace the model an existing --out holds")
     train.add_argument("--problem", default="replicate", choices=["replicate", "generate"],

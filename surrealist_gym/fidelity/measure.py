@@ -312,8 +312,8 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
         uav: UAV profile, a preset name or YAML (default ``px4-v1.12-sitl-iris``); config: the SimConfig the
             profile applies to (default :class:`~surrealist_gym.sim.config.SimConfig`).
         workers: processes (default: all cores, at most 8); executor: a Dask scheduler's address, a
-            ``distributed.Client`` or an executor instead (:func:`fly_labelled_set`); limit, every: fly every ``every``-th test, at most
-            ``limit``.
+            ``distributed.Client`` or an executor instead (:func:`fly_labelled_set`); limit, every: fly every
+            ``every``-th test, at most ``limit``.
         close: the close region is theirs < ``close`` [m]; buffer: polyline buffer of the distance [m].
         progress: called with (tests done, tests) as tests finish.
     """

@@ -288,8 +288,9 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     command = [str(tool_env.python), "cli.py", "generate", plan.case_study, str(plan.budget)]
     roots = (work, plan.case_study_file.parent,  # where the files a test names may be: and those the case study names
              *(Path(v) for _, v in _named_files(plan.case_study_file) if os.path.isabs(v)))
-    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight,
-                          roots=roots, executor=plan.executor) as server, open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
+    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight, roots=roots,
+                          executor=plan.executor) as server, open(stdout, "wb") as out_file, \
+            open(stderr, "wb") as err_file:
         env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
         started = time.time()
         with ending_with_us():
