@@ -173,7 +173,8 @@ class SearchOptions:
     command: ClassVar[str] = ""
 
     budget: int = _opt(PROBLEM_DEFAULTS["replicate"]["budget"], "evaluations allowed (default {default})", type=int)
-    runs: int = _opt(PROBLEM_DEFAULTS["replicate"]["runs"], "simulations per evaluation (default {default})", type=int)
+    runs: int = _opt(PROBLEM_DEFAULTS["replicate"]["runs"], "simulations per evaluation (default {default})", type=int,
+                     metavar="N")
     workers: int | None = _opt(None, WORKERS_HELP, type=int, metavar="N")
     dask_scheduler: str | None = _opt(None, DASK_HELP, metavar="ADDRESS")
     preset: str = _opt("authors", _PRESET_HELP, choices=["paper", "authors"])
@@ -321,7 +322,7 @@ class GenerateOptions(SearchOptions):
     budget: int = _opt(PROBLEM_DEFAULTS["generate"]["budget"], "evaluations allowed (default {default}; with "
                        f"--case-study {CASE_STUDY_DEFAULTS['budget']})", type=int)
     runs: int = _opt(PROBLEM_DEFAULTS["generate"]["runs"], "simulations per evaluation (default {default}; with "
-                     f"--case-study {CASE_STUDY_DEFAULTS['runs']})", type=int)
+                     f"--case-study {CASE_STUDY_DEFAULTS['runs']})", type=int, metavar="N")
     agent: str = _opt(PROBLEM_DEFAULTS["generate"]["agent"],
                       "search agent: greedy, greedy-paper, random, cmaes, suite, ppo[-sample]:POLICY.zip, module:Class "
                       f"(default {{default}}; with --case-study {CASE_STUDY_DEFAULTS['agent']})")
@@ -340,7 +341,7 @@ class GenerateOptions(SearchOptions):
                                         "rules; then the defaults are " + " ".join(
                                             f"--{k} {v}" for k, v in CASE_STUDY_DEFAULTS.items()),
                                   metavar="NAME|YAML")
-    obstacles: int = _opt(3, "with --case-study: boxes per test (1-3; default {default})", type=int)
+    obstacles: int = _opt(3, "with --case-study: boxes per test (1-3; default {default})", type=int, metavar="N")
     wind: bool = _opt(False, "search the wind's speed (0-10 m/s) and direction as well as the obstacles (not with "
                              "pre-screening)", action="store_true")
     confirm: int = _opt(5, "with --case-study: re-fly each failure of the suite this many times with fresh noise and "

@@ -36,7 +36,7 @@ def add_arguments(parser) -> None:
     train.add_argument("--k", type=int, default=None, help="neighbours of the knn baseline (default 7)")
     train.add_argument("--holdout", type=int, default=0, metavar="N",
                        help="first train without the last N stores and report how well it predicts them")
-    train.add_argument("--random-seed", type=int, default=0, help="seed of the training (default 0)")
+    train.add_argument("--random-seed", type=int, default=0, metavar="N", help="seed of the training (default 0)")
     ev = sub.add_parser("eval", help="measure a model on evaluation stores it was not trained on",
                         description="held-out R2, Spearman rank correlation and calibration of a model")
     ev.add_argument("model", metavar="MODEL", help="model folder written by `surrealist surrogate train`")
