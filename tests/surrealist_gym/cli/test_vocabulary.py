@@ -434,7 +434,7 @@ def test_compare_refuses_a_case_study_that_does_not_exist(tmp_path, capsys):
     assert "no such file" in _one_line_error(capsys) and not (tmp_path / "cmp").exists()
 
 
-# --- compare --obstacles, --random-seed; the command train prints runs -------------------------------------------------
+# --- compare --obstacles, --random-seed; the command train prints runs ------------------------------------------------
 def _printed_compare(printed: str) -> list[str]:
     """The ``surrealist compare ...`` line a training printed, as argv for main()."""
     line = next(line for line in printed.splitlines() if line.startswith("use it: "))
