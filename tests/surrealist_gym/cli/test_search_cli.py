@@ -40,7 +40,7 @@ def test_generate_on_a_competition_test_flies_the_sitl_iris_and_judges_by_the_co
 
     seed = sorted((SHARED_DATA / "competition" / "camba-collection").glob("*.yaml"))[0]
     out = tmp_path / "gen"
-    assert main(["generate", str(seed), "--budget", "2", "--runs", "1", "--workers", "1", "--out", str(out)]) == 0
+    assert main(["generate", "--seed", str(seed), "--budget", "2", "--runs", "1", "--workers", "1", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["uav"] == "px4-v1.12-sitl-iris" and summary["distance"] == "competition"
     assert json.loads((out / "run.json").read_text())["uav"] == "px4-v1.12-sitl-iris"
@@ -112,7 +112,7 @@ def test_bad_input_is_one_line_exit_2(argv, needle, capsys, tmp_path, monkeypatc
 def test_bad_yaml_via_subprocess(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("simulation:\n  obstacles: [3,3,-1, 0,0,0, 0]\n")
-    proc = subprocess.run([sys.executable, "-m", "surrealist_gym.cli", "generate", str(bad), "--out",
+    proc = subprocess.run([sys.executable, "-m", "surrealist_gym.cli", "generate", "--seed", str(bad), "--out",
                            str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
