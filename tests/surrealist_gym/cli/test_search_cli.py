@@ -40,7 +40,8 @@ def test_generate_on_a_competition_test_flies_the_sitl_iris_and_judges_by_the_co
 
     seed = sorted((SHARED_DATA / "competition" / "camba-collection").glob("*.yaml"))[0]
     out = tmp_path / "gen"
-    assert main(["generate", "--seed", str(seed), "--budget", "2", "--runs", "1", "--workers", "1", "--out", str(out)]) == 0
+    assert main(["generate", "--seed", str(seed), "--budget", "2", "--runs", "1", "--workers", "1",
+                 "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["uav"] == "px4-v1.12-sitl-iris" and summary["distance"] == "competition"
     assert json.loads((out / "run.json").read_text())["uav"] == "px4-v1.12-sitl-iris"
