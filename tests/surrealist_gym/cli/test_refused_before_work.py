@@ -183,7 +183,7 @@ def read_only(tmp_path) -> Path:
     (["compare", "--budget", "1", "--repetitions", "1", "--agents", "random", "--out", "{ro}/cmp"], "--out"),
     (["surrogate", "train", STORE, "--problem", "generate", "--kind", "knn", "--out", "{ro}/model"], "--out"),
     (["train", "--steps", "1", "--policy", "{ro}/policy.zip"], "--policy"),
-    (["inspect", CASE0, "--out", "{ro}/case0.png"], "--out"),
+    (["inspect", CASE0, "--out", "{ro}/plots"], "--out"),
     (["fidelity", SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv", "--out", "{ro}/fid"], "--out"),
 ], ids=lambda v: v[0] if isinstance(v, list) else v)
 def test_a_read_only_output_is_refused_before_any_work(read_only, tmp_path, capsys, argv, flag):

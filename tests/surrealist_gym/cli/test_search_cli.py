@@ -228,7 +228,7 @@ def test_search_options_are_typed_once_for_arguments_run_json_and_resume(tmp_pat
 
     parser = argparse.ArgumentParser()
     GenerateOptions.add_arguments(parser)
-    args = parser.parse_args(["seed.yaml", "--budget", "7", "--first-runs", "1,2", "--common-noise"])
+    args = parser.parse_args(["--seed", "seed.yaml", "--budget", "7", "--first-runs", "1,2", "--common-noise"])
     options = GenerateOptions.from_args(args)
     assert (options.test, options.budget, options.runs, options.first_runs, options.common_noise) == \
         ("seed.yaml", 7, 10, (1, 2), True)
@@ -268,7 +268,8 @@ def test_bad_search_values_are_one_line_errors(tmp_path, capsys, argv, message):
     (["simulate", "TEST", "--param", "MPC_XY_CRUISE=1e400"], "expected NAME=number (a finite number)")])
 def test_bad_numbers_of_other_commands_are_one_line_errors(tmp_path, capsys, argv, message):
     argv = [sg.data_path("rq1-seed1.yaml") if a == "TEST" else a for a in argv]
-    assert main([*argv, "--out", str(tmp_path / "out")]) == 2
+    written = ["--policy", str(tmp_path / "out" / "p.zip")] if argv[0] == "train" else ["--out", str(tmp_path / "out")]
+    assert main([*argv, *written]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and not (tmp_path / "out").exists()
 
