@@ -5,9 +5,10 @@ TEST``). A clean answer is exit 0 (the damage left a readable file) or exit 2 wi
 file; never a traceback, never over 10 s or 1 GB.
 
 Refusals: a seeded corpus of inputs that are wrong on purpose, over every command (simulate, replicate, generate,
-generate --case-study, calibrate, fidelity, evaluate, surrogate train/eval, compare, train, inspect): bad option
-values, options that do not apply to the problem or were renamed (``--seed`` where ``--random-seed`` is meant), UAV
-profiles outside their physical ranges or malformed, tests with out-of-range or non-numeric settings,
+generate --case-study, calibrate, fidelity, evaluate, surrogate train/eval, compare, train, inspect, compete): bad
+option values, options that do not apply to the problem, old spellings of the vocabulary of docs/cli.md (``--seed``
+where ``--random-seed`` is meant, ``generate SEED.yaml``, ``--runs-per-test``, ``--out`` naming a file), UAV profiles
+outside their physical ranges or malformed, tests with out-of-range or non-numeric settings,
 outputs that cannot be written (a file, a path under a file, a read-only tmpfs where this machine mounts one), FIFOs,
 folders and devices where a file is expected, empty files, bad case-study names, argparse errors. Each case runs in
 its own folder with cheap settings (``--budget 1 --runs 1``), so a command that wrongly accepts its input ends soon.
@@ -149,18 +150,20 @@ SEED_FILES = ["rq2-seed.yaml", "auto1.plan", "auto1-params.csv", "auto-commands.
 CHEAP = {  # each command with settings that keep a wrongly accepted input short; "out" is the output it writes
     "simulate": ["simulate", "rq2-seed.yaml", "--runs", "1", "--no-plot", "--no-ulog", "--out", "out"],
     "replicate": ["replicate", str(CASE0), "--budget", "1", "--runs", "1", "--workers", "1", "--out", "out"],
-    "generate": ["generate", "rq2-seed.yaml", "--budget", "1", "--runs", "1", "--workers", "1", "--out", "out"],
+    "generate": ["generate", "--seed", "rq2-seed.yaml", "--budget", "1", "--runs", "1", "--workers", "1", "--out",
+                 "out"],
     "case-study": ["generate", "--case-study", "mission1", "--budget", "1", "--runs", "1", "--workers", "1",
                    "--confirm", "0", "--out", "out"],
-    "calibrate": ["calibrate", str(CASE0), "--runs", "1", "--workers", "1", "--out", "uav.yaml"],
+    "calibrate": ["calibrate", str(CASE0), "--runs", "1", "--workers", "1", "--profile", "uav.yaml"],
     "fidelity": ["fidelity", str(LABELS_CSV), "--limit", "1", "--workers", "1", "--out", "out"],
     "evaluate": ["evaluate", "{camba}", "--runs", "1", "--workers", "1", "--out", "out"],
     "surrogate-train": ["surrogate", "train", str(STORE), "--problem", "generate", "--kind", "knn", "--out", "model"],
     "surrogate-eval": ["surrogate", "eval", "{model}", str(STORE)],
     "compare": ["compare", "--env", "Surrealist-Generate-v0", "--agents", "random", "--budget", "1",
                 "--repetitions", "1", "--runs", "1", "--inline", "--out", "out"],
-    "train": ["train", "--steps", "1", "--episode-budget", "2", "--problem", "generate", "--out", "policy.zip"],
-    "inspect": ["inspect", str(CASE0), "--out", "case0.png"],
+    "train": ["train", "--steps", "1", "--episode-budget", "2", "--problem", "generate", "--policy", "policy.zip"],
+    "inspect": ["inspect", str(CASE0), "--out", "plots"],
+    "compete": ["compete", "tool", "mission1", "1", "--out", "out"],
 }
 # (command, flag, bad values): whole numbers, numbers and names that the options do not take
 OPTIONS = [
@@ -323,7 +326,7 @@ def corpus(rng: np.random.Generator) -> list[Case]:
         "params file MPC_XY_CRUISE 0": _test_yaml(params_file="bad-params.csv"),
     }
     readers = [("simulate", CHEAP["simulate"][:1] + ["t.yaml"] + CHEAP["simulate"][2:]),
-               ("generate", CHEAP["generate"][:1] + ["t.yaml"] + CHEAP["generate"][2:]),
+               ("generate", _with(CHEAP["generate"], "--seed", "t.yaml")),
                ("evaluate", ["evaluate", "t.yaml", "--any-layout", "--runs", "1", "--workers", "1", "--out", "out"]),
                ("replicate --seed", _with(CHEAP["replicate"], "--seed", "t.yaml")),
                ("train --seed", _with(CHEAP["train"], "--seed", "t.yaml")),
@@ -341,24 +344,24 @@ def corpus(rng: np.random.Generator) -> list[Case]:
         add("output", f"{command} {flag} FILE", _with(CHEAP[command], flag, "afile"), _write("afile", "x"))
         add("output", f"{command} {flag} FILE/x", _with(CHEAP[command], flag, "afile/x"), _write("afile", "x"))
         add("output", f"{command} {flag} read-only", _with(CHEAP[command], flag, "{ro}/x"))
-    for command, flag, bad in [("calibrate", "--out", "uav.txt"), ("calibrate", "--out", "afile/uav.yaml"),
-                               ("calibrate", "--out", "{ro}/uav.yaml"), ("calibrate", "--plot", "plot.txt"),
+    for command, flag, bad in [("calibrate", "--profile", "uav.txt"), ("calibrate", "--profile", "afile/uav.yaml"),
+                               ("calibrate", "--profile", "{ro}/uav.yaml"), ("calibrate", "--plot", "plot.txt"),
                                ("calibrate", "--plot", "afile/p.png"), ("calibrate", "--plot", "{ro}/p.png"),
-                               ("inspect", "--out", "case0.txt"), ("inspect", "--out", "afile/case0.png"),
-                               ("inspect", "--out", "{ro}/case0.png"), ("inspect", "--out", "afile"),
+                               ("inspect", "--out", "afile/plots"), ("inspect", "--out", "{ro}/plots"),
+                               ("inspect", "--out", "afile"),
                                ("surrogate-eval", "--plot", "eval.txt"), ("surrogate-eval", "--plot", "afile/e.png"),
-                               ("surrogate-eval", "--plot", "{ro}/e.png"), ("train", "--out", "afile/p.zip"),
-                               ("train", "--out", "{ro}/p.zip"), ("calibrate", "--out", "afile")]:
+                               ("surrogate-eval", "--plot", "{ro}/e.png"), ("train", "--policy", "afile/p.zip"),
+                               ("train", "--policy", "{ro}/p.zip"), ("calibrate", "--profile", "afile")]:
         add("output", f"{command} {flag} {bad}", _with(CHEAP[command], flag, bad), _write("afile", "x"))
     # FIFOs, folders and devices where a file is expected
     for maker, label in ((_fifo, "FIFO"), (_folder, "folder")):
         for command, argv in [
                 ("inspect", ["inspect", "x.ulg", "--no-plot"]),
-                ("calibrate", ["calibrate", "x.ulg", "--out", "u.yaml"]),
+                ("calibrate", ["calibrate", "x.ulg", "--profile", "u.yaml"]),
                 ("replicate", ["replicate", "x.ulg"] + CHEAP["replicate"][2:]),
                 ("compare --log", _with(CHEAP["compare"], "--log", "x.ulg")),
                 ("simulate", ["simulate", "x.yaml"] + CHEAP["simulate"][2:]),
-                ("generate", ["generate", "x.yaml"] + CHEAP["generate"][2:]),
+                ("generate", _with(CHEAP["generate"], "--seed", "x.yaml")),
                 ("simulate --uav", _with(CHEAP["simulate"], "--uav", "x.yaml")),
                 ("generate --case-study", _with(CHEAP["case-study"], "--case-study", "x.yaml")),
                 ("fidelity --labels", ["fidelity", "{camba}", "--labels", "x.csv", "--limit", "1", "--out", "out"]),
@@ -375,9 +378,9 @@ def corpus(rng: np.random.Generator) -> list[Case]:
         add("non-regular", f"{command} device/FIFO", argv, _fifo("x.model"))
     # empty files
     for command, argv, name in [("inspect", ["inspect", "e.ulg", "--no-plot"], "e.ulg"),
-                                ("calibrate", ["calibrate", "e.ulg", "--out", "u.yaml"], "e.ulg"),
+                                ("calibrate", ["calibrate", "e.ulg", "--profile", "u.yaml"], "e.ulg"),
                                 ("simulate", ["simulate", "e.yaml"] + CHEAP["simulate"][2:], "e.yaml"),
-                                ("generate", ["generate", "e.yaml"] + CHEAP["generate"][2:], "e.yaml"),
+                                ("generate", _with(CHEAP["generate"], "--seed", "e.yaml"), "e.yaml"),
                                 ("simulate --uav", _with(CHEAP["simulate"], "--uav", "e.yaml"), "e.yaml"),
                                 ("surrogate train", ["surrogate", "train", "e.sqlite", "--out", "model"], "e.sqlite"),
                                 ("surrogate eval", ["surrogate", "eval", "{model}", "e.sqlite"], "e.sqlite"),
@@ -393,8 +396,16 @@ def corpus(rng: np.random.Generator) -> list[Case]:
     for name in ["mission9", "", "../../etc/passwd", "missing.yaml", "Mission 1", "uav.yaml"]:
         add("case-study", f"--case-study {name!r}", _with(CHEAP["case-study"], "--case-study", name),
             _write("uav.yaml", "name: x\n"))
-    add("case-study", "--case-study with a seed test", CHEAP["case-study"][:1] + ["rq2-seed.yaml"]
-        + CHEAP["case-study"][1:])
+    add("case-study", "--case-study with a seed test", _with(CHEAP["case-study"], "--seed", "rq2-seed.yaml"))
+    # old spellings of the vocabulary (docs/cli.md): each refused, naming the new one
+    for name, argv in [("generate SEED.yaml", ["generate", "rq2-seed.yaml"] + CHEAP["generate"][3:]),
+                       ("compete --runs-per-test", CHEAP["compete"] + ["--runs-per-test", "2"]),
+                       ("compete BUDGET 0", CHEAP["compete"][:3] + ["0", "--out", "out"]),
+                       ("train --out p.zip", _with(CHEAP["train"], "--policy", "p.zip")[:-2] + ["--out", "p.zip"]),
+                       ("calibrate --out u.yaml", CHEAP["calibrate"][:-2] + ["--out", "u.yaml"]),
+                       ("inspect --out case0.png", _with(CHEAP["inspect"], "--out", "case0.png")),
+                       ("simulate --seed", _with(CHEAP["simulate"], "--seed", "1"))]:
+        add("old spelling", name, argv)
     # stores that are not evaluation stores
     for what, body in [("random bytes", bytes(rng.integers(0, 256, 4096, dtype=np.uint8))),
                        ("text", b"not sqlite " * 100), ("sqlite header only", b"SQLite format 3\x00" + bytes(84))]:
@@ -445,7 +456,7 @@ def _what_a_test_reads(add) -> None:
             lambda folder, v=value: [_write("t.yaml", _test_yaml(params_file=v))(folder),
                                      (folder / "link.csv").symlink_to("/etc/passwd")])
     huge = "MPC_XY_CRUISE, " + "1" * 140_000 + "\n"
-    for command, argv in [("simulate", simulate), ("generate", ["generate", "t.yaml"] + CHEAP["generate"][2:]),
+    for command, argv in [("simulate", simulate), ("generate", _with(CHEAP["generate"], "--seed", "t.yaml")),
                           ("evaluate", ["evaluate", "t.yaml", "--any-layout", "--runs", "1", "--workers", "1",
                                         "--out", "out"]),
                           ("replicate --seed", _with(CHEAP["replicate"], "--seed", "t.yaml"))]:
@@ -480,7 +491,7 @@ def _what_a_test_reads(add) -> None:
         ["surrogate", "train", "a.sqlite", "b.sqlite", "--problem", "generate", "--kind", "knn", "--holdout", "1",
          "--out", "model"],
         lambda folder: [shutil.copy(STORE, folder / "a.sqlite"), (folder / "b.sqlite").symlink_to("a.sqlite")])
-    add("reads", "train --out p.zip (holds a policy)", CHEAP["train"], _write("policy.zip", b"PK policy"))
+    add("reads", "train --policy p.zip (holds a policy)", CHEAP["train"], _write("policy.zip", b"PK policy"))
 
 
 def _pickled_policy(folder: Path) -> None:

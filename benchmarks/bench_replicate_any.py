@@ -4,7 +4,7 @@ For each flight, in one run:
 - ``baseline``: the paper's set-up (``--uav px4-vision-case0 --seed paper``: the case0 PX4 Vision, whatever flew
   the log);
 - ``default``: ``surrealist replicate LOG`` (the log's own vehicle, on the ground as long as the log);
-- ``calibrated``: ``surrealist calibrate LOG --out uav.yaml`` then ``replicate LOG --uav uav.yaml``;
+- ``calibrated``: ``surrealist calibrate LOG --profile uav.yaml`` then ``replicate LOG --uav uav.yaml``;
 - ``calibrated+search``: the same with ``--search-uav``.
 
 It prints, per flight and configuration: seed and best DTW, the best's reduction against its own seed and against
@@ -91,7 +91,7 @@ def main() -> None:
         log = M0 if flight == "m0" else held_out_log(flight, args.out)
         uav = args.out / f"{flight}-uav.yaml"
         if any(c.startswith("calibrated") for c in args.configs):
-            seconds = surrealist("calibrate", str(log), "--out", str(uav), "--workers", str(args.workers))
+            seconds = surrealist("calibrate", str(log), "--profile", str(uav), "--workers", str(args.workers))
             print(f"{flight:16s} calibrate: {seconds:.1f} s")
         base_seed = None
         for config in args.configs:

@@ -135,7 +135,7 @@ def main() -> None:
                         help="common random numbers: run i of every test flies with the same noise")
     parser.add_argument("--uav", default=None, help="fly this UAV profile: a preset (px4-vision-sitl: the paper's "
                                                     "Gazebo set-up) or a YAML (e.g. surrealist calibrate case0.ulg "
-                                                    "--seed rq1-seed1.yaml --out case0-uav.yaml)")
+                                                    "--seed rq1-seed1.yaml --profile case0-uav.yaml)")
     parser.add_argument("--search-uav", action="store_true", help="RQ1: search the UAV's settings too")
     args = parser.parse_args()
     warnings.simplefilter("ignore", UserWarning)

@@ -3,7 +3,7 @@
     python examples/calibrate_and_replicate.py ../shared/data/surrealist/experiments/m0.ulg --budget 100 --runs 5
     python examples/calibrate_and_replicate.py LOG --budget 3 --runs 1 --inline      # a quick look (CI)
 
-The same as ``surrealist calibrate LOG --out uav.yaml`` then ``surrealist replicate LOG --uav uav.yaml
+The same as ``surrealist calibrate LOG --profile uav.yaml`` then ``surrealist replicate LOG --uav uav.yaml
 --search-uav``, through the Python API (docs/calibration.md).
 """
 import argparse

@@ -16,11 +16,11 @@ from search import PPOAgent, train_policy
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--steps", type=int, default=3000, help="training steps (evaluations)")
 parser.add_argument("--budget", type=int, default=20, help="evaluations of the final search on the real log")
-parser.add_argument("--out", default="results/ppo-example.zip")
+parser.add_argument("--policy", default="results/ppo-example.zip", help="the policy file to write")
 args = parser.parse_args()
 
 small = {"n_steps": 8, "batch_size": 8} if args.steps < 64 else {}
-path = train_policy(args.steps, args.out, problem="replicate", budget=15, runs=1, seed=0, **small)
+path = train_policy(args.steps, args.policy, problem="replicate", budget=15, runs=1, seed=0, **small)
 print(f"policy saved to {path}")
 env = gym.make("Surrealist-Replicate-v0", budget=args.budget, runs=1, executor="inline")
 result = PPOAgent(path, seed=0).run(env)

@@ -1,11 +1,12 @@
 """Compare agents on one problem: every agent, every repetition, the same env seeds; Table 2 metrics and statistics.
 
-Repetition ``r`` of every agent runs on the env built with ``random_seed=r`` (the simulation noise) and the agent
-seeded with ``r``, so agents differ only in what they propose. Each search stores its evaluations in its own SQLite
-file under ``OUT/searches/``; a finished search is cached as JSON beside it, so calling :func:`compare` again on the
-same folder does no simulation for it, and an interrupted one replays its stored evaluations (the env answers them
-without simulating) and goes on. Writes ``compare.md``, ``compare.csv`` (per agent), ``pairwise.csv``,
-``searches.csv`` (per search) and ``convergence.png`` (best fitness against simulations, median and quartiles).
+Repetition ``r`` of every agent runs on the env built with ``random_seed=S + r`` (the simulation noise; ``S`` the base
+seed, 0 by default) and the agent seeded with ``S + r``, so agents differ only in what they propose. Each search
+stores its evaluations in its own SQLite file under ``OUT/searches/``; a finished search is cached as JSON beside it,
+so calling :func:`compare` again on the same folder does no simulation for it, and an interrupted one replays its
+stored evaluations (the env answers them without simulating) and goes on. Writes ``compare.md``, ``compare.csv``
+(per agent), ``pairwise.csv``, ``searches.csv`` (per search) and ``convergence.png`` (best fitness against
+simulations, median and quartiles).
 
 Example:
     >>> compare("Surrealist-Generate-v0", ["greedy", "random"], repetitions=3, budget=10, runs=1,
@@ -96,7 +97,8 @@ def _slug(name: str) -> str:
 
 def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: int = 100, runs: int | None = None,
             out="results/compare", env_kwargs: dict | None = None, executor=None, workers: int | None = None,
-            parallel: int = 1, progress: Callable[[dict], None] | None = None) -> CompareResult:
+            parallel: int = 1, progress: Callable[[dict], None] | None = None, random_seed: int = 0
+            ) -> CompareResult:
     """Run every agent ``repetitions`` times on the same problems, then write the tables and the plot.
 
     Args:
@@ -112,6 +114,7 @@ def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: i
         workers: local worker processes (process executor).
         parallel: searches run at the same time (threads sharing the executor; useful when runs < workers).
         progress: called with ``{"agent", "repetition", "evaluations", "budget", "done"}`` after every step.
+        random_seed: base seed: repetition r uses env seed ``random_seed + r`` and agent seed ``random_seed + r``.
     """
     from surrealist_gym.executors import InlineExecutor, make_executor
 
@@ -123,6 +126,8 @@ def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: i
     out = Path(out)
     (out / "searches").mkdir(parents=True, exist_ok=True)
     settings = {"env_id": env_id, "budget": budget, "runs": runs, "env_kwargs": env_kwargs or {}}
+    if random_seed:  # recorded when not 0, so a folder written before the option existed still resumes
+        settings["random_seed"] = int(random_seed)
     _check_settings(out / SETTINGS_FILE, settings)
     real = make_executor(executor, workers)
     shared = _Shared(real)
@@ -130,7 +135,8 @@ def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: i
     tasks = [(name, rep) for name in agents for rep in range(repetitions)]
 
     def one(task):
-        return _one_search(env_id, task[0], task[1], budget, runs, env_kwargs or {}, shared, out, progress, lock)
+        return _one_search(env_id, task[0], task[1], budget, runs, env_kwargs or {}, shared, out, progress, lock,
+                           random_seed)
 
     try:
         if parallel > 1 and not isinstance(real, InlineExecutor):
@@ -155,12 +161,15 @@ def _check_settings(path: Path, settings: dict) -> None:
         path.write_text(json.dumps(settings, indent=2) + "\n")
 
 
-def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, progress, lock) -> SearchRecord:
+def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, progress, lock,
+                random_seed: int = 0) -> SearchRecord:
     import gymnasium as gym
+
+    seed = random_seed + rep
 
     def make_env(store):
         # the bare env (flyable=False): agents compared on the paper's semantics, an invalid test refused
-        kwargs = dict(env_kwargs, budget=budget, random_seed=rep, store=str(store), executor=executor, flyable=False)
+        kwargs = dict(env_kwargs, budget=budget, random_seed=seed, store=str(store), executor=executor, flyable=False)
         return gym.make(env_id, **(kwargs if runs is None else dict(kwargs, runs=runs)))
 
     def report(evaluations, done: bool) -> None:
@@ -170,7 +179,8 @@ def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, prog
                           "done": done})
 
     finished = run_repetition(out / "searches" / f"{_slug(name)}-rep{rep}", make_env,
-                              lambda: make_agent(name, seed=rep), rep, lambda info: report(info["evaluations"], False))
+                              lambda: make_agent(name, seed=seed), seed,
+                              lambda info: report(info["evaluations"], False))
     report(budget, True)
     return SearchRecord(name, rep, finished.metrics, finished.new_simulations)
 
@@ -234,11 +244,16 @@ def _fmt(value, spec: str) -> str:
     return "n/a" if value is None or not math.isfinite(value) else format(value, spec)
 
 
+def _base(settings) -> str:
+    """The base seed as the report writes it before ``r``: nothing for 0."""
+    return f"{settings['random_seed']} + " if settings.get("random_seed") else ""
+
+
 def _markdown(settings, summary, pairwise, present) -> str:
     lines = [f"# Comparison on {settings['env_id']}", "",
              f"Budget {settings['budget']} evaluations, runs per evaluation: {settings['runs'] or 'env default'}, "
              f"env options: {settings['env_kwargs'] or 'defaults'}. Mean ± standard deviation over the "
-             f"repetitions (repetition r: env seed r, agent seed r).", "",
+             f"repetitions (repetition r: env seed {_base(settings)}r, agent seed {_base(settings)}r).", "",
              "| agent | searches | " + " | ".join(t for _, t, _ in present) + " |",
              "|---|---|" + "---|" * len(present)]
     for row in summary:

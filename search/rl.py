@@ -225,7 +225,8 @@ class TrainingRecord:
 def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, algorithm: Algorithm | str = "ppo",
                  budget: int = 15, runs: int = 1, spread: float = 0.3, seed: int = 0, seed_test=None,
                  sim_config=None, progress: Callable[[int], None] | None = None, case_study=None,
-                 obstacles: int = 3, envs: int = 1, init=None, **hyper) -> Path:
+                 obstacles: int = 3, envs: int = 1, init=None, executor="inline", workers: int | None = None,
+                 **hyper) -> Path:
     """Train a policy for ``steps`` env steps and save it (SB3 ``save``), with ``train.json`` beside it.
 
     Args:
@@ -241,6 +242,9 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
         envs: envs stepped together; more than 1 runs them in SB3's ``SubprocVecEnv`` (one process each).
         init: a policy file of :func:`train_policy` whose weights the new policy starts from (its optimiser starts
             afresh): training in parts, each saved, resumes after the last part saved.
+        executor, workers: where the runs of one env fly (:func:`~surrealist_gym.executors.make_executor`: "inline",
+            the default, "process" with ``workers`` local processes, or a Dask scheduler's address), one executor for
+            the whole training; with ``envs`` above 1 each env's process flies its runs inline.
         **hyper: keyword arguments of the SB3 algorithm, over :func:`algorithm_settings`' defaults.
 
     Returns:
@@ -259,13 +263,23 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     from stable_baselines3.common.callbacks import BaseCallback
 
     config = ProblemConfig(problem, budget, runs, spread, seed_test, case_study, obstacles)
+    pool = None
     if envs > 1:
         from stable_baselines3.common.vec_env import SubprocVecEnv
 
+        if executor not in (None, "inline"):
+            raise ValueError(f"executor={executor!r}: with envs={envs} each env's process flies its runs inline")
         env = SubprocVecEnv([functools.partial(training_env, config, sim_config, seed + i, None) for i in range(envs)])
         env.seed(seed)
     else:
-        env = training_env(config, sim_config, seed)
+        if executor not in (None, "inline"):  # one pool or client for every problem drawn (each env closes its own)
+            from surrealist_gym.executors import make_executor
+
+            from .compare import _Shared
+
+            pool = make_executor(executor, workers)
+            executor = _Shared(pool)
+        env = training_env(config, sim_config, seed, executor or "inline")
         env.reset(seed=seed)
     hyper = algorithm_settings(algorithm, steps, envs, config.problem, **hyper)
     model = cls("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **hyper)
@@ -298,6 +312,8 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     finally:
         with contextlib.suppress(*(() if not interrupted else (EOFError, OSError))):  # workers Ctrl-C ended
             env.close()
+        if pool is not None:
+            pool.close()
     path = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
     settings = {"problem": config.problem.value, "algorithm": Algorithm(algorithm).value, "steps": int(steps),
                 "budget": budget, "runs": runs, "seed": seed, "envs": envs,

@@ -160,12 +160,22 @@ class InlineExecutor(_Executor):
         return _Done(task, test, list(indices), seed, config)
 
 
+#: Local worker processes when none are asked for: all cores, but no more than this (each worker holds a simulator and
+#: its compiled loop; ``--workers`` asks for more).
+DEFAULT_MAX_WORKERS = 8
+
+
+def default_workers() -> int:
+    """The local worker processes used when none are asked for: all cores, at most :data:`DEFAULT_MAX_WORKERS`."""
+    return max(1, min(os.cpu_count() or 1, DEFAULT_MAX_WORKERS))
+
+
 class LocalPoolExecutor(_Executor):
-    """A pool of local processes; the runs of one test are split evenly over the workers. A pool broken by a dead
-    worker is replaced when next given work."""
+    """A pool of local processes (default :func:`default_workers`); the runs of one test are split evenly over the
+    workers. A pool broken by a dead worker is replaced when next given work."""
 
     def __init__(self, workers: int | None = None):
-        self.workers = workers or max(1, min(os.cpu_count() or 1, 8))
+        self.workers = workers or default_workers()
         self._pool: ProcessPoolExecutor | None = None
 
     def submit(self, task, test, indices, seed, config):

@@ -108,7 +108,7 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         options = options_type.from_json(saved)
         flags = getattr(args, "_flags", frozenset())  # options typed on the command line, even at their defaults
         for f in dataclasses.fields(options_type):  # what the command line changes: where it runs, nothing else
-            given, flag = getattr(args, f.name, f.default), "--" + f.name.replace("_", "-")
+            given, flag = getattr(args, f.name, f.default), f.metadata.get("flag", "--" + f.name.replace("_", "-"))
             if f.name in ("workers", "dask_scheduler"):
                 if given is not None:  # where it runs now: --workers alone leaves the cluster it ran on before
                     other = {"workers": "dask_scheduler", "dask_scheduler": "workers"}[f.name]

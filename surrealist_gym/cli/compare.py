@@ -11,7 +11,7 @@ CASE_STUDY_ENV = PROBLEM_ENVS["case study"]
 
 def add_arguments(parser) -> None:
     """Arguments of ``surrealist compare``."""
-    from .options import add_dask_argument, out_help
+    from .options import WORKERS_HELP, add_dask_argument, add_random_seed_argument, out_help
 
     parser.add_argument("--env", default=None,
                         help=f"env id: {', '.join(PROBLEM_ENVS.values())} (default {PROBLEM_ENVS['replicate']}; "
@@ -19,12 +19,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("--case-study", default=None, metavar="NAME|YAML",
                         help=f"the UAV Testing Competition case study the searches generate tests for (mission1, "
                              f"mission2, mission3 or its YAML), on {CASE_STUDY_ENV} (default mission1)")
+    parser.add_argument("--obstacles", type=int, default=None, metavar="N",
+                        help=f"boxes per test of the case study, 1 to 3 (default 3; only {CASE_STUDY_ENV}): as the "
+                             f"policies compared were trained (surrealist train --obstacles)")
     parser.add_argument("--agents", default="greedy,random,cmaes",
                         help="comma-separated agents: greedy, greedy-paper, random, cmaes, ppo[-sample]:POLICY.zip, "
                              "sac:POLICY.zip, module:Class or file.py:Class (default greedy,random,cmaes)")
     parser.add_argument("--repetitions", type=int, default=10, help="searches per agent (default 10)")
     parser.add_argument("--budget", type=int, default=100, help="evaluations per search (default 100)")
-    parser.add_argument("--runs", type=int, default=None,
+    parser.add_argument("--runs", type=int, default=None, metavar="N",
                         help="simulations per evaluation (default: the env's: " + ", ".join(
                             f"{PROBLEM_ENVS[p]} {d['runs']}" for p, d in PROBLEM_DEFAULTS.items()) + ")")
     parser.add_argument("--seed", default=None, metavar="TEST.yaml",
@@ -32,8 +35,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--log", default=None,
                         help=f"reference flight log (only {PROBLEM_ENVS['replicate']}; default: the seed test's, "
                              f"else case0)")
-    parser.add_argument("--workers", type=int, default=None,
-                        help="local worker processes (default: all cores; not with --inline or --dask-scheduler)")
+    add_random_seed_argument(parser, "base seed: repetition r of every agent flies with noise seed N + r and seeds "
+                                     "the agent with N + r (default 0)", seed_test=True)
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help=WORKERS_HELP[:-1] + "; not with --inline or --dask-scheduler)")
     parser.add_argument("--parallel", type=int, default=1,
                         help="searches run at the same time on the workers (default 1; not with --inline)")
     add_dask_argument(parser)
@@ -51,7 +56,7 @@ def run(args) -> int:
 
     from .options import check_at_least, check_writable, default_out, refuse_inapplicable
 
-    check_at_least(args, repetitions=1, budget=1, runs=1, workers=1, parallel=1)
+    check_at_least(args, repetitions=1, budget=1, runs=1, workers=1, parallel=1, random_seed=0, obstacles=1)
     if args.env is None:
         args.env = CASE_STUDY_ENV if args.case_study is not None else PROBLEM_ENVS["replicate"]
 
@@ -68,12 +73,15 @@ def run(args) -> int:
     case_study = args.env == CASE_STUDY_ENV
     refuse_inapplicable(args, [
         ("--case-study", case_study, f"applies only to {CASE_STUDY_ENV}, not to {args.env}"),
+        ("--obstacles", case_study, f"applies only to {CASE_STUDY_ENV} (a case study's boxes), not to {args.env}"),
         ("--seed", not case_study, "not with a case study: it brings its own mission (the searches lay out its boxes)"),
         ("--log", args.env == PROBLEM_ENVS["replicate"],
          f"applies only to {PROBLEM_ENVS['replicate']} (a reference flight to replicate), not to {args.env}"),
         ("--dask-scheduler", not args.inline, "not with --inline: give one of them"),
         (("--workers", "--parallel"), not args.inline, "not with --inline: every simulation runs in this process"),
         ("--workers", args.dask_scheduler is None, "not with --dask-scheduler: the cluster's workers fly the runs")])
+    if args.obstacles is not None and args.obstacles > 3:
+        raise SurrealistError(f"--obstacles: the competition allows 1 to 3 boxes, got {args.obstacles}")
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     if not agents:
         raise SurrealistError(f"--agents {args.agents!r}: expected comma-separated agent names such as "
@@ -92,6 +100,8 @@ def run(args) -> int:
         from ..sim.uav import DEFAULT_UAV
 
         env_kwargs["uav"] = DEFAULT_UAV
+        if args.obstacles is not None:
+            env_kwargs["obstacles"] = args.obstacles
     if args.seed:
         env_kwargs["seed_test"] = str(Path(args.seed).resolve())
     if args.log:
@@ -123,7 +133,7 @@ def run(args) -> int:
     try:
         result = compare(args.env, agents, repetitions=args.repetitions, budget=args.budget, runs=args.runs,
                          out=out, env_kwargs=env_kwargs, executor=executor, workers=args.workers,
-                         parallel=args.parallel, progress=progress)
+                         parallel=args.parallel, progress=progress, random_seed=args.random_seed)
     except KeyboardInterrupt:
         bar.close()
         print(f"interrupted: finished searches and every evaluation are stored; resume with --out {out}",

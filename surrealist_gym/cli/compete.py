@@ -29,13 +29,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("budget", metavar="BUDGET", type=int, help="simulations the tool may fly (given to its cli.py)")
     from ..competition.compete.process import ToolLimits
     from ..competition.compete.toolenv import TOOL_ENV_MODES
-    from .options import add_out_argument, add_random_seed_argument
+    from .options import (
+        WORKERS_ONE_HELP,
+        add_dask_argument,
+        add_out_argument,
+        add_random_seed_argument,
+        add_workers_argument,
+        refuse_argument,
+    )
 
     add_out_argument(parser, "compete", "output folder, must not exist")
-    parser.add_argument("--runs-per-test", type=int, default=1,
+    parser.add_argument("--runs", type=int, default=1, metavar="N",
                         help="runs an agent flies per test (default 1; a test's own agent.count wins)")
-    parser.add_argument("--workers", type=int, default=1,
-                        help="processes that fly the runs of one test (default 1: in this process)")
+    refuse_argument(parser, "--runs-per-test", "use --runs (runs an agent flies per test)")
+    add_workers_argument(parser, WORKERS_ONE_HELP, default=1)
+    add_dask_argument(parser)
     parser.add_argument("--aerialist", metavar="DIR", default=None,
                         help="Aerialist's folder (default: the folders in $SURREALIST_AERIALIST holding the API the "
                              "tool imports, then the installed aerialist)")
@@ -69,14 +77,18 @@ def run(args: argparse.Namespace) -> int:
     from ..competition.compete.toolenv import CACHE_ENV
     from ..errors import SurrealistError
     from ._search import _lock, _unlock
-    from .options import check_at_least, check_writable, default_out
+    from .options import check_at_least, check_writable, default_out, refuse_workers_with_dask
 
-    check_at_least(args, budget=1, runs_per_test=1, workers=1, random_seed=0)
+    if args.budget < 1:  # the positional BUDGET, named as the usage names it
+        raise SurrealistError(f"BUDGET: expected a whole number >= 1, got {args.budget}")
+    check_at_least(args, runs=1, workers=1, random_seed=0)
+    refuse_workers_with_dask(args)
     for flag, value, top in (("--tool-timeout", args.tool_timeout, 10 ** 7), ("--tool-memory", args.tool_memory, 4096)):
         if not (math.isfinite(value) and 0 < value <= top):
             raise SurrealistError(f"{flag}: expected a number above 0 and at most {top}, got {value:g}")
     plan = prepare(args.tool, args.case_study, args.budget, args.out or default_out("compete"),
-                   runs_per_test=args.runs_per_test, workers=args.workers, aerialist=args.aerialist,
+                   runs_per_test=args.runs, workers=args.workers, aerialist=args.aerialist,
+                   executor=args.dask_scheduler,
                    seed=args.random_seed, uav=args.uav, tool_env=args.tool_env,
                    tool_env_cache=args.tool_env_cache,
                    limits=ToolLimits(timeout_s=args.tool_timeout, memory_gb=args.tool_memory))

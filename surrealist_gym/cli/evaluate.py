@@ -93,10 +93,16 @@ class EvaluateOptions:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist evaluate``."""
-    from .options import add_buffer_argument, add_dask_argument, add_out_argument
+    from .options import (
+        add_buffer_argument,
+        add_dask_argument,
+        add_out_argument,
+        add_random_seed_argument,
+        add_workers_argument,
+    )
 
     parser.add_argument("tests", metavar="TESTS", nargs="*", help="Aerialist test YAMLs, or folders of them")
-    parser.add_argument("--runs", type=int, default=None,
+    parser.add_argument("--runs", type=int, default=None, metavar="N",
                         help=f"runs per test (default {DEFAULT_RUNS}; with --competition the edition's: "
                              + ", ".join(f"{e.name} {e.runs}" for e in EDITIONS.values()) + ")")
     parser.add_argument("--competition", metavar="EDITION", default=None,
@@ -105,10 +111,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "similarity penalty, 2025's duplicates and diversity, and the folders ranked per case "
                              "study (2026 as 2025, each test with its own wind; surrealist leaderboard scores with and "
                              "without it)")
-    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    add_workers_argument(parser)
     add_dask_argument(parser)
-    parser.add_argument("--random-seed", type=int, default=0, metavar="S",
-                        help="base seed: run i of a test draws its noise from the test, S and i (default 0)")
+    add_random_seed_argument(parser, "base seed: run i of a test draws its noise from the test, N and i (default 0)")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
                         help="UAV profile for every test: px4-v1.12-sitl-iris, px4-vision-case0 or a profile YAML "
                              "(default: each test's own, px4-v1.12-sitl-iris for competition tests)")

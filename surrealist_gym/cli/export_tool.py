@@ -25,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sim-budget-factor", type=int, default=default.sim_budget_factor,
                         help="the simulator's evaluations per real simulation: the tool's search flies this times "
                              "BUDGET (default %(default)s)")
-    parser.add_argument("--obstacles", type=int, default=default.obstacles,
+    parser.add_argument("--obstacles", type=int, default=default.obstacles, metavar="N",
                         help="boxes per test, 1-3 (default %(default)s)")
     parser.add_argument("--confirm", type=int, default=default.confirm,
                         help="re-runs of each failure in the simulator before ranking (default %(default)s)")
@@ -34,7 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(default %(default)s, Aerialist master's, as the competition measures)")
     add_random_seed_argument(parser, f"seed of the tool's search and of the simulator's noise (default "
                                      f"{default.seed})", default=default.seed)
-    parser.add_argument("--workers", type=int, default=default.workers,
+    parser.add_argument("--workers", type=int, default=default.workers, metavar="N",
                         help="simulator processes the tool uses (default %(default)s: the competition gives a tool "
                              "1.5 vCPU)")
     parser.add_argument("--agent", default=default.agent, choices=AGENTS,

@@ -20,7 +20,13 @@ from ..errors import SurrealistError
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist fidelity``."""
-    from .options import add_buffer_argument, add_dask_argument, add_out_argument, add_random_seed_argument
+    from .options import (
+        add_buffer_argument,
+        add_dask_argument,
+        add_out_argument,
+        add_random_seed_argument,
+        add_workers_argument,
+    )
 
     parser.add_argument("labels_set", metavar="LABELS", help="tests CSV, or a folder of Aerialist YAMLs")
     parser.add_argument("--labels", metavar="FILE", help="labels of a YAML folder (default <folder>/labels.csv)")
@@ -30,9 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
                         help="UAV profile: a preset (px4-v1.12-sitl-iris, the default; px4-vision-case0) or a "
                              "profile YAML")
-    parser.add_argument("--runs", type=int, default=1, help="runs per test (default 1)")
+    parser.add_argument("--runs", type=int, default=1, metavar="N", help="runs per test (default 1)")
     add_random_seed_argument(parser, "base seed of the simulation noise (default 0)")
-    parser.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    add_workers_argument(parser)
     add_dask_argument(parser)
     parser.add_argument("--limit", type=int, default=None, metavar="N", help="fly at most N tests")
     parser.add_argument("--every", type=int, default=1, metavar="K", help="fly every K-th test (default 1)")

@@ -1,4 +1,4 @@
-"""`surrealist generate TEST.yaml`: find nearby tests that make the UAV unsafe or crash (paper RQ2).
+"""`surrealist generate --seed TEST.yaml`: find nearby tests that make the UAV unsafe or crash (paper RQ2).
 
 `surrealist generate --case-study mission2`: a suite of distinct failures for a UAV Testing Competition case study,
 exported for Aerialist and re-flown to give each its failure probability.
@@ -6,12 +6,13 @@ exported for Aerialist and re-flown to give each its failure probability.
 from __future__ import annotations
 
 from ._search import run_search, search_folder
-from .options import CASE_STUDY_DEFAULTS, GenerateOptions, refuse_inapplicable
+from .options import CASE_STUDY_DEFAULTS, GenerateOptions, refuse_inapplicable, refuse_leftover, refuse_positional
 
 
 def add_arguments(parser) -> None:
-    """Arguments of ``surrealist generate``."""
+    """Arguments of ``surrealist generate``; a seed test given as a positional argument, as before, is refused."""
     GenerateOptions.add_arguments(parser)
+    refuse_positional(parser, "seed", lambda value: f"the seed test is given as --seed {value}")
 
 
 def run(args) -> int:
@@ -22,6 +23,7 @@ def run(args) -> int:
     from ..errors import InvalidTestCase
     from ..mutators import AUTHORS_ORDER, default_mutators
 
+    refuse_leftover(args, "seed")
     if not args.resume:  # an option of the other problem, before any work
         refuse_inapplicable(args, GenerateOptions.inapplicable(args))
     if args.case_study and not args.resume:

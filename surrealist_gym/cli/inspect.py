@@ -3,6 +3,7 @@
 Example::
 
     surrealist inspect case0.ulg                 # text summary, plot written to ./case0.png
+    surrealist inspect case0.ulg --out plots     # the plot in plots/case0.png
     surrealist inspect case0.ulg --json --no-plot
 """
 from __future__ import annotations
@@ -20,12 +21,23 @@ KEY_PARAMS = ("MPC_XY_CRUISE", "MPC_XY_VEL_MAX", "MPC_TKO_SPEED", "MPC_LAND_SPEE
               "WPNAV_SPEED", "WPNAV_ACCEL", "WPNAV_RADIUS", "WP_SPEED", "WP_RADIUS", "FRAME_CLASS")
 
 
+class _OutFolder(argparse.Action):
+    """``--out DIR``; a plot file's name, as ``--out`` took before, is refused in one line with its folder."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if Path(values).suffix.lower() in (".png", ".jpg", ".svg", ".pdf") and not Path(values).is_dir():
+            folder = Path(values).parent
+            parser.error(f"--out is a folder; inspect writes <log name>.png in it: --out {folder}")
+        setattr(namespace, self.dest, values)
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist inspect``."""
     parser.add_argument("log", metavar="LOG", nargs="?", default=None,
                         help="flight log: PX4 .ulg, MAVLink .tlog or ArduPilot DataFlash .bin "
                              "(default: the bundled real flight case0.ulg)")
-    parser.add_argument("--out", metavar="PNG", help="plot file (default: ./<log name>.png in the current directory)")
+    parser.add_argument("--out", metavar="DIR", action=_OutFolder, default=None,
+                        help="folder of the plot, <log name>.png (default: the current folder)")
     parser.add_argument("--no-plot", action="store_true", help="do not write the plot")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
@@ -124,13 +136,15 @@ def run(args: argparse.Namespace) -> int:
         args.log = data_path("case0.ulg")
     out = None
     if not args.no_plot:  # the plot's path is checked before the log is read
-        out = check_writable(args.out or Path.cwd() / (Path(args.log).stem + ".png"), "--out", "file", (".png",))
+        folder = check_writable(args.out or Path.cwd(), "--out", "folder")
+        out = check_writable(folder / (Path(args.log).stem + ".png"), "--out", "file", (".png",))
     flight = read_flight(args.log)
     info = summary(flight)
     if out is not None:
         from ..logs.plots import plot_flight
 
         try:
+            out.parent.mkdir(parents=True, exist_ok=True)
             plot_flight(flight, out)
         except OSError as err:
             raise SurrealistError(f"{out}: cannot write the plot ({err.strerror or err})") from err

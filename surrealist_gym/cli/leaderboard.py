@@ -41,10 +41,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--budget", type=int, default=None,
                         help="simulations per tool and case study (default: the edition's)")
     parser.add_argument("--repetitions", type=int, default=3, help="runs of each tool on each case study (default 3)")
-    parser.add_argument("--runs", type=int, default=None,
+    parser.add_argument("--runs", type=int, default=None, metavar="N",
                         help="runs per evaluated test in the scoring (default: the edition's)")
     add_random_seed_argument(parser, "base seed: repetition k runs the tools and scores with seed S + k (default 0)")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
                         help="cells run at once, and processes flying the scoring's runs (default: all cores, at "
                              "most 8)")
     add_dask_argument(parser)
@@ -57,11 +57,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Check everything, run the missing cells, score, write the board; returns the exit code."""
-    import os
-
     from ..competition import leaderboard as lb
     from ..competition.reports.leaderboard import write_report
     from ..errors import SurrealistError
+    from ..executors import default_workers
     from ._search import _lock, _unlock
     from .options import check_at_least, check_writable, default_out
 
@@ -72,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     check_writable(out, "--out")
     board = lb.plan(args.tools, args.case_studies, args.edition, budget=args.budget, repetitions=args.repetitions,
                     runs=args.runs, seed=args.random_seed, uav=args.uav, out=out)
-    workers = args.workers or min(8, os.cpu_count() or 1)
+    workers = args.workers or default_workers()
     executor = None
     if args.dask_scheduler:
         from ..executors import DaskExecutor

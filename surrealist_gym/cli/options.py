@@ -73,22 +73,62 @@ def add_out_argument(parser: argparse.ArgumentParser, command: str, what: str = 
 
 
 class _Refused(argparse.Action):
-    """An option kept only to be refused in one line (argparse's error: exit code 2) with what to type instead."""
+    """An option kept only to be refused in one line (argparse's error: exit code 2, before any work) with what to
+    type instead. ``instead``: the words, or a function of the value typed (None when none was) that gives them."""
 
-    def __init__(self, option_strings, dest, instead: str = "", **kwargs):
+    def __init__(self, option_strings, dest, instead="", **kwargs):
         self.instead = instead
         super().__init__(option_strings, dest, nargs="?", help=argparse.SUPPRESS, **kwargs)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        parser.error(f"{option_string}: {self.instead}")
+        said = self.instead(values) if callable(self.instead) else self.instead
+        parser.error(said if said.startswith(option_string + " ") else f"{option_string}: {said}")
 
 
-def add_random_seed_argument(parser: argparse.ArgumentParser, help: str, default: int = 0) -> None:
+class _RefusedPositional(argparse.Action):
+    """A positional argument a command no longer takes (``generate SEED.yaml``), refused in one line with the option
+    that took its place: ``instead(value)`` gives the words. A value that is not a test YAML (the value of a mistyped
+    option, say) is kept for :func:`refuse_leftover` to refuse once argparse has said what else is wrong."""
+
+    def __init__(self, option_strings, dest, instead=None, **kwargs):
+        self.instead = instead
+        super().__init__(option_strings, dest, nargs="?", default=None, help=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if values is not None and str(values).lower().endswith((".yaml", ".yml")):
+            parser.error(self.instead(values))
+        setattr(namespace, self.dest, values)
+
+
+def refuse_argument(parser: argparse.ArgumentParser, flag: str, instead) -> None:
+    """Keep ``flag`` (an old spelling) only to refuse it in one line before any work: ``instead`` says what to type
+    (words, or a function of the value typed)."""
+    parser.add_argument(flag, dest="_refused_" + flag.lstrip("-").replace("-", "_"), action=_Refused, default=None,
+                        instead=instead)
+
+
+def refuse_positional(parser: argparse.ArgumentParser, name: str, instead) -> None:
+    """Refuse a positional argument the command no longer takes; ``instead(value)`` says what to type. The command's
+    run() calls :func:`refuse_leftover` first."""
+    parser.add_argument("_refused_" + name, action=_RefusedPositional, instead=instead)
+
+
+def refuse_leftover(args: argparse.Namespace, name: str) -> None:
+    """One line for a positional argument :func:`refuse_positional` kept (not a test YAML), before any work."""
+    value = getattr(args, "_refused_" + name, None)
+    if value is not None:
+        raise SurrealistError(f"{value}: unexpected argument; the command takes options only (a seed test is --seed "
+                              f"TEST.yaml)")
+
+
+def add_random_seed_argument(parser: argparse.ArgumentParser, help: str, default: int = 0,
+                             seed_test: bool = False) -> None:
     """``--random-seed N``, the seed of the simulation noise in every command; ``--seed`` (which names a seed test
-    elsewhere) is refused in one line."""
+    elsewhere) is refused in one line, unless the command takes a seed test (``seed_test``)."""
     parser.add_argument("--random-seed", type=int, default=default, metavar="N", help=help)
-    parser.add_argument("--seed", dest="_refused_seed", action=_Refused, default=None,
-                        instead="use --random-seed (the noise seed); --seed names a seed test in other commands")
+    if not seed_test:
+        refuse_argument(parser, "--seed", "use --random-seed (the noise seed); --seed names a seed test in "
+                                          "other commands")
 
 
 def refuse_inapplicable(args: argparse.Namespace, rules) -> None:
@@ -108,9 +148,17 @@ def refuse_inapplicable(args: argparse.Namespace, rules) -> None:
 BUFFER_HELP = ("half width added to the flight's polyline in the competition distance [m]: 0.125 is Aerialist's since "
                "Oct 2024, whose figures read that much lower; default 0, Aerialist's before then (and the labelled "
                "PX4 flights')")
-#: ``--dask-scheduler`` of every command that flies on workers: the searches (a SearchOptions field), compare,
-#: evaluate and fidelity (:func:`add_dask_argument`).
+#: ``--dask-scheduler`` of every command that flies (:data:`FLYING_COMMANDS`): the searches' (a SearchOptions field)
+#: and the others' (:func:`add_dask_argument`).
 DASK_HELP = "run the simulations on a Dask cluster (tcp://host:port)"
+#: ``--workers`` with its default, local processes: all cores, at most ``executors.DEFAULT_MAX_WORKERS``
+WORKERS_HELP = "local worker processes (default: all cores, at most 8)"
+#: ``--workers`` of a command that flies in its own process unless told otherwise (simulate, train, compete)
+WORKERS_ONE_HELP = "local worker processes flying the runs of a test (default 1: in this process)"
+#: The commands that fly simulations: each takes ``--workers N`` and ``--dask-scheduler ADDRESS``, and
+#: ``--random-seed N`` for the noise (docs/cli.md; tests/surrealist_gym/cli/test_vocabulary.py).
+FLYING_COMMANDS = ("simulate", "calibrate", "replicate", "generate", "compare", "train", "fidelity", "evaluate",
+                   "compete", "leaderboard")
 
 
 _UAV_HELP = ("UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), px4-vision-case0, "
@@ -125,8 +173,9 @@ class SearchOptions:
     command: ClassVar[str] = ""
 
     budget: int = _opt(PROBLEM_DEFAULTS["replicate"]["budget"], "evaluations allowed (default {default})", type=int)
-    runs: int = _opt(PROBLEM_DEFAULTS["replicate"]["runs"], "simulations per evaluation (default {default})", type=int)
-    workers: int | None = _opt(None, "local worker processes (default: all cores)", type=int)
+    runs: int = _opt(PROBLEM_DEFAULTS["replicate"]["runs"], "simulations per evaluation (default {default})", type=int,
+                     metavar="N")
+    workers: int | None = _opt(None, WORKERS_HELP, type=int, metavar="N")
     dask_scheduler: str | None = _opt(None, DASK_HELP, metavar="ADDRESS")
     preset: str = _opt("authors", _PRESET_HELP, choices=["paper", "authors"])
     agent: str = _opt(PROBLEM_DEFAULTS["replicate"]["agent"], "search agent: greedy, greedy-paper, random, cmaes, "
@@ -273,14 +322,15 @@ class GenerateOptions(SearchOptions):
     budget: int = _opt(PROBLEM_DEFAULTS["generate"]["budget"], "evaluations allowed (default {default}; with "
                        f"--case-study {CASE_STUDY_DEFAULTS['budget']})", type=int)
     runs: int = _opt(PROBLEM_DEFAULTS["generate"]["runs"], "simulations per evaluation (default {default}; with "
-                     f"--case-study {CASE_STUDY_DEFAULTS['runs']})", type=int)
+                     f"--case-study {CASE_STUDY_DEFAULTS['runs']})", type=int, metavar="N")
     agent: str = _opt(PROBLEM_DEFAULTS["generate"]["agent"],
                       "search agent: greedy, greedy-paper, random, cmaes, suite, ppo[-sample]:POLICY.zip, module:Class "
                       f"(default {{default}}; with --case-study {CASE_STUDY_DEFAULTS['agent']})")
     uav: str | None = _opt(None, _UAV_HELP + "; default: px4-vision-case0 for a seed test with a reference log, as "
                                              "the paper's, else px4-v1.12-sitl-iris (with --case-study too)",
                            metavar="NAME_OR_YAML")
-    test: str | None = _opt(None, "seed test case (Aerialist YAML); default: the paper's RQ2 seed", positional=True)
+    test: str | None = _opt(None, "seed test case (Aerialist YAML); default: the paper's RQ2 seed", flag="--seed",
+                            metavar="TEST.yaml")
     aggregate: str = _opt("riskiest", "how the runs of a test are scored: the riskiest run (paper) or the mean",
                           choices=["riskiest", "mean"])
     all_mutators: bool = _opt(False, "move, resize and rotate every obstacle of the seed test (default: move the "
@@ -291,7 +341,7 @@ class GenerateOptions(SearchOptions):
                                         "rules; then the defaults are " + " ".join(
                                             f"--{k} {v}" for k, v in CASE_STUDY_DEFAULTS.items()),
                                   metavar="NAME|YAML")
-    obstacles: int = _opt(3, "with --case-study: boxes per test (1-3; default {default})", type=int)
+    obstacles: int = _opt(3, "with --case-study: boxes per test (1-3; default {default})", type=int, metavar="N")
     wind: bool = _opt(False, "search the wind's speed (0-10 m/s) and direction as well as the obstacles (not with "
                              "pre-screening)", action="store_true")
     confirm: int = _opt(5, "with --case-study: re-fly each failure of the suite this many times with fresh noise and "
@@ -334,9 +384,21 @@ def add_buffer_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--buffer", type=float, default=0.0, metavar="M", help=BUFFER_HELP)
 
 
-def add_dask_argument(parser: argparse.ArgumentParser) -> None:
+def add_dask_argument(parser: argparse.ArgumentParser, help: str = DASK_HELP) -> None:
     """``--dask-scheduler ADDRESS`` (:data:`DASK_HELP`; an address that cannot be reached is one line)."""
-    parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS", help=DASK_HELP)
+    parser.add_argument("--dask-scheduler", default=None, metavar="ADDRESS", help=help)
+
+
+def add_workers_argument(parser: argparse.ArgumentParser, help: str = WORKERS_HELP, default: int | None = None
+                         ) -> None:
+    """``--workers N`` (:data:`WORKERS_HELP`, or the command's own default said in ``help``)."""
+    parser.add_argument("--workers", type=int, default=default, metavar="N", help=help)
+
+
+def refuse_workers_with_dask(args: argparse.Namespace) -> None:
+    """``--workers`` typed with ``--dask-scheduler``: one line (the cluster's workers fly the runs)."""
+    if args.dask_scheduler is not None and "--workers" in getattr(args, "_flags", frozenset()):
+        raise SurrealistError("--workers: not with --dask-scheduler (the cluster's workers fly the runs)")
 
 
 def check_at_least(args: argparse.Namespace, **lowest) -> None:
@@ -387,7 +449,9 @@ def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tu
     return path
 
 
-__all__ = ["BUFFER_HELP", "CASE_STUDY_DEFAULTS", "DASK_HELP", "GenerateOptions", "OUT_PATTERN", "PROBLEM_DEFAULTS",
-           "PROBLEM_ENVS", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions", "add_buffer_argument",
-           "add_dask_argument", "add_out_argument", "add_random_seed_argument", "check_at_least",
-           "check_writable", "default_out", "out_help", "race_stages", "refuse_inapplicable"]
+__all__ = ["BUFFER_HELP", "CASE_STUDY_DEFAULTS", "DASK_HELP", "FLYING_COMMANDS", "GenerateOptions", "OUT_PATTERN",
+           "PROBLEM_DEFAULTS", "PROBLEM_ENVS", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions",
+           "WORKERS_HELP", "WORKERS_ONE_HELP", "add_buffer_argument", "add_dask_argument", "add_out_argument",
+           "add_random_seed_argument", "add_workers_argument", "check_at_least", "check_writable", "default_out",
+           "out_help", "race_stages", "refuse_argument", "refuse_inapplicable", "refuse_leftover", "refuse_positional",
+           "refuse_workers_with_dask"]

@@ -21,12 +21,21 @@ from pathlib import Path
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist simulate``."""
-    from .options import _Refused, add_out_argument, add_random_seed_argument
+    from .options import (
+        WORKERS_ONE_HELP,
+        _Refused,
+        add_dask_argument,
+        add_out_argument,
+        add_random_seed_argument,
+        add_workers_argument,
+    )
 
     parser.add_argument("test", metavar="TEST.yaml", help="Aerialist test case")
-    parser.add_argument("--runs", type=int, default=5, help="number of runs (default 5)")
+    parser.add_argument("--runs", type=int, default=5, metavar="N", help="number of runs (default 5)")
     add_random_seed_argument(parser, "base seed of the simulation noise: run i draws its noise from the test, N and i "
                                      "(default 0)")
+    add_workers_argument(parser, WORKERS_ONE_HELP, default=1)
+    add_dask_argument(parser)
     reference = parser.add_mutually_exclusive_group()
     reference.add_argument("--reference", metavar="LOG",
                            help="real flight to compare against (default: the test's assertion log, if any)")
@@ -72,13 +81,31 @@ def _params(items: list[str]) -> dict:
     return out
 
 
+def _fly_on_workers(args: argparse.Namespace, test, config) -> list:
+    """The runs flown on ``--workers`` local processes or the ``--dask-scheduler``'s cluster, in run order; a run
+    whose simulation failed twice is the error it raised, as in this process."""
+    from ..errors import SimulationError
+    from ..executors import make_executor
+
+    executor = make_executor(args.dask_scheduler, args.workers)
+    try:
+        results = executor.run(test, range(args.runs), args.random_seed, config)
+    finally:
+        executor.close()
+    for r in results:
+        if not hasattr(r, "save_ulog"):  # executors.FailedRun
+            raise SimulationError(r.message)
+    return results
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from .. import load_test
     from ..sim import simulate
-    from .options import check_at_least, check_writable, default_out
+    from .options import check_at_least, check_writable, default_out, refuse_workers_with_dask
 
-    check_at_least(args, runs=1, random_seed=0)
+    check_at_least(args, runs=1, random_seed=0, workers=1)
+    refuse_workers_with_dask(args)
     out = check_writable(args.out or default_out("simulate"), "--out", "folder")  # before anything is read or flown
     params = _params(args.param)
     test = load_test(args.test)
@@ -99,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidTestCase(f"{args.test}: {err}") from None
     config = uav.config
     start = time.perf_counter()
-    results = simulate(test, runs=args.runs, seed=args.random_seed, config=config)
+    results = (simulate(test, runs=args.runs, seed=args.random_seed, config=config)
+               if args.workers == 1 and args.dask_scheduler is None else _fly_on_workers(args, test, config))
     wall = time.perf_counter() - start
     out.mkdir(parents=True, exist_ok=True)
     uav.write(out)

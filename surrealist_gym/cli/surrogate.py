@@ -14,7 +14,7 @@ def add_arguments(parser) -> None:
     train = sub.add_parser("train", help="train a model on one or more evaluation stores",
                            description="train a model on one or more evaluation stores (.sqlite)")
     train.add_argument("stores", nargs="+", metavar="STORE", help="evaluation stores of one problem")
-    train.add_argument("--out", required=True, metavar="MODEL", help="model folder to write (weights.pt, meta.json): "
+    train.add_argument("--out", required=True, metavar="DIR", help="model folder to write (weights.pt, meta.json): "
                        "new or empty unless --overwrite")
     train.add_argument("--overwrite", action="store_true", help="replace the model an existing --out holds")
     train.add_argument("--problem", default="replicate", choices=["replicate", "generate"],
@@ -36,7 +36,7 @@ def add_arguments(parser) -> None:
     train.add_argument("--k", type=int, default=None, help="neighbours of the knn baseline (default 7)")
     train.add_argument("--holdout", type=int, default=0, metavar="N",
                        help="first train without the last N stores and report how well it predicts them")
-    train.add_argument("--random-seed", type=int, default=0, help="seed of the training (default 0)")
+    train.add_argument("--random-seed", type=int, default=0, metavar="N", help="seed of the training (default 0)")
     ev = sub.add_parser("eval", help="measure a model on evaluation stores it was not trained on",
                         description="held-out R2, Spearman rank correlation and calibration of a model")
     ev.add_argument("model", metavar="MODEL", help="model folder written by `surrealist surrogate train`")

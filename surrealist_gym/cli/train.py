@@ -9,26 +9,30 @@ import time
 
 def add_arguments(parser) -> None:
     """Arguments of ``surrealist train``."""
-    from .options import OUT_PATTERN
+    from .options import OUT_PATTERN, add_dask_argument, add_workers_argument, refuse_argument
 
     parser.add_argument("--steps", type=int, default=2000, help="env steps (evaluations) to train for (default 2000)")
-    parser.add_argument("--out", metavar="POLICY.zip", default=None,
-                        help=f"where to save the policy (default {OUT_PATTERN.format(command='train')}/policy.zip): "
-                             "a new file unless --overwrite")
-    parser.add_argument("--overwrite", action="store_true", help="replace the policy an existing --out holds")
+    parser.add_argument("--policy", metavar="FILE.zip", default=None,
+                        help=f"the policy file to write, its record FILE.json beside it (default "
+                             f"{OUT_PATTERN.format(command='train')}/policy.zip): a new file unless --overwrite")
+    refuse_argument(parser, "--out", _out_refused)
+    parser.add_argument("--overwrite", action="store_true", help="replace the policy an existing --policy holds")
     parser.add_argument("--problem", default="replicate", choices=["replicate", "generate", "case-study"],
                         help="training problems: hidden layouts of case0 (replicate), RQ2 seeds (generate), or a "
                              "competition case study's layouts within its rules (case-study, with --case-study)")
     parser.add_argument("--case-study", default=None, metavar="NAME|YAML",
                         help="the case study of --problem case-study: mission1-mission3 or an Aerialist YAML")
-    parser.add_argument("--obstacles", type=int, default=3,
+    parser.add_argument("--obstacles", type=int, default=3, metavar="N",
                         help="boxes per test of --problem case-study, 1 to 3 (default 3)")
     parser.add_argument("--envs", type=int, default=1,
                         help="envs stepped together, each in a process of its own (SB3's SubprocVecEnv; its runs fly "
                              "inline there); default 1")
+    add_workers_argument(parser, "local worker processes flying the runs of an evaluation (default 1: in the "
+                                 "training process; not with --envs above 1)", default=1)
+    add_dask_argument(parser, "fly the runs on a Dask cluster (tcp://host:port; not with --envs above 1)")
     parser.add_argument("--algorithm", default="ppo", choices=["ppo", "sac"], help="SB3 algorithm (default ppo)")
     parser.add_argument("--episode-budget", type=int, default=15, help="evaluations per episode (default 15)")
-    parser.add_argument("--runs", type=int, default=1, help="simulations per evaluation (default 1)")
+    parser.add_argument("--runs", type=int, default=1, metavar="N", help="simulations per evaluation (default 1)")
     parser.add_argument("--spread", type=float, default=0.3,
                         help="how far hidden layouts lie from the seed, in action units (default 0.3; replicate and "
                              "generate)")
@@ -44,6 +48,14 @@ def add_arguments(parser) -> None:
                              "interrupted training, which saves the policy so far")
 
 
+def _out_refused(value) -> str:
+    """``--out``, train's name for its policy file before: the file is ``--policy``."""
+    if value and str(value).endswith(".zip"):
+        return f"--out is a folder; the policy file is --policy {value}"
+    return ("--out is a folder; train writes one policy file: --policy " + (f"{value.rstrip('/')}/policy.zip" if value
+                                                                           else "FILE.zip"))
+
+
 def run(args) -> int:
     """Train the policy across generated problems and save it; returns the exit code."""
     import json
@@ -53,7 +65,7 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from ..errors import SurrealistError
-    from .options import check_at_least, check_writable, default_out, refuse_inapplicable
+    from .options import check_at_least, check_writable, default_out, refuse_inapplicable, refuse_workers_with_dask
 
     case_study = args.problem == "case-study"
     refuse_inapplicable(args, [
@@ -64,20 +76,24 @@ def run(args) -> int:
     ])
     if case_study and args.case_study is None:
         raise SurrealistError("--problem case-study: name the case study with --case-study NAME|YAML (e.g. mission2)")
-    check_at_least(args, steps=1, episode_budget=2, runs=1, threads=1, random_seed=0, envs=1, obstacles=1)
+    check_at_least(args, steps=1, episode_budget=2, runs=1, threads=1, random_seed=0, envs=1, obstacles=1, workers=1)
+    refuse_workers_with_dask(args)
+    refuse_inapplicable(args, [(("--workers", "--dask-scheduler"), args.envs == 1,
+                                "not with --envs above 1: each env's process flies its runs inline")])
     if args.obstacles > 3:
         raise SurrealistError(f"--obstacles: the competition allows 1 to 3 boxes, got {args.obstacles}")
     if case_study:  # the case study is read before anything is trained or flown
         from ..competition.rules import case_study_path
         args.case_study = str(case_study_path(args.case_study).resolve())
-    args.out = args.out or str(default_out("train") / "policy.zip")
+    args.policy = args.policy or str(default_out("train") / "policy.zip")
     if not (math.isfinite(args.spread) and 0 < args.spread <= 1):
         raise SurrealistError(f"--spread: expected a number in (0, 1] (action units), got {args.spread:g}")
-    out = Path(args.out)  # stable-baselines3 saves to the path with .zip added unless it ends in .zip
+    out = Path(args.policy)  # stable-baselines3 saves to the path with .zip added unless it ends in .zip
     out = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
-    check_writable(out, "--out", "file")
+    check_writable(out, "--policy", "file")
     if out.exists() and not args.overwrite:
-        raise SurrealistError(f"--out {out}: holds a policy already; --overwrite replaces it, or choose another file")
+        raise SurrealistError(f"--policy {out}: holds a policy already; --overwrite replaces it, or choose another "
+                              f"file")
     if args.init:
         from ..errors import regular_file
         regular_file(args.init, "--init policy file")
@@ -106,12 +122,13 @@ def run(args) -> int:
     try:
         extra = dict(case_study=args.case_study, obstacles=args.obstacles) if case_study else dict(
             spread=args.spread, seed_test=args.seed)
-        path = train_policy(args.steps, args.out, problem=args.problem, algorithm=args.algorithm,
+        executor = args.dask_scheduler or ("process" if args.workers > 1 else "inline")
+        path = train_policy(args.steps, args.policy, problem=args.problem, algorithm=args.algorithm,
                             budget=args.episode_budget, runs=args.runs, seed=args.random_seed, progress=progress,
-                            envs=args.envs, init=args.init, **extra)
+                            envs=args.envs, init=args.init, executor=executor, workers=args.workers, **extra)
     except KeyboardInterrupt:
         bar.close()
-        saved = Path(args.out) if Path(args.out).suffix == ".zip" else Path(args.out + ".zip")
+        saved = out
         record = saved.with_suffix(".json")
         done = json.loads(record.read_text()).get("interrupted_after_steps") if record.is_file() else None
         if done is None:
@@ -119,7 +136,7 @@ def run(args) -> int:
         else:
             print(f"interrupted after {done} of {args.steps} steps: the policy so far is in {saved} (record in "
                   f"{record}); train on with the same options and --init {saved} --steps {args.steps - done} "
-                  f"--out NEW.zip", file=sys.stderr)
+                  f"--policy NEW.zip", file=sys.stderr)
         return 130
     bar.close()
     record = json.loads(path.with_suffix(".json").read_text())["record"]
@@ -130,9 +147,22 @@ def run(args) -> int:
           f"{record['refused']} actions refused, {record['memo']} answered from the memo"
           + (f", {record['soft_failures']} soft failures" if case_study else "")
           + f"; record in {path.with_suffix('.json')}")
-    if case_study:
-        print(f"use it: surrealist compare --case-study {args.case_study} --agents suite,random,"
-              f"{args.algorithm}:{path} ...")
-    else:
-        print(f"use it: surrealist compare --agents greedy,{args.algorithm}:{path} ...")
+    print(f"use it: {compare_command(args, path)}")
     return 0
+
+
+def compare_command(args, policy) -> str:
+    """The ``surrealist compare`` that compares the policy a training saved with the other agents, on the problem it
+    was trained for (its env, its case study and boxes, or its seed test), as a shell runs it."""
+    import shlex
+
+    from .options import PROBLEM_ENVS
+
+    agent = f"{args.algorithm}:{policy}"
+    if args.problem == "case-study":
+        words = ["--case-study", args.case_study, "--obstacles", str(args.obstacles), "--agents",
+                 f"suite,random,{agent}"]
+    else:
+        words = ["--env", PROBLEM_ENVS[args.problem], *(["--seed", args.seed] if args.seed else []),
+                 "--agents", f"greedy,random,{agent}"]
+    return shlex.join(["surrealist", "compare", *map(str, words)])

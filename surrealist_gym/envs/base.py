@@ -55,7 +55,7 @@ class EnvSetup:
             (:func:`~surrealist_gym.sim.uav.decide_uav`), with a mapping ``sim_config`` applied to it, unless
             ``sim_config`` is a full :class:`~surrealist_gym.sim.config.SimConfig`, which is then the UAV as given.
         executor: where the runs fly (:mod:`surrealist_gym.executors`); None: a pool of ``workers`` local
-            processes (all cores when ``workers`` is None too), except in a daemonic process (a worker of
+            processes (all cores, at most 8, when ``workers`` is None too), except in a daemonic process (a worker of
             Gymnasium's async vector env or SB3's ``SubprocVecEnv``), which may not start processes of its own: there
             the runs fly in that process (``"inline"``).
         workers: local processes when no executor is given.

@@ -58,11 +58,11 @@ def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=Non
     :class:`~surrealist_gym.sim.config.SimConfig`), the competition distance's polyline buffered by ``buffer`` [m].
 
     ``executor``: a Dask scheduler's address, a ``distributed.Client`` or an executor (default ``workers`` local
-    processes, all cores; 1: this process). Returns one tuple of run records per test, in the set's
+    processes, all cores and at most 8; 1: this process). Returns one tuple of run records per test, in the set's
     order; ``progress`` is called with (tests done, tests) as tests finish. A run whose simulation raises is retried
     once; if it raises again, it ends in ``error`` with the exception as message.
     """
-    from ..executors import executor_for, fly_many
+    from ..executors import default_workers, executor_for, fly_many
     from ..sim import SimConfig
 
     config = replace(config or SimConfig(), competition_buffer_m=buffer)
@@ -75,7 +75,7 @@ def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=Non
         if progress and held[i] == runs:
             progress(finished, len(lset))
 
-    with executor_for(executor, workers or os.cpu_count() or 1) as flying:
+    with executor_for(executor, workers or default_workers()) as flying:
         return fly_many(list(lset.tests), runs, seed, config, flying, done=done)
 
 
@@ -311,9 +311,9 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
         runs: runs per test; seed: base seed of the noise.
         uav: UAV profile, a preset name or YAML (default ``px4-v1.12-sitl-iris``); config: the SimConfig the
             profile applies to (default :class:`~surrealist_gym.sim.config.SimConfig`).
-        workers: processes (default: all cores); executor: a Dask scheduler's address, a ``distributed.Client`` or
-            an executor instead (:func:`fly_labelled_set`); limit, every: fly every ``every``-th test, at most
-            ``limit``.
+        workers: processes (default: all cores, at most 8); executor: a Dask scheduler's address, a
+            ``distributed.Client`` or an executor instead (:func:`fly_labelled_set`); limit, every: fly every
+            ``every``-th test, at most ``limit``.
         close: the close region is theirs < ``close`` [m]; buffer: polyline buffer of the distance [m].
         progress: called with (tests done, tests) as tests finish.
     """

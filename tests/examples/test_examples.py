@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[2]
 CASES = {
     "replicate_case0.py": ["--budget", "3", "--runs", "1", "--inline"],
     "compare_two_agents.py": ["--repetitions", "2", "--budget", "3", "--runs", "1", "--inline", "--out", "{tmp}"],
-    "train_ppo.py": ["--steps", "16", "--budget", "3", "--out", "{tmp}/ppo.zip"],
+    "train_ppo.py": ["--steps", "16", "--budget", "3", "--policy", "{tmp}/ppo.zip"],
     "dask_cluster.py": ["--budget", "2", "--runs", "2"],
     "custom_agent.py": ["--budget", "4"],
     "prescreen_greedy.py": ["--budget", "3", "--runs", "2", "--first-runs", "1", "--kind", "knn"],

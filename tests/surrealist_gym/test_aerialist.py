@@ -419,8 +419,8 @@ def test_buffer_of_evaluate_and_generate(tmp_path, capsys):
             distances[buffer] = float(next(csv.DictReader(f))["distance"])
     assert distances["0.125"] == pytest.approx(distances["0"] - 0.125, abs=1e-3)
     out = tmp_path / "gen"
-    assert main(["generate", str(folder / f"{FLIGHTS[2]}.yaml"), "--budget", "1", "--runs", "1", "--workers", "1",
-                 "--buffer", "0.125", "--out", str(out)]) == 0
+    assert main(["generate", "--seed", str(folder / f"{FLIGHTS[2]}.yaml"), "--budget", "1", "--runs", "1",
+                 "--workers", "1", "--buffer", "0.125", "--out", str(out)]) == 0
     assert json.loads((out / "run.json").read_text())["buffer"] == 0.125
     seed_run = json.loads((out / "summary.json").read_text())["seed_runs"][0]
     assert seed_run["competition_distance"] == pytest.approx(distances["0.125"], abs=1e-3)

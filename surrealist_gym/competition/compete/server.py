@@ -93,17 +93,19 @@ class SimulationServer:
         on_flight: called with each :class:`Flight` as it is recorded (from the server's thread).
         runaway_after: refused requests after which :attr:`runaway` is set (a tool that keeps asking; default
             :func:`default_runaway_after`).
+        executor: a Dask scheduler's address (or an executor): the runs fly there instead of on ``workers``.
     """
 
     def __init__(self, folder, budget: int, config, seed: int = 0, workers: int = 1,
                  on_flight: Callable[[Flight], None] | None = None, runaway_after: int | None = None,
-                 roots: tuple = ()) -> None:
-        from ...executors import InlineExecutor, LocalPoolExecutor
+                 roots: tuple = (), executor=None) -> None:
+        from ...executors import InlineExecutor, LocalPoolExecutor, make_executor
 
         self.folder = Path(folder)
         self.budget, self.config, self.seed = budget, config, seed
         self.roots = tuple(Path(os.path.realpath(r)) for r in roots)
-        self._executor = InlineExecutor() if workers <= 1 else LocalPoolExecutor(workers)
+        self._executor = (make_executor(executor) if executor is not None
+                          else InlineExecutor() if workers <= 1 else LocalPoolExecutor(workers))
         self._on_flight = on_flight
         self._runaway_after = default_runaway_after(budget) if runaway_after is None else runaway_after
         self.runaway = threading.Event()

@@ -73,6 +73,7 @@ class CompetePlan:
     uav: str = DEFAULT_UAV
     env: EnvChoice = EnvChoice("ours", "every module its files import is installed here")
     limits: ToolLimits = ToolLimits()
+    executor: str | None = None  # a Dask scheduler's address: the runs fly there instead of on ``workers``
 
 
 @dataclass(frozen=True, slots=True)
@@ -138,7 +139,7 @@ class CompeteResult:
 # --- checks ----------------------------------------------------------------------------------------------------------
 def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, workers: int = 1, aerialist=None,
             seed: int = 0, uav: str = DEFAULT_UAV, tool_env: str = "auto", tool_env_cache=None,
-            limits: ToolLimits = ToolLimits()) -> CompetePlan:
+            limits: ToolLimits = ToolLimits(), executor: str | None = None) -> CompetePlan:
     """Check every input and find the Aerialist to use; nothing is written. One-line SurrealistError otherwise.
 
     Args:
@@ -155,8 +156,9 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         tool_env: which Python runs the tool: ``auto``, ``ours`` or ``own`` (``toolenv.choose_env``).
         tool_env_cache: where the tools' own environments are kept (default ``toolenv.default_cache()``).
         limits: what the tool's process may use (time, memory, file size, CPU time; ``process.ToolLimits``).
+        executor: a Dask scheduler's address (``tcp://host:port``): the runs fly on its cluster, not on ``workers``.
     """
-    for name, value in (("budget", budget), ("--runs-per-test", runs_per_test), ("--workers", workers)):
+    for name, value in (("budget", budget), ("--runs", runs_per_test), ("--workers", workers)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise SurrealistError(f"{name}: expected a whole number >= 1, got {value!r}")
     tool = Path(tool)
@@ -178,7 +180,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
     if env.kind == "ours":  # an own environment gets Aerialist's imports installed
         _check_imports(source)
     return CompetePlan(tool.resolve(), argument, file, budget, out, source, apis, runs_per_test, workers, seed, uav,
-                       env, limits)
+                       env, limits, executor)
 
 
 def _case_study(tool: Path, name) -> tuple[str, Path]:
@@ -286,8 +288,9 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     command = [str(tool_env.python), "cli.py", "generate", plan.case_study, str(plan.budget)]
     roots = (work, plan.case_study_file.parent,  # where the files a test names may be: and those the case study names
              *(Path(v) for _, v in _named_files(plan.case_study_file) if os.path.isabs(v)))
-    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight,
-                          roots=roots) as server, open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
+    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight, roots=roots,
+                          executor=plan.executor) as server, open(stdout, "wb") as out_file, \
+            open(stderr, "wb") as err_file:
         env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
         started = time.time()
         with ending_with_us():

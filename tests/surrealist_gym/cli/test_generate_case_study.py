@@ -81,7 +81,7 @@ def test_case_study_bad_input_is_one_line(tmp_path, capsys, monkeypatch, argv, m
 
 def test_case_study_and_seed_test_exclude_each_other(tmp_path, capsys):
     seed = CASE_STUDIES / "mission1.yaml"
-    assert main(["generate", str(seed), "--case-study", str(seed), "--out", str(tmp_path / "x")]) == 2
+    assert main(["generate", "--seed", str(seed), "--case-study", str(seed), "--out", str(tmp_path / "x")]) == 2
     assert "--case-study: a case study brings its own mission" in _one_line(capsys)
 
 

@@ -132,7 +132,7 @@ def test_surrogate_train_reads_a_store_given_twice_once(tmp_path, capsys):
 
 def test_train_keeps_an_existing_policy(tmp_path, capsys):
     (tmp_path / "p.zip").write_bytes(b"PK not really")
-    refused(capsys, ["train", "--steps", "1", "--episode-budget", "2", "--problem", "generate", "--out",
+    refused(capsys, ["train", "--steps", "1", "--episode-budget", "2", "--problem", "generate", "--policy",
                      tmp_path / "p.zip"], "p.zip", "holds a policy already", "--overwrite")
     assert (tmp_path / "p.zip").read_bytes() == b"PK not really"
 

@@ -12,8 +12,8 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
 def test_case0_golden_facts(tmp_path, capsys):
-    out = tmp_path / "plot.png"
-    assert main(["inspect", str(CASE0_ULG), "--out", str(out)]) == 0
+    out = tmp_path / "plots" / "case0.png"  # --out DIR: the plot, named after the log, in that folder
+    assert main(["inspect", str(CASE0_ULG), "--out", str(out.parent)]) == 0
     text = capsys.readouterr().out
     for fact in ("multirotor (PX4 airframe 4016)", "duration    43.3 s", "AUTO_MISSION 43.1 s",
                  "86 points of 0.5 s from 432 samples", "mission     2 items", "takeoff", "z   3.0 m",
@@ -61,8 +61,16 @@ def test_bad_input_exits_2_with_one_line(log, message, capsys):
 
 
 def test_unwritable_plot_exits_2(tmp_path, capsys):
-    assert main(["inspect", str(CASE0_ULG), "--out", str(tmp_path / "no" / "dir.png")]) == 2
-    assert "cannot write the plot" in capsys.readouterr().err
+    (tmp_path / "afile").write_text("a file")
+    assert main(["inspect", str(CASE0_ULG), "--out", str(tmp_path / "afile" / "plots")]) == 2
+    assert "--out" in capsys.readouterr().err and not any(tmp_path.rglob("*.png"))
+
+
+def test_a_plot_file_as_out_is_refused_with_its_folder(tmp_path, capsys):
+    assert main(["inspect", str(CASE0_ULG), "--out", str(tmp_path / "plot.png")]) == 2
+    err = capsys.readouterr().err
+    assert f"--out is a folder; inspect writes <log name>.png in it: --out {tmp_path}" in err
+    assert err.count("\n") == 1 and not any(tmp_path.iterdir())
 
 
 def test_console_script_exit_code_and_single_stderr_line(tmp_path):

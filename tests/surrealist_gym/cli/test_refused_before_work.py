@@ -81,7 +81,7 @@ def test_generate_refuses_a_profile_out_of_range_before_any_results_folder(work,
     profile = work / "uav.yaml"
     profile.write_text("name: slow\nparams: {MPC_XY_CRUISE: 0}\n")
     out = work / "results"
-    refused(capsys, ["generate", work / "rq2-seed.yaml", "--uav", profile, "--budget", "1", "--runs", "1",
+    refused(capsys, ["generate", "--seed", work / "rq2-seed.yaml", "--uav", profile, "--budget", "1", "--runs", "1",
                      "--out", out], profile, "params.MPC_XY_CRUISE")
     assert not out.exists()
 
@@ -89,7 +89,7 @@ def test_generate_refuses_a_profile_out_of_range_before_any_results_folder(work,
 def test_a_zero_hover_thrust_is_an_input_error_not_an_infrastructure_failure(work, capsys):
     test = _test_yaml(work, "MPC_THR_HOVER: 0, MPC_USE_HTE: 0")
     out = work / "results"
-    refused(capsys, ["generate", test, "--budget", "1", "--runs", "1", "--workers", "1", "--out", out],
+    refused(capsys, ["generate", "--seed", test, "--budget", "1", "--runs", "1", "--workers", "1", "--out", out],
             test, "params.MPC_THR_HOVER", "(0, 1)")
     assert not out.exists()
 
@@ -140,12 +140,12 @@ def test_an_inline_command_with_non_numeric_fields_is_refused(work, capsys, comm
 
 # --- 2. outputs that cannot be written, checked before anything is read or flown -------------------------------
 def test_calibrate_out_under_a_file_is_refused_before_flying(work, capsys):
-    refused(capsys, ["calibrate", CASE0, "--out", work / "afile" / "u.yaml"], "--out", "afile")
+    refused(capsys, ["calibrate", CASE0, "--profile", work / "afile" / "u.yaml"], "--profile", "afile")
     assert nothing_in(work, "afile", "rq2-seed.yaml", "auto1.plan", "auto1-params.csv", "auto-commands.csv")
 
 
 def test_calibrate_plot_of_another_kind_is_refused_before_flying(work, capsys):
-    refused(capsys, ["calibrate", CASE0, "--out", work / "u.yaml", "--plot", work / "u.txt"], "--plot", ".png")
+    refused(capsys, ["calibrate", CASE0, "--profile", work / "u.yaml", "--plot", work / "u.txt"], "--plot", ".png")
     assert not (work / "u.yaml").exists() and not (work / "u.txt").exists()
 
 
@@ -178,12 +178,12 @@ def read_only(tmp_path) -> Path:
 
 @pytest.mark.parametrize("argv, flag", [
     (["simulate", RQ2, "--runs", "1", "--out", "{ro}/sim"], "--out"),
-    (["calibrate", CASE0, "--out", "{ro}/u.yaml"], "--out"),
-    (["calibrate", CASE0, "--out", "{tmp}/u.yaml", "--plot", "{ro}/u.png"], "--plot"),
+    (["calibrate", CASE0, "--profile", "{ro}/u.yaml"], "--profile"),
+    (["calibrate", CASE0, "--profile", "{tmp}/u.yaml", "--plot", "{ro}/u.png"], "--plot"),
     (["compare", "--budget", "1", "--repetitions", "1", "--agents", "random", "--out", "{ro}/cmp"], "--out"),
     (["surrogate", "train", STORE, "--problem", "generate", "--kind", "knn", "--out", "{ro}/model"], "--out"),
-    (["train", "--steps", "1", "--out", "{ro}/policy.zip"], "--out"),
-    (["inspect", CASE0, "--out", "{ro}/case0.png"], "--out"),
+    (["train", "--steps", "1", "--policy", "{ro}/policy.zip"], "--policy"),
+    (["inspect", CASE0, "--out", "{ro}/plots"], "--out"),
     (["fidelity", SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv", "--out", "{ro}/fid"], "--out"),
 ], ids=lambda v: v[0] if isinstance(v, list) else v)
 def test_a_read_only_output_is_refused_before_any_work(read_only, tmp_path, capsys, argv, flag):
@@ -302,7 +302,7 @@ def test_fifo_inputs_are_refused_before_they_are_opened(work, fifo, capsys):
     yamls = work / "yamls"
     yamls.mkdir()
     refused(capsys, ["fidelity", yamls, "--labels", labels, "--out", work / "fid"], labels, "FIFO")
-    refused(capsys, ["calibrate", log, "--out", work / "u.yaml"], log, "FIFO")
+    refused(capsys, ["calibrate", log, "--profile", work / "u.yaml"], log, "FIFO")
     time.sleep(0.2)
     assert opened == [] and not (work / "out").exists() and not (work / "model").exists()
 

@@ -40,7 +40,8 @@ def test_generate_on_a_competition_test_flies_the_sitl_iris_and_judges_by_the_co
 
     seed = sorted((SHARED_DATA / "competition" / "camba-collection").glob("*.yaml"))[0]
     out = tmp_path / "gen"
-    assert main(["generate", str(seed), "--budget", "2", "--runs", "1", "--workers", "1", "--out", str(out)]) == 0
+    assert main(["generate", "--seed", str(seed), "--budget", "2", "--runs", "1", "--workers", "1",
+                 "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["uav"] == "px4-v1.12-sitl-iris" and summary["distance"] == "competition"
     assert json.loads((out / "run.json").read_text())["uav"] == "px4-v1.12-sitl-iris"
@@ -112,7 +113,7 @@ def test_bad_input_is_one_line_exit_2(argv, needle, capsys, tmp_path, monkeypatc
 def test_bad_yaml_via_subprocess(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("simulation:\n  obstacles: [3,3,-1, 0,0,0, 0]\n")
-    proc = subprocess.run([sys.executable, "-m", "surrealist_gym.cli", "generate", str(bad), "--out",
+    proc = subprocess.run([sys.executable, "-m", "surrealist_gym.cli", "generate", "--seed", str(bad), "--out",
                            str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
@@ -227,7 +228,7 @@ def test_search_options_are_typed_once_for_arguments_run_json_and_resume(tmp_pat
 
     parser = argparse.ArgumentParser()
     GenerateOptions.add_arguments(parser)
-    args = parser.parse_args(["seed.yaml", "--budget", "7", "--first-runs", "1,2", "--common-noise"])
+    args = parser.parse_args(["--seed", "seed.yaml", "--budget", "7", "--first-runs", "1,2", "--common-noise"])
     options = GenerateOptions.from_args(args)
     assert (options.test, options.budget, options.runs, options.first_runs, options.common_noise) == \
         ("seed.yaml", 7, 10, (1, 2), True)
@@ -267,7 +268,8 @@ def test_bad_search_values_are_one_line_errors(tmp_path, capsys, argv, message):
     (["simulate", "TEST", "--param", "MPC_XY_CRUISE=1e400"], "expected NAME=number (a finite number)")])
 def test_bad_numbers_of_other_commands_are_one_line_errors(tmp_path, capsys, argv, message):
     argv = [sg.data_path("rq1-seed1.yaml") if a == "TEST" else a for a in argv]
-    assert main([*argv, "--out", str(tmp_path / "out")]) == 2
+    written = ["--policy", str(tmp_path / "out" / "p.zip")] if argv[0] == "train" else ["--out", str(tmp_path / "out")]
+    assert main([*argv, *written]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and not (tmp_path / "out").exists()
 

@@ -1,11 +1,17 @@
-"""One command-line vocabulary: ``--random-seed`` is the noise seed everywhere and ``--seed`` a seed test; one
-``--out`` pattern; defaults that differ by problem stated once; an option that does not apply refused before any
-work; ``train`` (PPO or SAC, alias ``train-ppo``); ``compare --case-study``."""
+"""One command-line vocabulary (docs/cli.md), checked on the real parser of every sub-command: ``--seed TEST.yaml``
+is a seed test and ``--random-seed N`` the noise seed everywhere; ``--runs N`` the times a test is flown; ``--out
+DIR`` always a folder (a command writing one file names it: ``train --policy``, ``calibrate --profile``);
+``--workers N`` and ``--dask-scheduler`` on every command that flies, the workers' default told as it is; old
+spellings refused in one line before any work. Also: one ``--out`` pattern; defaults that differ by problem stated
+once; an option that does not apply refused before any work; ``train`` (PPO or SAC, alias ``train-ppo``) and the
+compare command it prints; ``compare --case-study`` and ``--obstacles``."""
 import argparse
 import inspect
 import json
 import re
+import shlex
 import warnings
+from pathlib import Path
 
 import pytest
 
@@ -15,6 +21,35 @@ from surrealist_gym.errors import SurrealistError
 from tests.conftest import CASE_STUDIES
 
 RQ2 = sg.data_path("rq2-seed.yaml")
+
+
+def _commands() -> dict[str, argparse.ArgumentParser]:
+    """Every sub-command's real parser by name (``surrogate train`` and ``surrogate eval`` by theirs; aliases
+    left out)."""
+    from surrealist_gym.cli import COMMANDS
+
+    sub = next(a for a in _parser()._actions if a.dest == "command")
+    parsers = {}
+    for name in COMMANDS:
+        parser = sub.choices[name]
+        nested = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        if nested:
+            parsers.update({f"{name} {n}": p for n, p in nested[0].choices.items()})
+        else:
+            parsers[name] = parser
+    return parsers
+
+
+def _options(parser: argparse.ArgumentParser) -> dict[str, argparse.Action]:
+    """The options a parser offers (those kept only to be refused left out), by flag."""
+    from surrealist_gym.cli.options import _Refused
+
+    return {flag: a for a in parser._actions if not isinstance(a, _Refused) for flag in a.option_strings}
+
+
+def _positionals(parser: argparse.ArgumentParser) -> list[argparse.Action]:
+    return [a for a in parser._actions if not a.option_strings and a.help is not argparse.SUPPRESS
+            and not isinstance(a, argparse._SubParsersAction)]
 
 
 def _help(command: str) -> str:
@@ -33,6 +68,120 @@ def _one_line_error(capsys) -> str:
 
 class _Stop(SurrealistError):
     """Raised by a stand-in to end a command once it has shown what it would do."""
+
+
+# --- the vocabulary, rule by rule, on every sub-command's parser -----------------------------------------------------
+def test_the_flying_commands_are_the_commands_that_fly():
+    from surrealist_gym.cli.options import FLYING_COMMANDS
+
+    parsers = _commands()
+    assert set(FLYING_COMMANDS) <= set(parsers)
+    for name, parser in parsers.items():  # a command that flies tests N times is one of them
+        if "--runs" in _options(parser):
+            assert name in FLYING_COMMANDS, f"{name} has --runs: add it to FLYING_COMMANDS (and docs/cli.md)"
+
+
+def test_seed_is_a_seed_test_and_random_seed_the_noise_everywhere():
+    from surrealist_gym.cli.options import FLYING_COMMANDS
+
+    for name, parser in _commands().items():
+        options = _options(parser)
+        if "--seed" in options:
+            assert options["--seed"].metavar.startswith("TEST.yaml"), name  # replicate: or tall, paper, detours
+            assert "seed test" in options["--seed"].help or "test's obstacles" in options["--seed"].help, name
+        for action in _positionals(parser):  # a seed test is never positional
+            assert "seed test" not in (action.help or ""), (name, action.dest)
+        if name in FLYING_COMMANDS or name in ("export-tool", "surrogate train"):
+            seed = options.get("--random-seed")
+            assert seed is not None and seed.type is int and seed.metavar == "N", name
+            assert "seed" in seed.help and "default" in seed.help, name
+    assert "--seed" not in _options(_commands()["generate"]) or \
+        _options(_commands()["generate"])["--seed"].dest == "test"  # run.json's key stays
+
+
+def test_runs_is_the_times_a_test_is_flown_everywhere():
+    from surrealist_gym.cli.options import FLYING_COMMANDS
+
+    for name, parser in _commands().items():
+        options = _options(parser)
+        assert not any(re.search(r"runs-per|--run$|repeats", flag) for flag in options), name
+        if name in FLYING_COMMANDS:
+            runs = options.get("--runs")
+            assert runs is not None and runs.type is int and runs.metavar == "N", name
+
+
+def test_out_is_always_a_folder_and_one_file_has_a_name_of_its_own():
+    for name, parser in _commands().items():
+        options = _options(parser)
+        if "--out" in options:
+            assert options["--out"].metavar == "DIR", name
+            assert "folder" in options["--out"].help, name
+    train, calibrate = _options(_commands()["train"]), _options(_commands()["calibrate"])
+    assert "--out" not in train and train["--policy"].metavar == "FILE.zip"
+    assert "--out" not in calibrate and calibrate["--profile"].metavar == "FILE.yaml"
+    assert _options(_commands()["inspect"])["--out"].metavar == "DIR"
+
+
+def test_every_command_that_flies_takes_workers_and_a_dask_scheduler_and_tells_the_workers_default():
+    from surrealist_gym.cli.options import FLYING_COMMANDS
+    from surrealist_gym.executors import DEFAULT_MAX_WORKERS, LocalPoolExecutor, default_workers
+
+    assert default_workers() == LocalPoolExecutor().workers <= DEFAULT_MAX_WORKERS
+    for name, parser in _commands().items():
+        options = _options(parser)
+        if name not in FLYING_COMMANDS:
+            continue
+        workers, dask = options.get("--workers"), options.get("--dask-scheduler")
+        assert workers is not None and dask is not None, name
+        assert workers.type is int and workers.metavar == "N" and dask.metavar == "ADDRESS", name
+        said = " ".join(workers.help.split())
+        assert "default" in said, name
+        if workers.default is None:  # the library's default: all cores, capped
+            assert f"all cores, at most {DEFAULT_MAX_WORKERS}" in said, name
+        else:
+            assert f"default {workers.default}" in said, name
+
+
+def test_obstacles_means_one_thing_where_it_is_taken():
+    for name in ("generate", "compare", "train", "export-tool"):
+        obstacles = _options(_commands()[name])["--obstacles"]
+        assert obstacles.type is int and obstacles.metavar == "N" and re.search(r"1.(3|to 3)", obstacles.help), name
+
+
+# --- old spellings: one line naming the new one, exit 2, before any work ----------------------------------------------
+OLD_SPELLINGS = [
+    (["generate", "{tmp}/seed.yaml", "--budget", "1"], "the seed test is given as --seed {tmp}/seed.yaml"),
+    (["generate", "stray", "--budget", "1"], "stray: unexpected argument"),
+    (["compete", "tool", "mission1", "5", "--runs-per-test", "2"], "--runs-per-test: use --runs"),
+    (["compete", "tool", "mission1", "0"], "BUDGET: expected a whole number >= 1, got 0"),
+    (["train", "--steps", "1", "--out", "{tmp}/p.zip"], "--out is a folder; the policy file is --policy {tmp}/p.zip"),
+    (["train", "--steps", "1", "--out", "{tmp}/pol"], "--out is a folder; train writes one policy file: --policy "
+                                                      "{tmp}/pol/policy.zip"),
+    (["calibrate", "{tmp}/x.ulg", "--out", "{tmp}/u.yaml"], "--out is a folder; the profile file is --profile "
+                                                            "{tmp}/u.yaml"),
+    (["calibrate", "{tmp}/x.ulg", "--out", "{tmp}/cal"], "--profile {tmp}/cal/uav.yaml"),
+    (["inspect", str(sg.data_path("case0.ulg")), "--out", "{tmp}/case0.png"],
+     "--out is a folder; inspect writes <log name>.png in it: --out {tmp}"),
+    (["simulate", RQ2, "--seed", "3"], "--seed: use --random-seed"),
+    (["evaluate", RQ2, "--seed", "3"], "--seed: use --random-seed"),
+]
+
+
+@pytest.mark.parametrize("argv, message", OLD_SPELLINGS, ids=lambda v: " ".join(v[:2]) if isinstance(v, list) else None)
+def test_an_old_spelling_is_refused_in_one_line_naming_the_new(tmp_path, capsys, argv, message):
+    before = sorted(p.name for p in tmp_path.iterdir())
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    assert main(argv) == 2
+    assert message.replace("{tmp}", str(tmp_path)) in _one_line_error(capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
+
+
+def test_refused_spellings_are_not_offered_in_the_help():
+    for command in ("generate", "compete", "train", "calibrate", "simulate"):
+        text = _help(command)
+        assert "--runs-per-test" not in text and "--out POLICY" not in text and "--out YAML" not in text, command
+    assert "--seed TEST.yaml" in _help("generate") and "--policy FILE.zip" in _help("train")
+    assert "--profile FILE.yaml" in _help("calibrate") and "--runs N" in _help("compete")
 
 
 # --- --random-seed: the noise seed; --seed refused where it meant one ------------------------------------------------
@@ -143,11 +292,11 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
         assert getattr(ReplicateOptions(), name) == PROBLEM_DEFAULTS["replicate"][name]
         assert getattr(GenerateOptions(), name) == PROBLEM_DEFAULTS["generate"][name]
     gen, rep = _help("generate"), _help("replicate")
-    assert "--runs RUNS simulations per evaluation (default 10; with --case-study 1)" in gen
+    assert "--runs N simulations per evaluation (default 10; with --case-study 1)" in gen
     assert "--budget BUDGET evaluations allowed (default 50; with --case-study 200)" in gen
     assert "(default greedy; with --case-study suite)" in gen
     assert "then the defaults are --budget 200 --runs 1 --agent suite" in gen
-    assert "--runs RUNS simulations per evaluation (default 5)" in rep
+    assert "--runs N simulations per evaluation (default 5)" in rep
     assert "the log's vehicle" in rep and "the log's vehicle" not in gen  # each says only its own UAV default
     assert "seed test with a reference log" in gen and "seed test with a reference log" not in rep
     assert "case-study" not in rep and "generate" not in rep.split("options:", 1)[1]
@@ -197,7 +346,8 @@ def test_an_option_that_does_not_apply_is_refused_in_one_line(tmp_path, capsys, 
     store.write_bytes(b"not empty")
     argv = [a.replace("{tmp}", str(tmp_path)).replace("{store}", str(store)) for a in argv]
     out = tmp_path / "out"
-    assert main([*argv, "--out", str(out)]) == 2
+    written = ["--policy", str(out / "p.zip")] if argv[0] == "train" else ["--out", str(out)]
+    assert main([*argv, *written]) == 2
     assert message in _one_line_error(capsys)
     assert not out.exists()
 
@@ -218,7 +368,7 @@ def test_an_option_that_applies_is_not_refused():
 # --- train: PPO or SAC; train-ppo still works -------------------------------------------------------------------------
 def test_train_ppo_is_an_alias_of_train(tmp_path, capsys):
     for command in ("train", "train-ppo"):
-        assert main([command, "--steps", "0", "--out", str(tmp_path / "p.zip")]) == 2
+        assert main([command, "--steps", "0", "--policy", str(tmp_path / "p.zip")]) == 2
         assert "--steps: expected a whole number >= 1, got 0" in _one_line_error(capsys)
     assert "--algorithm {ppo,sac}" in _help("train") and _help("train") == _help("train-ppo")
 
@@ -231,7 +381,7 @@ def test_train_with_sac_runs_a_few_steps_and_its_policy_searches(tmp_path, capsy
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert main(["train", "--algorithm", "sac", "--problem", "generate", "--steps", "4", "--episode-budget", "2",
-                     "--out", str(out)]) == 0
+                     "--policy", str(out)]) == 0
     printed = capsys.readouterr().out
     assert out.is_file() and "trained sac for 4 steps on generate problems" in printed
     assert f"sac:{out}" in printed
@@ -282,3 +432,63 @@ def test_compare_runs_on_a_case_study(tmp_path, capsys):
 def test_compare_refuses_a_case_study_that_does_not_exist(tmp_path, capsys):
     assert main(["compare", "--case-study", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "cmp")]) == 2
     assert "no such file" in _one_line_error(capsys) and not (tmp_path / "cmp").exists()
+
+
+# --- compare --obstacles, --random-seed; the command train prints runs ------------------------------------------------
+def _printed_compare(printed: str) -> list[str]:
+    """The ``surrealist compare ...`` line a training printed, as argv for main()."""
+    line = next(line for line in printed.splitlines() if line.startswith("use it: "))
+    words = shlex.split(line[len("use it: "):])
+    assert words[:2] == ["surrealist", "compare"] and "..." not in words, line
+    return words[1:]
+
+
+@pytest.mark.parametrize("problem", [
+    ["--problem", "case-study", "--case-study", str(CASE_STUDIES / "mission2.yaml"), "--obstacles", "1"],
+    ["--problem", "generate", "--seed", RQ2]], ids=["case-study with 1 box", "generate with a seed test"])
+def test_the_compare_command_train_prints_runs_with_the_policy_it_saved(tmp_path, capsys, monkeypatch, problem):
+    pytest.importorskip("stable_baselines3")
+    monkeypatch.chdir(tmp_path)
+    policy = Path("policies") / "p.zip"  # relative, as a user types it: the printed command runs from here
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["train", *problem, "--steps", "4", "--episode-budget", "2", "--policy", str(policy)]) == 0
+        argv = _printed_compare(capsys.readouterr().out)
+        assert f"ppo:{policy}" in argv[argv.index("--agents") + 1]
+        # as printed, at a tiny scale: one search per agent of one evaluation of one run, in this process
+        assert main([*argv, "--repetitions", "1", "--budget", "1", "--runs", "1", "--inline", "--out", "cmp"]) == 0
+    settings = json.loads((tmp_path / "cmp" / "compare.json").read_text())
+    if "case-study" in problem:
+        assert settings["env_id"] == "Surrealist-CaseStudy-v1" and settings["env_kwargs"]["obstacles"] == 1
+    else:
+        assert settings["env_id"] == "Surrealist-Generate-v0"
+        assert settings["env_kwargs"]["seed_test"] == str(Path(RQ2).resolve())
+    assert f"| ppo:{policy} |" in capsys.readouterr().out or "ppo" in (tmp_path / "cmp" / "compare.md").read_text()
+
+
+def test_compare_flies_each_repetition_with_the_random_seed_plus_its_number(tmp_path, monkeypatch, capsys):
+    import importlib
+
+    search_compare = importlib.import_module("search.compare")  # the module (search.compare is also its function)
+    seen = {}
+
+    def fake(env_id, agents, **kw):
+        seen.update(kw)
+        raise _Stop("stop")
+
+    monkeypatch.setattr(search_compare, "compare", fake)
+    assert main(["compare", "--case-study", "mission1", "--obstacles", "2", "--agents", "random", "--random-seed",
+                 "7", "--inline", "--out", str(tmp_path / "cmp")]) == 2
+    assert seen["random_seed"] == 7 and seen["env_kwargs"]["obstacles"] == 2
+    assert "--random-seed: expected a whole number >= 0, got -1" in (
+        main(["compare", "--random-seed", "-1"]) == 2 and capsys.readouterr().err)
+
+
+def test_search_compare_seeds_repetition_r_with_the_base_seed_plus_r(tmp_path):
+    from search.compare import compare
+
+    result = compare("Surrealist-Generate-v0", ["random"], repetitions=1, budget=1, runs=1, out=tmp_path / "cmp",
+                     executor="inline", random_seed=5)
+    settings = json.loads((tmp_path / "cmp" / "compare.json").read_text())
+    assert settings["random_seed"] == 5 and len(result.searches) == 1
+    assert "env seed 5 + r, agent seed 5 + r" in (tmp_path / "cmp" / "compare.md").read_text()

@@ -257,7 +257,7 @@ while True:
 
 def test_agent_count_and_runs_per_test(tmp_path):
     """A test's agent.count decides how many runs K8sAgent returns (Aerialist's k8s job runs count pods); without an
-    agent section, --runs-per-test does; every run counts in the budget."""
+    agent section, --runs does; every run counts in the budget."""
     tool = _tool(tmp_path, '''
 counts = [len(DockerAgent(test).run())]
 test.agent = AgentConfig(engine="k8s", count=3)
@@ -286,7 +286,7 @@ def test_errors_before_anything_starts(tmp_path, capsys):
         (["compete", str(tmp_path / "nowhere"), "mission1", "5"], "no such folder"),
         (["compete", str(SNIPPETS), "mission9", "5", "--out", str(tmp_path / "a")], "case study 'mission9': not found"),
         (["compete", str(SNIPPETS), "mission1", "5", "--out", str(exists)], f"--out {exists}: exists"),
-        (["compete", str(SNIPPETS), "mission1", "0", "--out", str(tmp_path / "b")], "budget: expected a whole number"),
+        (["compete", str(SNIPPETS), "mission1", "0", "--out", str(tmp_path / "b")], "BUDGET: expected a whole number"),
         (["compete", str(SNIPPETS), "mission1", "5", "--aerialist", str(tmp_path), "--out", str(tmp_path / "c")],
          "not an Aerialist folder"),
         (["compete", str(SNIPPETS), "mission1", "5", "--aerialist", str(LEGACY), "--out", str(tmp_path / "d")],

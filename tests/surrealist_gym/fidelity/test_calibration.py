@@ -67,7 +67,7 @@ def test_uav_mutators_stay_within_each_setting_span():
 
 def test_calibrate_fits_m0_pace_and_take_off_and_writes_a_profile_replicate_accepts(tmp_path, capsys):
     out = tmp_path / "m0-uav.yaml"
-    assert main(["calibrate", str(M0_ULG), "--out", str(out), "--runs", "1", "--workers", "2"]) == 0
+    assert main(["calibrate", str(M0_ULG), "--profile", str(out), "--runs", "1", "--workers", "2"]) == 0
     printed = capsys.readouterr().out
     assert "planner.heading_offset_deg" in printed and "resid" in printed
     assert (tmp_path / "m0-uav.png").stat().st_size > 10_000
@@ -93,14 +93,14 @@ def test_calibrate_fits_m0_pace_and_take_off_and_writes_a_profile_replicate_acce
 ])
 def test_calibrate_refuses_a_log_it_cannot_fit_in_one_line_and_writes_nothing(tmp_path, capsys, log, message):
     out = tmp_path / "uav.yaml"
-    assert main(["calibrate", str(FORMATS / log), "--out", str(out), "--workers", "1"]) == 2
+    assert main(["calibrate", str(FORMATS / log), "--profile", str(out), "--workers", "1"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and message in err and log.split("/")[1] in err
     assert not out.exists()
 
 
 def test_calibrate_wants_a_yaml_to_write(tmp_path, capsys):
-    assert main(["calibrate", str(M0_ULG), "--out", str(tmp_path / "uav.txt")]) == 2
+    assert main(["calibrate", str(M0_ULG), "--profile", str(tmp_path / "uav.txt")]) == 2
     assert "expected a .yaml or .yml file" in capsys.readouterr().err
 
 
@@ -162,7 +162,7 @@ def test_search_uav_is_refused_with_pre_screening(tmp_path, capsys):
 
 def test_calibrate_refuses_a_profile_of_another_vehicle(tmp_path, capsys):
     out = tmp_path / "uav.yaml"
-    assert main(["calibrate", str(M0_ULG), "--uav", "px4-vision-case0", "--out", str(out)]) == 2
+    assert main(["calibrate", str(M0_ULG), "--uav", "px4-vision-case0", "--profile", str(out)]) == 2
     err = capsys.readouterr().err
     assert "m0.ulg: flown by iris (PX4 airframe 1015)" in err and "px4-vision-case0" in err
     assert not out.exists()
