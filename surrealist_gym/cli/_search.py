@@ -3,127 +3,63 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import shutil
-import sqlite3
 import sys
 import time
 from collections import Counter
-from contextlib import closing, contextmanager
+from contextlib import contextmanager
 from pathlib import Path
 
-from ..errors import InfrastructureError, SurrealistError, one_line
+from ..errors import SurrealistError
+from ..results import ResultsFolder
 from .options import RUN_FILE, SearchOptions, check_writable, default_out
 
 
 @contextmanager
 def search_folder(args, options_type: type[SearchOptions]):
     """Yield (folder, options) from :func:`prepare`, the folder locked against a second writer until the search
-    ends. A failure keeps the folder once it holds a stored evaluation (a worker or scheduler lost twice, a full
-    disk, a plot that cannot be written) and says so in one line with the ``--resume`` that finishes it; only a
-    folder made here that holds no evaluation is removed again (a bad log or test case leaves nothing behind)."""
-    fresh = not args.resume and not (args.out and Path(args.out).exists())
-    out, options = prepare(args, options_type)
-    _lock(out)
-    try:
-        yield out, options
-    except KeyboardInterrupt:
-        if fresh and not stored_evaluations(out):
-            _remove(out)
-        raise
-    except (SurrealistError, OSError, sqlite3.Error) as err:
-        stored = stored_evaluations(out)
-        if fresh and not stored:
-            _remove(out)
-            if isinstance(err, SurrealistError) and not isinstance(err, InfrastructureError):
-                raise  # bad input found while setting up: its own line says it all
-            raise SurrealistError(f"{_what_failed(err, out)}; nothing was stored, so {out} is removed") from None
-        if not stored and isinstance(err, SurrealistError) and not isinstance(err, InfrastructureError):
-            raise
-        raise SurrealistError(f"{_what_failed(err, out)}; {stored} evaluation(s) are stored in {out}: "
-                              f"--resume {out} flies the rest") from None
-    finally:
-        _unlock(out)
+    ends and kept on failure once it stores an evaluation (:meth:`ResultsFolder.keeping
+    <surrealist_gym.results.ResultsFolder.keeping>`), with the ``--resume`` that finishes it."""
+    folder, options = prepare(args, options_type)
+    with folder.keeping(f"--resume {folder.path} flies the rest", "evaluation(s)"):
+        yield folder.path, options
 
 
 def stored_evaluations(out: Path) -> int:
     """How many evaluations the results folder's store holds (an unreadable store counts as holding some, so it
     is never removed)."""
-    path = out / "evaluations.sqlite"
-    if not path.is_file():
-        return 0
-    try:
-        with closing(sqlite3.connect(f"file:{path}?mode=ro", uri=True)) as db:
-            return int(db.execute("SELECT COUNT(*) FROM evaluations").fetchone()[0])
-    except sqlite3.Error:
-        return 1 if path.stat().st_size else 0
+    return ResultsFolder(out, "search").stored()
 
 
-def _what_failed(err: BaseException, out: Path) -> str:
-    """The failure in words: an input or infrastructure error's own line, else what could not be written."""
-    if isinstance(err, SurrealistError):
-        return str(err)
-    if isinstance(err, OSError):
-        where = err.filename or out
-        return f"{where}: cannot write ({err.strerror or one_line(err)})"
-    return f"{out / 'evaluations.sqlite'}: cannot store an evaluation ({one_line(err)})"
+def _given(args, options_type: type[SearchOptions]) -> dict:
+    """The options on the command line, their paths made absolute as a new search records them."""
+    from ..envs.replicate import SEEDS
+    from ..sim.profiles import PRESETS
+
+    values = {f.name: getattr(args, f.name, f.default) for f in dataclasses.fields(options_type)}
+    for key in ("log", "test", "seed", "uav", "case_study"):
+        value = values.get(key)
+        if isinstance(value, str) and value and not (key == "seed" and value in SEEDS) and \
+                not (key == "uav" and value in PRESETS) and (key != "case_study" or value.endswith((".yaml", ".yml"))):
+            values[key] = str(Path(value).resolve())
+    return values
 
 
-def _remove(out: Path) -> None:
-    _unlock(out)
-    shutil.rmtree(out, ignore_errors=True)
-
-
-_LOCKS: dict[Path, object] = {}  # results folders this process writes to, with their open lock files
-
-
-def _lock(out: Path) -> None:
-    """Refuse a second writer: an exclusive lock on ``out/.lock`` held until the search ends (run_search)."""
-    try:
-        import fcntl
-    except ImportError:  # no advisory locks on this platform
-        return
-    handle = open(out / ".lock", "w")
-    try:
-        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        handle.close()
-        raise SurrealistError(f"{out}: another search is writing to this results folder") from None
-    _LOCKS[out] = handle
-
-
-def _unlock(out: Path) -> None:
-    handle = _LOCKS.pop(out, None)
-    if handle is not None:
-        handle.close()
-
-
-def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOptions]:
-    """The results folder and the options of this search (read back from run.json when resuming)."""
-    if args.resume:
-        out = Path(args.resume)
-        saved = out / RUN_FILE
-        if not saved.is_file():
-            raise SurrealistError(f"{out}: not a results folder to resume (no {RUN_FILE})")
-        check_writable(out, "--resume")
-        options = options_type.from_json(saved)
-        flags = getattr(args, "_flags", frozenset())  # options typed on the command line, even at their defaults
-        for f in dataclasses.fields(options_type):  # what the command line changes: where it runs, nothing else
-            given, flag = getattr(args, f.name, f.default), f.metadata.get("flag", "--" + f.name.replace("_", "-"))
-            if f.name in ("workers", "dask_scheduler"):
-                if given is not None:  # where it runs now: --workers alone leaves the cluster it ran on before
-                    other = {"workers": "dask_scheduler", "dask_scheduler": "workers"}[f.name]
-                    moved = {other: None} if getattr(args, other, None) is None else {}
-                    options = dataclasses.replace(options, **{f.name: given, **moved})
-            elif f.name != "agent" and (flag in flags or given != f.default) and given != getattr(options, f.name):
-                raise SurrealistError(f"{flag}: the search in {out} was started with {getattr(options, f.name)!r}; "
-                                      f"--resume keeps its options (only --workers and --dask-scheduler change)")
-        from search.registry import POLICY_PREFIXES
-
-        module = options.agent.split(":", 1)[0] if ":" in (options.agent or "") else None
-        if module not in (None, *POLICY_PREFIXES) and args.agent != options.agent:
-            raise SurrealistError(f"{saved}: the search's agent {options.agent!r} is code from module {module!r}; "
-                                  f"resuming would import it: give --agent {options.agent} to confirm")
-        return out, options
+def prepare(args, options_type: type[SearchOptions]) -> tuple[ResultsFolder, SearchOptions]:
+    """The results folder, claimed, and the options of this search: new, or read back from its run.json when it
+    resumes (``--resume DIR``, or ``--out DIR`` naming a folder that holds this search: the same command again)."""
+    command = options_type.command
+    if args.resume or (args.out and (Path(args.out) / RUN_FILE).is_file()):
+        flag = "--resume" if args.resume else "--out"
+        out = check_writable(args.resume or args.out, flag)
+        if args.resume and args.out and Path(args.out).absolute() != out.absolute():
+            raise SurrealistError(f"--out {args.out}: --resume writes to the folder it resumes ({out})")
+        folder = ResultsFolder.claim(out, command, None, resume_only=True, flag=flag)
+        try:
+            options = _resumed(args, options_type, out, flag)
+        except BaseException:
+            folder.release()
+            raise
+        return folder, options
     options = options_type.from_args(args)
     if options.agent not in (None, "greedy"):
         from search.registry import make_agent
@@ -143,13 +79,41 @@ def prepare(args, options_type: type[SearchOptions]) -> tuple[Path, SearchOption
         if getattr(options, key, None) and not (key == "seed" and options.seed in SEEDS):
             changes[key] = str(Path(getattr(options, key)).resolve())
     options = measured_prescreen(dataclasses.replace(options, **changes))
-    out = check_writable(args.out or default_out(options.command), "--out")
-    if (out / RUN_FILE).exists():
-        raise SurrealistError(f"--out {out}: holds a search already; continue it with --resume {out}, or choose "
-                              f"another folder")
-    out.mkdir(parents=True, exist_ok=True)
-    (out / RUN_FILE).write_text(json.dumps(options.to_json(), indent=2) + "\n")
-    return out, options
+    out = check_writable(args.out or default_out(command), "--out")
+    settings = {k: v for k, v in options.to_json().items() if k != "command"}
+    return ResultsFolder.claim(out, command, settings, free=("workers", "dask_scheduler")), options
+
+
+def _resumed(args, options_type: type[SearchOptions], out: Path, flag: str) -> SearchOptions:
+    """The options run.json records; an option typed again must be the one it was started with (only where it
+    runs changes: --workers, --dask-scheduler)."""
+    saved = out / RUN_FILE
+    options = options_type.from_json(saved)
+    flags = getattr(args, "_flags", frozenset())  # options typed on the command line, even at their defaults
+    given = _given(args, options_type)
+    for f in dataclasses.fields(options_type):  # what the command line changes: where it runs, nothing else
+        value, typed = given[f.name], f.metadata.get("flag", "--" + f.name.replace("_", "-"))
+        if f.name in ("workers", "dask_scheduler"):
+            if value is not None:  # where it runs now: --workers alone leaves the cluster it ran on before
+                other = {"workers": "dask_scheduler", "dask_scheduler": "workers"}[f.name]
+                moved = {other: None} if getattr(args, other, None) is None else {}
+                options = dataclasses.replace(options, **{f.name: value, **moved})
+        elif f.name != "agent" and (typed in flags or value != f.default) and \
+                _jsonish(value) != _jsonish(getattr(options, f.name)):
+            raise SurrealistError(f"{typed}: the search in {out} was started with {getattr(options, f.name)!r}; "
+                                  f"resuming ({flag} {out}) keeps its options (only --workers and --dask-scheduler "
+                                  f"change)")
+    from search.registry import POLICY_PREFIXES
+
+    module = options.agent.split(":", 1)[0] if ":" in (options.agent or "") else None
+    if module not in (None, *POLICY_PREFIXES) and args.agent != options.agent:
+        raise SurrealistError(f"{saved}: the search's agent {options.agent!r} is code from module {module!r}; "
+                              f"resuming would import it: give --agent {options.agent} to confirm")
+    return options
+
+
+def _jsonish(value):
+    return list(value) if isinstance(value, tuple) else value
 
 
 def measured_prescreen(options: SearchOptions) -> SearchOptions:

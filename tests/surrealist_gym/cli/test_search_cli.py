@@ -1,6 +1,7 @@
 """`surrealist replicate` and `surrealist generate` end to end on the real simulator (tiny budgets)."""
 import csv
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -179,8 +180,9 @@ def test_racing_stages_must_increase_below_the_runs(tmp_path, stages):
 
 
 def test_a_results_folder_holds_one_search(tmp_path, capsys):
-    """Another search into a results folder is refused before anything is written; a store holds one search's
-    evaluations (its identity: problem, runs, seed, simulator) even when reached without the command line."""
+    """Another search into a results folder is refused before anything is written, naming the option that differs;
+    the same command again resumes it (here: finished, so nothing is flown); a store holds one search's evaluations
+    (its identity: problem, runs, seed, simulator) even when reached without the command line."""
     from surrealist_gym.envs.generate import GenerateEnv
     from surrealist_gym.errors import SurrealistError
 
@@ -188,10 +190,13 @@ def test_a_results_folder_holds_one_search(tmp_path, capsys):
     assert main(["generate", "--budget", "1", "--runs", "1", "--workers", "1", "--common-noise",
                  "--out", str(out)]) == 0
     saved = (out / "run.json").read_text()
-    for other in (["--runs", "2"], ["--random-seed", "5"], []):
-        assert main(["generate", "--budget", "1", *other, "--workers", "1", "--out", str(out)]) == 2
+    for other, flag in ((["--runs", "2"], "--runs"), (["--random-seed", "5"], "--random-seed"),
+                        (["--budget", "3"], "--budget")):
+        assert main(["generate", "--runs", "1", "--budget", "1", *other, "--workers", "1", "--out", str(out)]) == 2
         err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and "holds a search already" in err[0] and f"--resume {out}" in err[0]
+        assert len(err) == 1 and err[0].startswith(f"error: {flag}: the search in {out} was started with"), err
+    assert (out / "run.json").read_text() == saved
+    assert main(["generate", "--budget", "1", "--runs", "1", "--common-noise", "--out", str(out)]) == 0
     assert (out / "run.json").read_text() == saved
     store = out / "evaluations.sqlite"
     with pytest.raises(SurrealistError, match="common noise"):  # each test's own noise: the noise mode differs
@@ -201,17 +206,16 @@ def test_a_results_folder_holds_one_search(tmp_path, capsys):
 
 
 def test_a_second_writer_is_refused(tmp_path):
-    from surrealist_gym.cli._search import _lock, _unlock
     from surrealist_gym.errors import SurrealistError
+    from surrealist_gym.results import ResultsFolder
 
-    _lock(tmp_path)
+    first = ResultsFolder.claim(tmp_path / "out", "generate", {"budget": 1})
     try:
-        with pytest.raises(SurrealistError, match="another search is writing"):
-            _lock(tmp_path)
+        with pytest.raises(SurrealistError, match=f"another process \\(process {os.getpid()}\\) is writing"):
+            ResultsFolder.claim(tmp_path / "out", "generate", {"budget": 1})
     finally:
-        _unlock(tmp_path)
-    _lock(tmp_path)
-    _unlock(tmp_path)
+        first.release()
+    ResultsFolder.claim(tmp_path / "out", "generate", {"budget": 1}).release()
 
 
 def test_compare_refuses_an_unknown_env_before_writing(tmp_path, capsys):

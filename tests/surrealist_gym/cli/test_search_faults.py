@@ -103,7 +103,7 @@ def test_ctrl_c_keeps_the_folder_and_resumes(tmp_path, uninterrupted):
 
 def test_a_plot_that_cannot_be_written_keeps_the_folder(tmp_path, uninterrupted, monkeypatch, capsys):
     """The disk fills while figure1.png is written (an injected ENOSPC: where it strikes is the point here)."""
-    import surrealist_gym.results as results
+    import surrealist_gym.results.search as results
 
     def full_disk(out, *args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device", str(out / "figure1.png"))

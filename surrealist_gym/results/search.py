@@ -1,4 +1,4 @@
-"""The results folder of a search: best test (Aerialist YAML + its files: :func:`export_test`, which the competition's
+"""What a search writes in its results folder: best test (Aerialist YAML + its files: :func:`export_test`, which the
 suite export uses too), evaluations.csv, summary.json, and plots in the paper's style (Figure 1: real vs seed vs
 best, top view and altitude, horizontal speed and distance to the goal over time; Figure 2: fitness over evaluations
 and per-run minimum distances of seed and best).
@@ -17,14 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .aerialist import save_test
-from .errors import SurrealistError
-from .outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
-from .sim.profiles import save_profile
-from .sim.uav import uav_settings
-from .store import EvaluationStore
-from .testcase import TestCase
-from .trajectory import Profile, profile
+from ..aerialist import save_test
+from ..errors import SurrealistError
+from ..outcomes import UNSAFE_DISTANCE_M, Measure, judged_distance, outcomes
+from ..sim.profiles import save_profile
+from ..sim.uav import uav_settings
+from ..store import EvaluationStore
+from ..testcase import TestCase
+from ..trajectory import Profile, profile
 
 #: Where :func:`export_test` copies the files a test names (the folder the competition's own YAMLs name them in).
 FILES_FOLDER = "case_studies"
