@@ -9,9 +9,10 @@ closest approach) and the suite's distinct failures and diversity, and writes ``
 edition's tests (:mod:`surrealist_gym.competition.scoring`), flies them the edition's runs, and ranks the folders per
 case study (``leaderboard.csv``, ``test-scores.csv``, ``leaderboard.png`` and a section of the report).
 
-``--out`` holds one evaluation: its options (``run.json``, with the tests drawn) and every run, stored as it
-completes (``evaluations.sqlite``). ``--resume DIR`` finishes an interrupted evaluation: it flies only the missing
-runs and writes the same report an uninterrupted one would have.
+``--out`` holds one evaluation (a :class:`~surrealist_gym.results.ResultsFolder`): its options (``run.json``, with the
+tests drawn) and every run, stored as it completes (``evaluations.sqlite``). The same command with the same ``--out``,
+or ``--resume DIR``, finishes an interrupted evaluation: it flies only the missing runs and writes the same report an
+uninterrupted one would have.
 
 Example::
 
@@ -150,30 +151,33 @@ def _m(value, digits: int = 2) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
-    summary and write the report."""
+    summary and write the report. ``--resume DIR``, or ``--out DIR`` naming a folder that holds an evaluation,
+    finishes that evaluation."""
     from ..competition.reevaluation import uav_decisions
     from ..competition.scoring import edition
     from ..competition.tool_output import load_tests, rule_broken
     from ..geometry import check_buffer
+    from ..results import ResultsFolder
     from ..sim.uav import decide_uav
-    from ._search import _unlock
-    from .options import check_at_least
+    from .options import check_at_least, check_writable
 
     check_at_least(args, runs=1, workers=1)
     check_buffer(args.buffer)
-    if args.resume:
-        out, options = _resumed(args)
+    resume = args.resume or (args.out if args.out and _evaluation_folder(Path(args.out)) else None)
+    flag = "--resume" if args.resume else "--out"
+    if resume:
+        out, options = _resumed(args, check_writable(resume, flag, "folder"), flag)
     else:
         if not args.tests:
             raise SurrealistError("TESTS: give the tests to evaluate (YAMLs or folders of them), or --resume DIR")
         if args.competition is not None:
             edition(args.competition)
         _distinct(args.tests, "TESTS")
-        out = _empty_folder(Path(args.out or default_out("evaluate")))
+        out = check_writable(Path(args.out or default_out("evaluate")), "--out", "folder")
         options = EvaluateOptions.from_args(args)
-    uav = None if options.uav is None else decide_uav(uav=options.uav if args.resume else args.uav).profile
+    uav = None if options.uav is None else decide_uav(uav=options.uav if resume else args.uav).profile
     scored = bool(options.competition)  # a drawn test that breaks the rules is not flown and scores 0
-    tests = load_tests(args.tests if not (args.resume or scored) else options.files,
+    tests = load_tests(args.tests if not (resume or scored) else options.files,
                        any_layout=options.any_layout or scored)
     tests = [(path.absolute(), test) for path, test in tests]  # as a resume loads them: the same report
     decisions = uav_decisions(tests, uav)  # uav.* settings the UAV takes, before anything flies
@@ -183,54 +187,12 @@ def run(args: argparse.Namespace) -> int:
     if scored and len(invalid) == len(tests):
         raise SurrealistError(f"every drawn test breaks the competition's rules ({tests[0][0]}: "
                               f"{invalid[tests[0][0]]}): each would score 0; --any-layout flies them anyway")
-    _own(out)
-    try:
-        if not args.resume:
-            try:
-                with open(out / RUN_FILE, "x") as f:  # the one evaluation of this folder
-                    f.write(json.dumps(options.to_json(), indent=2) + "\n")
-            except FileExistsError:
-                raise SurrealistError(f"--out {out}: holds an evaluation already; finish it with --resume {out}, "
-                                      f"or choose another folder") from None
-            except OSError as err:
-                raise SurrealistError(f"--out {out}: cannot write {RUN_FILE} ({err.strerror or err})") from None
+    settings = None if resume else {k: v for k, v in options.to_json().items() if k != "command"}
+    folder = ResultsFolder.claim(out, "evaluate", settings, free=("workers",), resume_only=bool(resume), flag=flag)
+    with folder.keeping(f"surrealist evaluate --resume {out} flies the rest and writes the report", "evaluation(s)",
+                        said=True):
         write_record(out, {str(path): decision for (path, _), decision in zip(tests, decisions)})
         return _evaluate(out, options, tests, uav, invalid, args.dask_scheduler)
-    finally:
-        _unlock(out)
-
-
-def _own(out: Path) -> None:
-    """Make the folder and hold its lock (cli._search's) until :func:`~surrealist_gym.cli._search._unlock`: one
-    writer."""
-    from ._search import _lock
-
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        _lock(out)
-    except SurrealistError:
-        raise SurrealistError(f"{out}: another process is writing to this folder") from None
-    except OSError as err:
-        raise SurrealistError(f"{out}: cannot write in this folder ({err.strerror or err})") from None
-
-
-def _empty_folder(out: Path) -> Path:
-    """``--out``, refused in one line unless it can be written and is new or empty (but for a lock file)."""
-    from ._search import _unlock
-    from .options import check_writable
-
-    check_writable(out, "--out", "folder")
-    held = sorted(p.name for p in out.iterdir() if p.name != ".lock") if out.is_dir() else []
-    if RUN_FILE in held and _evaluation_folder(out):
-        _own(out)  # an evaluation running there is refused as such
-        _unlock(out)
-        raise SurrealistError(f"--out {out}: holds an evaluation already; finish it with --resume {out}, or choose "
-                              f"another folder")
-    if held:
-        raise SurrealistError(f"--out {out}: not empty (holds {held[0]}" + (f" and {len(held) - 1} more" if
-                                                                             len(held) > 1 else "")
-                              + "); an evaluation writes to a new or empty folder: choose another")
-    return out
 
 
 def _distinct(tests, where: str, hint: str = "give it once") -> None:
@@ -250,15 +212,12 @@ def _evaluation_folder(out: Path) -> bool:
         return False
 
 
-def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
+def _resumed(args: argparse.Namespace, out: Path, flag: str) -> tuple[Path, EvaluateOptions]:
     """The folder and options of the evaluation to finish; options given again must be those it was started with."""
-    from .options import check_writable
-
-    out = check_writable(args.resume, "--resume", "folder")
     if not (out / RUN_FILE).is_file():
-        raise SurrealistError(f"--resume {out}: not an evaluation to resume (no {RUN_FILE})")
+        raise SurrealistError(f"{flag} {out}: not an evaluation to resume (no {RUN_FILE})")
     options = EvaluateOptions.from_json(out / RUN_FILE)
-    _distinct(options.tests, f"--resume {out}: {RUN_FILE}'s tests",  # started twice by an earlier version
+    _distinct(options.tests, f"{flag} {out}: {RUN_FILE}'s tests",  # started twice by an earlier version
               "it cannot be resumed: start a new evaluation with each once")
     flags = getattr(args, "_flags", frozenset())
     given = {"tests": (tuple(str(Path(t).absolute()) for t in args.tests) if args.tests else None, None),
@@ -266,12 +225,12 @@ def _resumed(args: argparse.Namespace) -> tuple[Path, EvaluateOptions]:
              "any_layout": (args.any_layout, False), "competition": (args.competition, None),
              "buffer": (args.buffer, 0.0)}
     for name, (value, default) in given.items():
-        flag = "TESTS" if name == "tests" else "--" + name.replace("_", "-")
-        if (flag in flags or value != default) and value != getattr(options, name):
+        typed = "TESTS" if name == "tests" else "--" + name.replace("_", "-")
+        if (typed in flags or value != default) and value != getattr(options, name):
             shown = f"other tests ({out / RUN_FILE} lists them)" if name == "tests" else repr(getattr(options, name))
-            raise SurrealistError(f"{flag}: the evaluation in {out} was started with {shown}; --resume keeps its "
+            raise SurrealistError(f"{typed}: the evaluation in {out} was started with {shown}; resuming keeps its "
                                   f"options (only --workers changes)")
-    if args.out and Path(args.out).absolute() != out.absolute():
+    if args.resume and args.out and Path(args.out).absolute() != out.absolute():
         raise SurrealistError(f"--out {args.out}: --resume writes to the folder it resumes ({out})")
     return out, dataclasses.replace(options, workers=args.workers or options.workers)
 

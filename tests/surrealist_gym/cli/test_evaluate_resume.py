@@ -84,7 +84,8 @@ def test_killed_evaluation_resumes_to_the_same_report(camba_fast_folder, uninter
     kept = _stored(out)
     assert 1 <= kept < 6 and not (out / "report.md").exists()
 
-    assert main(["evaluate", "--resume", str(out), "--workers", "2"]) == 0
+    # the same command resumes: the killed run's lock (its pid gone) does not stand in the way
+    assert main(["evaluate", str(camba_fast_folder), *ARGS, "--out", str(out)]) == 0
     assert f"({kept} runs read back from the store)" in capsys.readouterr().out
     assert _stored(out) == 6  # only the missing runs were flown
     _same_report(uninterrupted, out)
@@ -96,9 +97,10 @@ def test_second_writer_refused_and_ctrl_c_keeps_the_runs(camba_fast_folder, unin
     first = _start(camba_fast_folder, *ARGS, "--out", out)
     _wait_for_runs(out, first)
     assert main(["evaluate", str(camba_fast_folder), *ARGS, "--out", str(out)]) == 2  # a second evaluation into it
-    assert _one_line(capsys) == f"error: {out}: another process is writing to this folder"
+    assert _one_line(capsys) == f"error: --out {out}: another process (process {first.pid}) is writing to this folder"
     assert main(["evaluate", "--resume", str(out)]) == 2  # or resuming it while it runs
-    assert _one_line(capsys) == f"error: {out}: another process is writing to this folder"
+    assert _one_line(capsys) == (f"error: --resume {out}: another process (process {first.pid}) is writing to this "
+                                 f"folder")
 
     first.send_signal(signal.SIGINT)  # Ctrl-C
     _, err = first.communicate(timeout=60)
@@ -112,17 +114,22 @@ def test_second_writer_refused_and_ctrl_c_keeps_the_runs(camba_fast_folder, unin
 
 def test_out_holding_anything_else_is_refused_before_flying(camba_fast_folder, uninterrupted, tmp_path, capsys):
     test = str(camba_fast_folder / f"{CAMBA_FAST[0]}.yaml")
-    assert main(["evaluate", test, "--out", str(uninterrupted)]) == 2  # an earlier evaluation
-    assert _one_line(capsys) == (f"error: --out {uninterrupted}: holds an evaluation already; finish it with "
-                                 f"--resume {uninterrupted}, or choose another folder")
+    assert main(["evaluate", test, "--out", str(uninterrupted)]) == 2  # an earlier evaluation, of other tests
+    assert _one_line(capsys) == (f"error: TESTS: the evaluation in {uninterrupted} was started with other tests "
+                                 f"({uninterrupted / 'run.json'} lists them); resuming keeps its options (only "
+                                 f"--workers changes)")
     search = tmp_path / "generate"  # a search's results folder, or any files
     search.mkdir()
     for name in ("run.json", "evaluations.sqlite", "best.yaml", ".lock"):
         (search / name).write_text("{}\n")
     assert main(["evaluate", test, "--out", str(search)]) == 2
-    assert _one_line(capsys) == (f"error: --out {search}: not empty (holds best.yaml and 2 more); an evaluation "
-                                 f"writes to a new or empty folder: choose another")
-    assert sorted(p.name for p in search.iterdir()) == [".lock", "best.yaml", "evaluations.sqlite", "run.json"]
+    assert _one_line(capsys) == f"error: --out {search}: holds another run, not a run of evaluate; choose another folder"
+    (search / "run.json").unlink()
+    assert main(["evaluate", test, "--out", str(search)]) == 2
+    assert _one_line(capsys) == (f"error: --out {search}: holds something else (best.yaml and 1 more), not a run of "
+                                 f"evaluate; choose a new or empty folder")
+    assert sorted(p.name for p in search.iterdir()) == [".lock", "best.yaml", "evaluations.sqlite"]
+    (search / "run.json").write_text("{}\n")
     afile = tmp_path / "report.txt"
     afile.write_text("x\n")
     assert main(["evaluate", test, "--out", str(afile)]) == 2
@@ -130,7 +137,7 @@ def test_out_holding_anything_else_is_refused_before_flying(camba_fast_folder, u
     assert main(["evaluate", test, "--out", str(afile / "sub")]) == 2
     assert _one_line(capsys) == f"error: --out {afile / 'sub'}: {afile} is a file, not a folder"
     assert main(["evaluate", "--resume", str(uninterrupted), "--runs", "3"]) == 2
-    assert _one_line(capsys) == (f"error: --runs: the evaluation in {uninterrupted} was started with 2; --resume "
+    assert _one_line(capsys) == (f"error: --runs: the evaluation in {uninterrupted} was started with 2; resuming "
                                  f"keeps its options (only --workers changes)")
     assert main(["evaluate", "--resume", str(search)]) == 2
     assert _one_line(capsys) == f"error: {search}: holds no evaluation to resume (run.json is another command's)"
