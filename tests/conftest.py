@@ -1,6 +1,7 @@
 """Shared fixtures: the real data in ../shared/data (beside the project root)."""
 from __future__ import annotations
 
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -26,6 +27,45 @@ def refused(capsys, argv, *names) -> str:
     for name in names:
         assert str(name) in lines[0], (name, lines[0])
     return lines[0]
+
+
+def until(condition, what: str, limit_s: float = 180.0) -> None:
+    """Poll ``condition`` until it holds (a bounded wait for another process, not a timing assertion)."""
+    import time
+
+    end = time.monotonic() + limit_s
+    while not condition():
+        if time.monotonic() > end:
+            raise AssertionError(f"gave up waiting for {what}")
+        time.sleep(0.05)
+
+
+def alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie, killed and not yet reaped, does not)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state not in ("Z", "X")
+
+
+def killed_and_resumed(argv, out: Path, stored, at_least: int = 1, signum=None) -> subprocess.Popen:
+    """Run ``surrealist ARGV`` in a process of its own until ``stored()`` (what its folder ``out`` holds) reaches
+    ``at_least``, then kill it (SIGKILL unless ``signum``) and wait for its end; returns the process (its stderr
+    read). The caller resumes with the same command."""
+    import os
+    import signal
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    process = subprocess.Popen([sys.executable, "-m", "surrealist_gym.cli", *map(str, argv)], env=env, cwd=ROOT,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    until(lambda: stored() >= at_least or process.poll() is not None, f"{at_least} result(s) stored in {out}")
+    assert process.poll() is None, f"it ended before it was killed: {process.communicate()[1]}"
+    process.send_signal(signal.SIGKILL if signum is None else signum)
+    process.communicate(timeout=120)
+    assert process.returncode != 0
+    return process
 
 
 def fly_the_python_outer_loop(mp: pytest.MonkeyPatch) -> None:

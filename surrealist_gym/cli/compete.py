@@ -72,11 +72,10 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from ..competition.compete import prepare, run as run_tool
+    from ..competition.compete import claim, prepare, run as run_tool
     from ..competition.compete.process import ToolLimits
     from ..competition.compete.toolenv import CACHE_ENV
     from ..errors import SurrealistError
-    from ._search import _lock, _unlock
     from .options import check_at_least, check_writable, default_out, refuse_workers_with_dask
 
     if args.budget < 1:  # the positional BUDGET, named as the usage names it
@@ -102,11 +101,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"tool environment: its own ({plan.env.reason}), from the cache {plan.env.cache} or built there "
               f"(pip's output: {plan.out / 'tool-env.txt'})", flush=True)
     print(plan.limits.describe(), flush=True)
-    try:  # one writer: a second compete on this --out stops here, in one line, and touches nothing of the first's
-        plan.out.mkdir(parents=True)
-        _lock(plan.out)
-    except (FileExistsError, SurrealistError):
-        raise SurrealistError(f"--out {plan.out}: exists (another compete writes there?); give a new folder") from None
+    folder = claim(plan)  # one writer: a second compete on this --out stops here, in one line
     bar = tqdm(total=plan.budget, unit="sim", desc="simulations", file=sys.stderr, dynamic_ncols=True)
     failing = []
 
@@ -118,11 +113,10 @@ def run(args: argparse.Namespace) -> int:
         failing.extend(d for d in flight.distances if d < 1.5)
         bar.set_postfix_str(f"runs < 1.5 m: {len(failing)}")
 
-    try:
-        result = run_tool(plan, on_flight)
+    try:  # the folder claimed (one writer; a run of the same settings there is resumed), the tool run
+        result = run_tool(plan, on_flight, folder)
     finally:
         bar.close()
-        _unlock(plan.out)
     _print_summary(result)
     if result.problem:
         raise SurrealistError(result.problem)
@@ -152,7 +146,9 @@ def _print_summary(result) -> None:
     flown = [f for f in result.flights if f.statuses]
     mean = sum(f.wall_s for f in flown) / max(1, sum(len(f.statuses) for f in flown))
     print(f"simulations: {result.spent} of budget {plan.budget} flown ({mean:.2f} s each), {result.refused} refused; "
-          f"{len(result.flights)} agent runs in {result.wall_s:.1f} s")
+          f"{len(result.flights)} agent runs in {result.wall_s:.1f} s"
+          + (f"; resumed: {result.replayed} of them read back from {plan.out / 'flights.sqlite'}"
+             if result.replayed else ""))
     if result.refused and not result.problem:
         print(f"budget: the tool asked for {result.refused} simulations past its budget of {plan.budget}; they were "
               f"refused (it saw each as a failed execution) and its output is scored as usual")

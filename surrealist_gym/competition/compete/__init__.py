@@ -15,9 +15,9 @@ Example::
 from .locate import AERIALIST_ENV, AerialistSource, find_aerialist, tool_apis
 from .process import ToolLimits
 from .server import Flight, SimulationServer
-from .tool import CompetePlan, CompeteResult, WrittenTest, prepare, run, tool_environment, ulog_distance
+from .tool import CompetePlan, CompeteResult, WrittenTest, claim, prepare, run, tool_environment, ulog_distance
 from .toolenv import EnvChoice, ToolEnv, choose_env, own_env
 
 __all__ = ["AERIALIST_ENV", "AerialistSource", "CompetePlan", "CompeteResult", "EnvChoice", "Flight",
-           "SimulationServer", "ToolEnv", "ToolLimits", "WrittenTest", "choose_env", "find_aerialist", "own_env",
-           "prepare", "run", "tool_apis", "tool_environment", "ulog_distance"]
+           "SimulationServer", "ToolEnv", "ToolLimits", "WrittenTest", "choose_env", "claim", "find_aerialist",
+           "own_env", "prepare", "run", "tool_apis", "tool_environment", "ulog_distance"]

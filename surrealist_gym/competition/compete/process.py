@@ -2,11 +2,14 @@
 
 :func:`start` runs the tool's command through a few lines of Python (``python -S -E -c``) that set the limits of
 :class:`ToolLimits` with :mod:`resource`, ask Linux to kill the tool if ``compete`` dies (``PR_SET_PDEATHSIG``),
-then ``exec`` the command: the limits hold from its first instruction and for every process it starts, and no
-``preexec_fn`` runs in ``compete``'s threaded process. The tool leads a new session (``start_new_session``), so
-:func:`stop` ends it and every process it started (that stayed in its group) with one signal; :func:`ending_with_us`
-turns SIGTERM and SIGHUP to ``compete`` into an exception, so the ``finally`` that stops the tool runs (Ctrl-C
-already raises one). See docs/compete.md, "What a tool sees of the machine".
+fork a watchdog into the tool's process group that kills the whole group (the processes the tool started too) once
+``compete`` has ended, however it ended (``kill -9`` included), then ``exec`` the command: the limits hold from its
+first instruction and for every process it starts, and no ``preexec_fn`` runs in ``compete``'s threaded process.
+The tool leads a new session (``start_new_session``), so :func:`stop` ends it and every process it started (that
+stayed in its group) with one signal; :func:`ending_with_us` turns SIGTERM and SIGHUP to ``compete`` into an
+exception, so the ``finally`` that stops the tool runs (Ctrl-C already raises one); :func:`end_with_parent` sends
+``compete`` that SIGTERM when the process named in ``$SURREALIST_COMPETE_PARENT`` (a leaderboard running it as a
+cell) has ended. See docs/compete.md, "What a tool sees of the machine".
 
 Example::
 
@@ -24,7 +27,7 @@ import time
 from dataclasses import dataclass
 
 _LAUNCHER = """
-import os, resource, sys
+import os, resource, signal, sys, time
 for pair in sys.argv[1].split(","):
     name, soft, hard = pair.split(":")
     which = getattr(resource, name)
@@ -36,8 +39,30 @@ try:
     ctypes.CDLL(None).prctl(1, 9)  # PR_SET_PDEATHSIG, SIGKILL: end with the process that started us
 except Exception:
     pass
+def born(pid):  # when the process started (None once it has ended): a process id reused is not it
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return None if fields[0] in ("Z", "X") else fields[19]
+compete = os.getppid()
+birth = born(compete)
+if birth is not None and os.fork() == 0:  # the watchdog, in the tool's process group
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        devnull = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(devnull, fd)
+        while born(compete) == birth:
+            time.sleep(0.25)
+        os.killpg(0, signal.SIGKILL)  # compete is gone (kill -9): the tool's whole group goes with it
+    finally:
+        os._exit(0)
 os.execv(sys.argv[2], sys.argv[2:])
 """
+#: The watchdog's name for a process that compete started and that must end with it (a leaderboard's cell).
+PARENT_ENV = "SURREALIST_COMPETE_PARENT"
 
 
 @dataclass(frozen=True, slots=True)
@@ -123,3 +148,35 @@ def ending_with_us():
         for s, handler in old.items():
             signal.signal(s, handler)
 
+
+
+def end_with_parent() -> None:
+    """When ``$SURREALIST_COMPETE_PARENT`` names this process's parent (a leaderboard running a cell), watch it from
+    a daemon thread and send this process SIGTERM once it has ended (however: ``kill -9`` too), so that the cell
+    stops its tool and its folder's lock is free for the leaderboard's resume."""
+    try:
+        parent = int(os.environ.get(PARENT_ENV, ""))
+    except ValueError:
+        return
+    if parent != os.getppid():  # not the one that started us (or already gone)
+        if not _born(parent):
+            os.kill(os.getpid(), signal.SIGTERM)
+        return
+    birth = _born(parent)
+
+    def watch() -> None:
+        while _born(parent) == birth:
+            time.sleep(0.25)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="surrealist-compete-parent", daemon=True).start()
+
+
+def _born(pid: int) -> str | None:
+    """When process ``pid`` started (None once it has ended, a zombie included)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return None if fields[0] in ("Z", "X") else fields[19]

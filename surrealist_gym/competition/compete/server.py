@@ -94,11 +94,14 @@ class SimulationServer:
         runaway_after: refused requests after which :attr:`runaway` is set (a tool that keeps asking; default
             :func:`default_runaway_after`).
         executor: a Dask scheduler's address (or an executor): the runs fly there instead of on ``workers``.
+        record: a :class:`~surrealist_gym.competition.compete.record.FlightRecord`: every flight is stored in it as
+            it completes, and a request it holds (the same test, first run index, runs and seed) is answered from it
+            unflown (:attr:`replayed` counts those runs).
     """
 
     def __init__(self, folder, budget: int, config, seed: int = 0, workers: int = 1,
                  on_flight: Callable[[Flight], None] | None = None, runaway_after: int | None = None,
-                 roots: tuple = (), executor=None) -> None:
+                 roots: tuple = (), executor=None, record=None) -> None:
         from ...executors import InlineExecutor, LocalPoolExecutor, make_executor
 
         self.folder = Path(folder)
@@ -114,6 +117,8 @@ class SimulationServer:
         self._flights: list[Flight] = []
         self._notes: dict[str, None] = {}
         self._spent = 0
+        self._store = record
+        self.replayed = 0
         self._refused_counts: list[int] = []
         self._closing = False
         self._socket: socket.socket | None = None
@@ -267,6 +272,16 @@ class SimulationServer:
                                                                  f"not a test our loader reads)"))
         first = self._spent
         self._spent += runs  # a run that fails counts as flown, as a PX4 run does
+        key = None
+        if self._store is not None:
+            from .record import flight_key
+
+            key = flight_key(Path(test_file).read_bytes(), first, runs, self.seed)
+            stored = self._store.get(key)
+            if stored is not None:  # flown before this run was interrupted: answered as it was then
+                self.replayed += runs
+                return self._record(Flight(number, agent, api, str(test_file), stored["logs"], stored["statuses"],
+                                           stored["distances"], stored["wall_s"], error=stored["error"]))
         results = self._executor.run(test, range(first, first + runs), self.seed, self.config)
         logs, statuses, distances, failures = [], [], [], 0
         for i, run in enumerate(results):
@@ -279,8 +294,11 @@ class SimulationServer:
             logs.append(log)
             distances.append(float(run.competition_distance))
         error = "" if logs else f"the simulation failed ({failures} of {runs} runs raised)"
+        wall_s = time.perf_counter() - start
+        if key is not None:
+            self._store.put(key, number, logs, statuses, distances, wall_s, error)
         return self._record(Flight(number, agent, api, str(test_file), tuple(logs), tuple(statuses),
-                                   tuple(distances), time.perf_counter() - start, error=error))
+                                   tuple(distances), wall_s, error=error))
     def _record(self, flight: Flight) -> dict:
         self._flights.append(flight)
         if self._on_flight is not None:

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import json
 import math
 import os
 import subprocess
@@ -75,6 +74,13 @@ class CompetePlan:
     limits: ToolLimits = ToolLimits()
     executor: str | None = None  # a Dask scheduler's address: the runs fly there instead of on ``workers``
 
+    def settings(self) -> dict:
+        """What the output folder records of the run (``run.json``): a resume must have the same; ``workers``, the
+        tool's environment and its limits may change (they change where and how fast it runs, not its flights)."""
+        return {"tool": str(self.tool), "case_study": self.case_study, "case_study_file": str(self.case_study_file),
+                "budget": self.budget, "runs_per_test": self.runs_per_test, "seed": self.seed, "uav": self.uav,
+                "workers": self.workers}
+
 
 @dataclass(frozen=True, slots=True)
 class WrittenTest:
@@ -95,7 +101,8 @@ class WrittenTest:
 class CompeteResult:
     """What a run of the tool gave: its output folder (``found_by``: how it was found) and tests, the simulations
     flown and refused, the environment it ran in, and ``problem`` (a one-line reason the run does not count: a crash,
-    a tool stopped for asking on and on past its budget, no output folder; None when it counts)."""
+    a tool stopped for asking on and on past its budget, no output folder; None when it counts); ``replayed``: the
+    simulations a resumed run answered from what its folder had stored."""
 
     plan: CompetePlan
     returncode: int
@@ -109,6 +116,7 @@ class CompeteResult:
     problem: str | None = None
     found_by: str = ""
     tool_env: ToolEnv | None = None
+    replayed: int = 0  # simulations answered from the folder's record (a resumed run), not flown again
 
     @property
     def failures(self) -> tuple[WrittenTest, ...]:
@@ -147,7 +155,8 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         case_study: a case-study name (``mission1``: the tool's ``case_studies/``, then the project's look-up,
             ``competition.case_study_path``) or an Aerialist YAML.
         budget: the simulations the tool may fly, as its cli.py is told.
-        out: the output folder (must not exist; default ``results/compete-YYYYmmdd-HHMMSS``).
+        out: the output folder: new or empty, or one holding a compete run of the same settings, which the run
+            resumes (default ``results/compete-YYYYmmdd-HHMMSS``).
         runs_per_test: runs an agent flies per ``run()`` (a test's own ``agent.count`` wins).
         workers: processes flying the runs of one ``run()``.
         aerialist: an Aerialist folder (default: ``$SURREALIST_AERIALIST``, then the installed one).
@@ -158,6 +167,8 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         limits: what the tool's process may use (time, memory, file size, CPU time; ``process.ToolLimits``).
         executor: a Dask scheduler's address (``tcp://host:port``): the runs fly on its cluster, not on ``workers``.
     """
+    from ...results import ResultsFolder
+
     for name, value in (("budget", budget), ("--runs", runs_per_test), ("--workers", workers)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise SurrealistError(f"{name}: expected a whole number >= 1, got {value!r}")
@@ -168,8 +179,7 @@ def prepare(tool, case_study, budget: int, out=None, *, runs_per_test: int = 1, 
         raise SurrealistError(f"tool {tool}: no cli.py in it (a competition tool is a folder with cli.py)")
     check_folder(tool)  # no link out of it, no loop, no FIFO: before anything in it is read
     out = (Path(out) if out is not None else Path("results") / f"compete-{datetime.now():%Y%m%d-%H%M%S}").absolute()
-    if out.exists() or out.is_symlink():
-        raise SurrealistError(f"--out {out}: exists; give a new folder")
+    ResultsFolder.check(out, "compete")  # new, empty, or a compete run to resume (its settings compared later)
     decide_uav(uav=uav)  # a bad profile fails here, before any folder exists
     argument, file = _case_study(tool.resolve(), case_study)
     apis = tool_apis(tool)
@@ -270,17 +280,47 @@ def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs
 
 
 # --- the run ---------------------------------------------------------------------------------------------------------
-def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) -> CompeteResult:
+def claim(plan: CompetePlan):
+    """The run's output folder, claimed (:class:`~surrealist_gym.results.ResultsFolder`: made or resumed, locked,
+    its settings recorded); one line if another process writes there or it holds something else."""
+    from ...results import ResultsFolder
+    from .record import FLIGHTS
+
+    return ResultsFolder.claim(plan.out, "compete", plan.settings(), free=("workers",), stores=(FLIGHTS,))
+
+
+def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None, folder=None) -> CompeteResult:
     """Run the tool (see the module docstring); ``on_flight`` is called with each Flight as the server records it.
-    ``plan.out`` must not exist, or be empty but for the ``.lock`` the command line holds in it."""
+
+    ``plan.out`` is claimed as a :class:`~surrealist_gym.results.ResultsFolder` (made, locked, its settings
+    recorded): a folder holding a compete run of the same settings is resumed. The tool is started again in a fresh
+    copy, and each simulation it asks for that the folder's ``flights.sqlite`` holds (the same test, run index and
+    seed) is answered from it unflown, so the run ends as an uninterrupted one would. ``folder``: the folder
+    :func:`claim` gave (claimed here when None); released when the run ends."""
+    folder = claim(plan) if folder is None else folder
+    with folder.keeping("the same command resumes it", "flight(s)"):
+        return _run(plan, folder.resumed, on_flight)
+
+
+def _run(plan: CompetePlan, resumed: bool, on_flight) -> CompeteResult:
+    import shutil
+
+    from .process import end_with_parent
+    from .record import FLIGHTS, FlightRecord
+
     start_s = time.perf_counter()
-    _claim(plan.out)
+    end_with_parent()  # a leaderboard's cell ends with the leaderboard
+    work = plan.out / "tool"
+    if resumed:  # the tool starts again from its own folder; what was flown stays in flights/ and flights.sqlite
+        for name in ("summary.json", "flights.csv"):
+            (plan.out / name).unlink(missing_ok=True)
+        if work.exists():
+            shutil.rmtree(work)
     tool_env = own_env(plan.env, plan.out / "tool-env.txt") if plan.env.kind == "own" else \
         ToolEnv("ours", Path(sys.executable), plan.env.reason)
-    work = plan.out / "tool"
     copy_folder(plan.tool, work)
-    for folder in PREPARED_FOLDERS:  # as the competition's Dockerfile prepares the tool's working folder
-        (work / folder).mkdir(exist_ok=True)
+    for name in PREPARED_FOLDERS:  # as the competition's Dockerfile prepares the tool's working folder
+        (work / name).mkdir(exist_ok=True)
     stdout, stderr = plan.out / "tool-stdout.txt", plan.out / "tool-stderr.txt"
     uav = decide_uav(uav=plan.uav)
     uav.write(plan.out)
@@ -288,36 +328,31 @@ def run(plan: CompetePlan, on_flight: Callable[[Flight], None] | None = None) ->
     command = [str(tool_env.python), "cli.py", "generate", plan.case_study, str(plan.budget)]
     roots = (work, plan.case_study_file.parent,  # where the files a test names may be: and those the case study names
              *(Path(v) for _, v in _named_files(plan.case_study_file) if os.path.isabs(v)))
-    with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight, roots=roots,
-                          executor=plan.executor) as server, open(stdout, "wb") as out_file, \
-            open(stderr, "wb") as err_file:
-        env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
-        started = time.time()
-        with ending_with_us():
-            process = start(command, plan.limits, cwd=work, env=env, stdout=out_file, stderr=err_file,
-                            stdin=subprocess.DEVNULL)
-            try:
-                returncode, stopped = wait(process, plan.limits, server.runaway)
-            finally:  # an exception, Ctrl-C, SIGTERM, or the tool's end: none of its processes outlives this
-                stop(process)
-        flights, spent, refused, notes = server.flights, server.spent, server.refused, server.notes
+    record = FlightRecord(plan.out / FLIGHTS[0])
+    try:
+        with SimulationServer(plan.out / "flights", plan.budget, config, plan.seed, plan.workers, on_flight,
+                              roots=roots, executor=plan.executor, record=record) as server, \
+                open(stdout, "wb") as out_file, open(stderr, "wb") as err_file:
+            env = tool_environment(plan.aerialist, server.address, server.authkey, plan.runs_per_test, plan.seed)
+            started = time.time()
+            with ending_with_us():
+                process = start(command, plan.limits, cwd=work, env=env, stdout=out_file, stderr=err_file,
+                                stdin=subprocess.DEVNULL)
+                try:
+                    returncode, stopped = wait(process, plan.limits, server.runaway)
+                finally:  # an exception, Ctrl-C, SIGTERM, or the tool's end: none of its processes outlives this
+                    stop(process)
+            flights, spent, refused, notes = server.flights, server.spent, server.refused, server.notes
+            replayed = server.replayed
+    finally:
+        record.close()
     output, found_by = find_output_folder(stdout, work, started)
     tests = _written_tests(output, flights, work) if output is not None else ()
     problem = _problem(plan, returncode, stopped, output, found_by, stdout, stderr)
     result = CompeteResult(plan, returncode, output, tests, flights, spent, refused, notes,
-                           time.perf_counter() - start_s, problem, found_by, tool_env)
+                           time.perf_counter() - start_s, problem, found_by, tool_env, replayed)
     _write_records(result)
     return result
-
-
-def _claim(out: Path) -> None:
-    """Make the output folder; one line if it exists (another compete made it since :func:`prepare` looked)."""
-    try:
-        out.mkdir(parents=True)
-    except FileExistsError:
-        if out.is_dir() and not out.is_symlink() and [p.name for p in out.iterdir()] == [".lock"]:
-            return  # made, and locked, by the command line
-        raise SurrealistError(f"--out {out}: exists (another compete writes there?); give a new folder") from None
 
 
 def find_output_folder(stdout: Path, work: Path, since: float = 0.0) -> tuple[Path | None, str]:
@@ -447,9 +482,10 @@ def ulog_distance(ulg, test_file) -> float:
 
 
 def _write_records(result: CompeteResult) -> None:
+    """flights.csv, then summary.json (written last, whole: a folder with a summary is a finished run)."""
+    from ...results import ResultsFolder
+
     out = result.plan.out
-    (out / "summary.json").write_text(json.dumps(result.to_dict(), indent=2, default=str) + "\n",
-                                      encoding="utf-8")
     with open(out / "flights.csv", "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(["number", "agent", "api", "test_file", "runs", "statuses", "competition_distances",
@@ -458,6 +494,7 @@ def _write_records(result: CompeteResult) -> None:
             writer.writerow([flight.number, flight.agent, flight.api, flight.test_file, len(flight.statuses),
                              " ".join(flight.statuses), " ".join(f"{d:.3f}" for d in flight.distances),
                              f"{flight.wall_s:.3f}", int(flight.refused), flight.error])
+    ResultsFolder(out, "compete").write_json("summary.json", result.to_dict())
 
 
 def _finite(value: float | None) -> float | None:

@@ -123,7 +123,8 @@ def test_out_holding_anything_else_is_refused_before_flying(camba_fast_folder, u
     for name in ("run.json", "evaluations.sqlite", "best.yaml", ".lock"):
         (search / name).write_text("{}\n")
     assert main(["evaluate", test, "--out", str(search)]) == 2
-    assert _one_line(capsys) == f"error: --out {search}: holds another run, not a run of evaluate; choose another folder"
+    assert _one_line(capsys) == (f"error: --out {search}: holds another run, not a run of evaluate; choose another "
+                                 f"folder")
     (search / "run.json").unlink()
     assert main(["evaluate", test, "--out", str(search)]) == 2
     assert _one_line(capsys) == (f"error: --out {search}: holds something else (best.yaml and 1 more), not a run of "

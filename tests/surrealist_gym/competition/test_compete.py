@@ -281,11 +281,13 @@ def test_errors_before_anything_starts(tmp_path, capsys):
     no_cli.mkdir()
     exists = tmp_path / "exists"
     exists.mkdir()
+    (exists / "notes.txt").write_text("someone else's\n")
     cases = [
         (["compete", str(no_cli), "mission1", "5"], f"tool {no_cli}: no cli.py in it"),
         (["compete", str(tmp_path / "nowhere"), "mission1", "5"], "no such folder"),
         (["compete", str(SNIPPETS), "mission9", "5", "--out", str(tmp_path / "a")], "case study 'mission9': not found"),
-        (["compete", str(SNIPPETS), "mission1", "5", "--out", str(exists)], f"--out {exists}: exists"),
+        (["compete", str(SNIPPETS), "mission1", "5", "--out", str(exists)],
+         f"--out {exists}: holds something else (notes.txt)"),
         (["compete", str(SNIPPETS), "mission1", "0", "--out", str(tmp_path / "b")], "BUDGET: expected a whole number"),
         (["compete", str(SNIPPETS), "mission1", "5", "--aerialist", str(tmp_path), "--out", str(tmp_path / "c")],
          "not an Aerialist folder"),
