@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     from ..competition.reports.leaderboard import write_report
     from ..errors import SurrealistError
     from ..executors import default_workers
-    from ._search import _lock, _unlock
+    from ..results import ResultsFolder
     from .options import check_at_least, check_writable, default_out
 
     check_at_least(args, workers=1)
@@ -81,12 +81,8 @@ def run(args: argparse.Namespace) -> int:
           f"{len(board.case_studies)} case studies x {board.repetitions} repetitions, edition {board.edition.name}: "
           f"budget {board.budget}, {board.runs} runs of up to {board.edition.tests} tests; UAV {board.uav}; "
           f"{'Dask ' + args.dask_scheduler if executor else f'{workers} workers'}; {board.out}", flush=True)
-    board.out.mkdir(parents=True, exist_ok=True)
-    try:
-        _lock(board.out)
-    except SurrealistError:
-        raise SurrealistError(f"--out {board.out}: another leaderboard is writing to this folder") from None
-    lb.start(board)  # its settings, written by the one writer
+    folder = ResultsFolder.claim(board.out, "leaderboard", None, settings_file=lb.BOARD_FILE, stores=())
+    lb.start(board)  # its settings, written by the one writer (a board grows: lb.plan compared them)
     started = time.perf_counter()
     try:
         summaries = lb.run_cells(board, workers, executor and executor.client,
@@ -108,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     except SurrealistError as err:
         raise SurrealistError(f"{err}; what is done is kept in {board.out}: the same command resumes") from None
     finally:
-        _unlock(board.out)
+        folder.release()  # kept: every finished cell and scored run is in it
         if executor is not None:
             executor.close()
     paths = write_report(board, rows)

@@ -7,7 +7,9 @@ A :class:`Board` is checked whole before anything runs (:func:`plan`: every tool
 1. **Cells** (:func:`run_cell`): ``surrealist compete TOOL CASE_STUDY BUDGET --random-seed SEED`` in a process of its
    own, into ``OUT/cells/TOOL/CASE_STUDY-repK``; repetition k's seed is ``--random-seed + k`` (the tool's runs draw
    their noise from it, and the tool's own ``random`` and ``numpy.random`` are seeded from it). A cell is done when its
-   ``summary.json`` is there; an interrupted cell's folder is kept beside, renamed ``*.interrupted-N``, and run again.
+   ``summary.json`` is there; an interrupted cell is run again into its folder, and compete resumes it (the
+   simulations it stored are answered from its ``flights.sqlite``); a cell ends with the leaderboard that runs it
+   (``kill -9`` too: ``process.end_with_parent``).
    Cells run at once on local worker threads (each a process of its own) or as tasks of a Dask cluster.
 2. **Scores** (:func:`score_cell`): each cell's output folder drawn and flown as the edition did (a drawn test that
    breaks the edition's rules on boxes is not flown and scores 0, as the organisers checked them;
@@ -162,8 +164,9 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     if not tools:
         raise SurrealistError("TOOL_DIR: give at least one competition tool's folder")
     out = Path(out).absolute()
-    ran = _given_cells(tools, budget, uav)
-    folders = [Path(os.fspath(t)) for t in tools if compete_summary(t) is None]
+    summaries = [(os.fspath(t), compete_summary(t)) for t in tools]  # a compete output folder's, read once here
+    ran = _given_cells(summaries, budget, uav)
+    folders = [Path(given) for given, summary in summaries if summary is None]
     named = name_tools(folders + list(dict.fromkeys(Path(tool) for tool, _, _ in ran)))  # a folder twice: refused
     case_studies = list(case_studies) + [file for _, file, _ in ran if case_label(file) not in
                                          {case_label(c) for c in case_studies}]
@@ -193,14 +196,12 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     return board
 
 
-def _given_cells(tools: Sequence, budget: int, uav: str) -> list[tuple[str, str, Path]]:
-    """The compete output folders among TOOL_DIR: (the tool's folder, the case study's file, the folder) each,
-    checked to have run with the board's budget and UAV."""
-    from .tool_output import compete_summary
-
+def _given_cells(summaries: Sequence[tuple[str, dict | None]], budget: int, uav: str) -> list[tuple[str, str, Path]]:
+    """The compete output folders among TOOL_DIR (``summaries``: each TOOL_DIR with its compete summary, or None):
+    (the tool's folder, the case study's file, the folder) each, checked to have run with the board's budget and
+    UAV."""
     out = []
-    for given in tools:
-        summary = compete_summary(given)
+    for given, summary in summaries:
         if summary is None:
             continue
         folder = Path(os.fspath(given)).absolute()
@@ -265,27 +266,32 @@ def cell_environment() -> dict[str, str]:
 
 def run_cell(command: Sequence[str], folder: str, env: dict | None = None) -> dict:
     """Run a cell's ``compete`` (unless its ``summary.json`` is there), with ``env`` over the process's own
-    environment, and return that summary. An earlier, interrupted attempt's folder is kept beside, renamed.
-    Picklable, so a Dask worker runs it as it is."""
+    environment, and return that summary. An interrupted cell is resumed: compete answers the simulations its folder
+    stored from it. A folder that holds no compete run (an older version's attempt) is kept beside, renamed. The
+    cell ends with this process. Picklable, so a Dask worker runs it as it is."""
+    from ..results import RUN_FILE, read_summary
+    from .compete.process import PARENT_ENV
+
     folder_path = Path(folder)
-    summary = folder_path / "summary.json"
-    if not summary.is_file():
-        if folder_path.exists():
+    summary = read_summary(folder_path)
+    if summary is None:
+        if folder_path.exists() and not (folder_path / RUN_FILE).is_file():
             set_aside(folder_path)
         folder_path.parent.mkdir(parents=True, exist_ok=True)
         log = folder_path.with_name(folder_path.name + ".log")
-        with open(log, "w", encoding="utf-8") as f:
+        with open(log, "a", encoding="utf-8") as f:
             subprocess.call(list(command), stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                            env={**os.environ, **(env or {})})
-        if not summary.is_file():
+                            env={**os.environ, **(env or {}), PARENT_ENV: str(os.getpid())})
+        summary = read_summary(folder_path)
+        if summary is None:
             lines = [x for x in log.read_text(encoding="utf-8", errors="replace").splitlines() if x.strip()]
             raise SurrealistError(f"cell {folder}: compete wrote no summary ({lines[-1] if lines else 'no output'}; "
                                   f"see {log})")
-    return json.loads(summary.read_text(encoding="utf-8"))
+    return summary
 
 
 def set_aside(folder: Path) -> Path:
-    """Keep an interrupted attempt's folder beside, under a new name (nothing is deleted)."""
+    """Keep a folder beside, under a new name (nothing is deleted)."""
     k = 1
     while folder.with_name(f"{folder.name}.interrupted-{k}").exists():
         k += 1
@@ -299,13 +305,15 @@ def run_cells(board: Board, workers: int, client=None, done: Callable[[Cell, dic
     """Run every cell not done yet (``workers`` at once, or as tasks of the Dask ``client``); each cell's summary."""
     from concurrent.futures import ThreadPoolExecutor, as_completed
 
+    from .tool_output import compete_summary
+
     summaries: dict[Cell, dict] = {}
     env = cell_environment()
     given = {cell for cell, _ in board.given}
     jobs = {cell: (cell_command(board, cell), str(board.folder(cell)), env) for cell in board.cells
             if cell not in given}
-    for cell in given:
-        summaries[cell] = run_cell((), str(board.folder(cell)))  # run before: its summary
+    for cell in given:  # run before: its summary
+        summaries[cell] = compete_summary(board.folder(cell))
     if client is not None:
         from distributed import as_completed as dask_completed
 

@@ -2,7 +2,6 @@
 output folder), loaded and checked against the competition's rules, each bad one a one-line error naming its file."""
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 from typing import Sequence
@@ -19,9 +18,11 @@ _SUFFIXES = (".yaml", ".yml")
 def compete_summary(folder) -> dict | None:
     """The ``summary.json`` of a ``surrealist compete`` output folder (the tool, case study, budget, output folder,
     ...), or None when the folder is not one."""
+    from ..results import read_summary
+
     try:
-        summary = json.loads((Path(os.fspath(folder)) / COMPETE_SUMMARY).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
+        summary = read_summary(os.fspath(folder), COMPETE_SUMMARY)
+    except SurrealistError:
         return None
     keys = {"tool", "case_study", "budget", "output_folder"}
     return summary if isinstance(summary, dict) and keys <= summary.keys() else None

@@ -159,6 +159,36 @@ def test_a_board_resumes_without_running_a_cell_again(local_board, boxes, windy,
     assert not list((local_board / "cells").rglob("*.interrupted-*"))
 
 
+def test_a_board_killed_mid_cell_resumes_it_to_the_same_board(local_board, boxes, windy, aerialist, tmp_path):
+    """kill -9 of the leaderboard while its cell's compete flies: the cell (compete and its tool) ends with it, the
+    flights it stored are kept, and the same command resumes the cell and gives the board of an uninterrupted run."""
+    from surrealist_gym.results import count_rows
+    from tests.conftest import alive, killed_and_resumed, until
+
+    out = tmp_path / "killed"
+    cell = out / "cells" / "boxes" / "mission1-wind-rep0"
+    argv = ["leaderboard", boxes, "--case-study", windy, "--edition", "2026", "--budget", "3", "--repetitions", "1",
+            "--runs", "2", "--random-seed", "5", "--workers", "1", "--out", out]
+    killed_and_resumed(argv, out, lambda: count_rows(cell / "flights.sqlite", "flights"))
+    assert not (cell / "summary.json").exists()
+
+    def cell_processes() -> list[int]:  # the cell's compete and the processes of its tool
+        found = []
+        for entry in Path("/proc").iterdir():
+            try:
+                if entry.name.isdigit() and str(cell).encode() in (entry / "cmdline").read_bytes() + \
+                        os.readlink(entry / "cwd").encode():
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+        return found
+
+    until(lambda: not any(alive(p) for p in cell_processes()), "the cell to end with the leaderboard")
+    assert _board(out, boxes, windy, "--workers", "1") == 0
+    assert _rows(out / "leaderboard.csv") == _rows(local_board / "leaderboard.csv")
+    assert not list((out / "cells").rglob("*.interrupted-*"))
+
+
 def test_a_dask_cluster_gives_the_same_board_as_local_workers(local_board, boxes, windy, aerialist, tmp_path):
     distributed = pytest.importorskip("distributed")
     with warnings.catch_warnings():
@@ -280,14 +310,15 @@ def test_a_compete_folder_is_a_cell_run_before(local_board, tmp_path, aerialist)
 
 
 def test_one_writer_per_board(local_board, boxes, windy, capsys, aerialist):
-    from surrealist_gym.cli._search import _lock, _unlock
+    from surrealist_gym.competition.leaderboard import BOARD_FILE
+    from surrealist_gym.results import ResultsFolder
 
-    _lock(local_board)  # another leaderboard at work in the folder
-    try:
+    other = ResultsFolder.claim(local_board, "leaderboard", None, settings_file=BOARD_FILE, stores=())
+    try:  # another leaderboard at work in the folder
         assert _board(local_board, boxes, windy, "--workers", "1") == 2
     finally:
-        _unlock(local_board)
-    assert "another leaderboard is writing to this folder" in _one_line(capsys)
+        other.release()
+    assert f"another process (process {os.getpid()}) is writing to this folder" in _one_line(capsys)
 
 
 def test_a_case_study_is_the_tool_s_own_from_any_folder(tmp_path, monkeypatch, aerialist):
