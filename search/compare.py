@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import csv
 import itertools
-import json
 import math
 import re
 import threading
@@ -27,13 +26,13 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from surrealist_gym.errors import SurrealistError
-
 from .metrics import SearchMetrics
 from .registry import agent_label, make_agent
 from .repetitions import run_repetition
 
 SETTINGS_FILE = "compare.json"
+#: The searches' evaluation stores (a folder holding a row of them is kept on failure).
+STORES = ("searches/*.sqlite", "evaluations")
 # (metric key, column title, format); a metric absent from every search of a problem is left out of the tables
 METRICS = (
     ("best_fitness", "best fitness", ".2f"),
@@ -108,7 +107,8 @@ def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: i
         repetitions: searches per agent; repetition r uses env seed r and agent seed r.
         budget: evaluations per search.
         runs: simulations per evaluation (None = the env's default).
-        out: results folder; calling again on it resumes (budget, runs, env and env_kwargs must match).
+        out: results folder (a :class:`~surrealist_gym.results.ResultsFolder`, its settings in ``compare.json``);
+            calling again on it resumes (budget, runs, env and env_kwargs must match; one writer at a time).
         env_kwargs: further keyword arguments of the env (JSON values, e.g. ``{"seed_test": "seed2.yaml"}``).
         executor: "process" (default), "inline", a Dask address or a ``distributed.Client``.
         workers: local worker processes (process executor).
@@ -116,19 +116,27 @@ def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: i
         progress: called with ``{"agent", "repetition", "evaluations", "budget", "done"}`` after every step.
         random_seed: base seed: repetition r uses env seed ``random_seed + r`` and agent seed ``random_seed + r``.
     """
-    from surrealist_gym.executors import InlineExecutor, make_executor
+    from surrealist_gym.results import ResultsFolder
 
     if repetitions < 1 or budget < 1 or not agents:
         raise ValueError(f"compare: expected agents, repetitions >= 1 and budget >= 1; got {list(agents)}, "
                          f"{repetitions}, {budget}")
     for name in agents:  # fail early on a bad name, before any simulation
         make_agent(name, seed=0)
-    out = Path(out)
-    (out / "searches").mkdir(parents=True, exist_ok=True)
     settings = {"env_id": env_id, "budget": budget, "runs": runs, "env_kwargs": env_kwargs or {}}
     if random_seed:  # recorded when not 0, so a folder written before the option existed still resumes
         settings["random_seed"] = int(random_seed)
-    _check_settings(out / SETTINGS_FILE, settings)
+    folder = ResultsFolder.claim(out, "compare", settings, settings_file=SETTINGS_FILE, stores=(STORES,))
+    with folder.keeping("the same command (the same --out) resumes it", "evaluation(s)"):
+        return _compare(env_id, agents, repetitions, budget, runs, folder.path, settings, env_kwargs, executor,
+                        workers, parallel, progress, random_seed)
+
+
+def _compare(env_id, agents, repetitions, budget, runs, out: Path, settings, env_kwargs, executor, workers, parallel,
+             progress, random_seed) -> CompareResult:
+    from surrealist_gym.executors import InlineExecutor, make_executor
+
+    (out / "searches").mkdir(exist_ok=True)
     real = make_executor(executor, workers)
     shared = _Shared(real)
     lock = threading.Lock()
@@ -149,16 +157,6 @@ def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: i
     summary, pairwise = _summarise(records, list(agents))
     _write_reports(out, settings, records, summary, pairwise, list(agents))
     return CompareResult(tuple(records), tuple(summary), tuple(pairwise), out)
-
-
-def _check_settings(path: Path, settings: dict) -> None:
-    if path.is_file():
-        saved = json.loads(path.read_text())
-        if saved != json.loads(json.dumps(settings)):
-            raise SurrealistError(f"{path}: the folder holds a comparison with other settings ({saved}); "
-                                  f"use another --out or the same settings")
-    else:
-        path.write_text(json.dumps(settings, indent=2) + "\n")
 
 
 def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, progress, lock,

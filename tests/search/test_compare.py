@@ -107,3 +107,35 @@ def test_agent_names_with_dots_keep_one_store_per_repetition():
 
     stem = Path("searches") / f"{_slug('ppo:results/policies/ppo-replicate.zip')}-rep3"
     assert stem.with_suffix(".sqlite").name.endswith("-rep3.sqlite")
+
+
+def _searches(out: Path) -> list[dict]:
+    """searches.csv without its timings."""
+    with open(out / "searches.csv", newline="") as f:
+        return [{k: v for k, v in row.items() if "seconds" not in k and "wall" not in k} for row in csv.DictReader(f)]
+
+
+def test_a_compare_killed_mid_run_resumes_with_the_same_out(tmp_path, capsys):
+    """kill -9 of ``surrealist compare`` while it flies: the evaluations stored are kept, the killed run's lock does
+    not stand in the way, and the same command gives the searches of an uninterrupted comparison."""
+    from surrealist_gym.results import ResultsFolder
+    from tests.conftest import killed_and_resumed
+
+    def argv(out):
+        return ["compare", "--env", "Surrealist-Generate-v0", "--agents", "random", "--repetitions", "2",
+                "--budget", "4", "--runs", "1", "--inline", "--out", str(out)]
+
+    def new_simulations() -> int:
+        return int(capsys.readouterr().out.rsplit("searches (", 1)[1].split(" new simulations")[0])
+
+    full = tmp_path / "full"
+    assert main(argv(full)) == 0
+    flown = new_simulations()
+    out = tmp_path / "killed"
+    stored = ResultsFolder(out, "compare", stores=(("searches/*.sqlite", "evaluations"),)).stored
+    killed_and_resumed(argv(out), out, stored, at_least=2)
+    kept = stored()
+    assert kept >= 2 and not (out / "searches.csv").exists()
+    assert main(argv(out)) == 0
+    assert new_simulations() == flown - kept  # 1 run per evaluation: only those not stored are flown
+    assert _searches(out) == _searches(full)

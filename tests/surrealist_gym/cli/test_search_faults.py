@@ -101,6 +101,21 @@ def test_ctrl_c_keeps_the_folder_and_resumes(tmp_path, uninterrupted):
     assert _evaluations(out) == uninterrupted
 
 
+def test_kill_9_keeps_the_folder_and_the_same_command_resumes(tmp_path, uninterrupted):
+    """SIGKILL: no clean-up of any kind; its pool worker may outlive it a moment, holding the lock file it
+    inherited: the lock of a process that no longer runs is taken over."""
+    out = tmp_path / "killed"
+    proc = _start(out)
+    _wait_for_stored(proc, out, 2)
+    proc.kill()
+    proc.wait(timeout=60)
+    proc.stderr.close()
+    stored = stored_evaluations(out)
+    assert stored >= 2 and not (out / "evaluations.csv").exists()
+    assert main([*SEARCH, "--out", str(out)]) == 0  # the same command
+    assert _evaluations(out) == uninterrupted
+
+
 def test_a_plot_that_cannot_be_written_keeps_the_folder(tmp_path, uninterrupted, monkeypatch, capsys):
     """The disk fills while figure1.png is written (an injected ENOSPC: where it strikes is the point here)."""
     import surrealist_gym.results.search as results

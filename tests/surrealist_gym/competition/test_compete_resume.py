@@ -112,6 +112,6 @@ def test_a_resume_with_other_settings_is_refused(uninterrupted, capsys):
     before = sorted(p.name for p in uninterrupted.iterdir())
     assert main(["compete", str(SNIPPETS), "mission1", "6", "--out", str(uninterrupted)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1] == (f"error: --out {uninterrupted}: holds a compete run started with budget = 5, not 6; resume it "
-                       f"with the same settings, or choose another folder")
+    assert err[-1] == (f"error: --out {uninterrupted}: holds a compete run with other settings (budget: 5 there, 6 "
+                       f"here); resume it with the same settings, or choose another folder")
     assert sorted(p.name for p in uninterrupted.iterdir()) == before
