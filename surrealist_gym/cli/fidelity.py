@@ -2,7 +2,9 @@
 
 LABELS is a tests CSV (flown on ``--mission``, default ``<CSV folder>/../case_studies/mission1.yaml``) or a folder
 of Aerialist YAMLs with a labels file (``--labels``, default ``<folder>/labels.csv``). Prints the summary and writes
-``fidelity.csv`` (one row per test), ``fidelity.json`` (the summary) and ``fidelity.png`` to ``--out``.
+``fidelity.csv`` (one row per test), ``fidelity.json`` (the summary) and ``fidelity.png`` to ``--out``, a results
+folder (``run.json``: its settings; ``evaluations.sqlite``: every run, stored as it completes): the same command
+with the same ``--out`` resumes an interrupted measurement and flies only the runs it lacks.
 
 Example::
 
@@ -117,16 +119,41 @@ def summary_text(report) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Fly the labelled set, print the summary and write the report files."""
-    import json
-
-    from tqdm import tqdm
-
-    from ..fidelity.measure import load_labelled_set, measure_fidelity, write_report
+    from ..fidelity.measure import load_labelled_set
+    from ..results import ResultsFolder
     from ..sim.uav import DEFAULT_UAV, decide_uav
 
     _check(args)
     uav = decide_uav(uav=args.uav or DEFAULT_UAV)  # a bad profile fails before anything is read
     lset = load_labelled_set(args.labels_set, args.labels, args.mission)  # bad input fails before the progress bar
+    folder = ResultsFolder.claim(args.out, "fidelity", _settings(args), free=("workers", "dask_scheduler"))
+    with folder.keeping("the same command resumes it", "record(s) of runs"):
+        return _measure(args, lset, folder.path, uav)
+
+
+def _settings(args) -> dict:
+    """What the folder records of the measurement (``run.json``): the same command resumes only with the same."""
+    from pathlib import Path
+
+    from ..sim.uav import recorded_choice
+
+    def absolute(path):
+        return None if path is None else str(Path(path).absolute())
+
+    return {"labels_set": absolute(args.labels_set), "labels": absolute(args.labels), "mission": absolute(args.mission),
+            "uav": recorded_choice(args.uav), "runs": args.runs,
+            "random_seed": args.random_seed, "limit": args.limit, "every": args.every, "close": args.close,
+            "buffer": args.buffer}
+
+
+def _measure(args, lset, out, uav) -> int:
+    import json
+
+    from tqdm import tqdm
+
+    from ..fidelity.measure import measure_fidelity, write_report
+    from ..results import EVALUATIONS
+
     bar = tqdm(total=None, unit="test", desc="fidelity", dynamic_ncols=True, file=sys.stderr, disable=None)
 
     def progress(done: int, total: int) -> None:
@@ -137,11 +164,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         report = measure_fidelity(lset, runs=args.runs, seed=args.random_seed, uav=args.uav, workers=args.workers,
                                   limit=args.limit, every=args.every, close=args.close, buffer=args.buffer,
-                                  progress=progress, executor=args.dask_scheduler)
+                                  progress=progress, executor=args.dask_scheduler, store=out / EVALUATIONS[0])
     finally:
         bar.close()
-    paths = write_report(report, args.out)
-    uav.write(paths["json"].parent)
+    paths = write_report(report, out)
+    uav.write(out)
     if args.json:
         print(json.dumps({**report.to_dict(), "files": {k: str(v) for k, v in paths.items()}}, indent=2))
         return 0

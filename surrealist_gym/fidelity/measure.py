@@ -52,31 +52,73 @@ STATUS_ORDER = tuple(s.value for s in (RunStatus.SUCCESS, RunStatus.TIMEOUT, Run
 
 # --- flying ------------------------------------------------------------------------------------------------------
 def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,
-                     buffer: float = 0.0, progress: Callable[[int, int], None] | None = None, executor=None
-                     ) -> list[tuple[RunRecord, ...]]:
+                     buffer: float = 0.0, progress: Callable[[int, int], None] | None = None, executor=None,
+                     store=None) -> list[tuple[RunRecord, ...]]:
     """Fly every test of ``lset`` (:func:`~surrealist_gym.executors.fly_many`) with ``config`` (default
     :class:`~surrealist_gym.sim.config.SimConfig`), the competition distance's polyline buffered by ``buffer`` [m].
 
     ``executor``: a Dask scheduler's address, a ``distributed.Client`` or an executor (default ``workers`` local
     processes, all cores and at most 8; 1: this process). Returns one tuple of run records per test, in the set's
     order; ``progress`` is called with (tests done, tests) as tests finish. A run whose simulation raises is retried
-    once; if it raises again, it ends in ``error`` with the exception as message.
+    once; if it raises again, it ends in ``error`` with the exception as message. ``store``: an SQLite file
+    (:class:`~surrealist_gym.store.EvaluationStore`) that holds the runs of this measurement: those it holds are read
+    back, not flown, and each chunk flown is written to it as it completes (a store of another measurement is a
+    one-line error).
     """
     from ..executors import default_workers, executor_for, fly_many
     from ..sim import SimConfig
 
     config = replace(config or SimConfig(), competition_buffer_m=buffer)
-    held, finished = [0] * len(lset), 0
+    db, have = None, [{} for _ in lset.tests]
+    if store is not None:
+        db = _open_store(store, lset, runs, seed, config)
+        for row in db:
+            have[row.info["test"]].update(
+                (r["index"], RunRecord.from_dict(r, t)) for r, t in zip(row.runs, row.info["trajectories"]))
+    held, finished = [len(h) for h in have], sum(len(h) == runs for h in have)
 
     def done(i: int, records: list) -> None:  # runs arrive chunk by chunk: a test is done when all its runs are
         nonlocal finished
+        if db is not None:
+            _store_runs(db, i, lset.tests[i], records)
         held[i] += len(records)
         finished += held[i] == runs
         if progress and held[i] == runs:
             progress(finished, len(lset))
 
-    with executor_for(executor, workers or default_workers()) as flying:
-        return fly_many(list(lset.tests), runs, seed, config, flying, done=done)
+    try:
+        with executor_for(executor, workers or default_workers()) as flying:
+            return fly_many(list(lset.tests), runs, seed, config, flying, have=have, done=done)
+    finally:
+        if db is not None:
+            db.close()
+
+
+def _open_store(store, lset: LabelledSet, runs: int, seed: int, config):
+    """The measurement's store, claimed for its identity (the tests, runs, seed and simulator settings)."""
+    import hashlib
+
+    from ..store import EvaluationStore
+
+    def digest(value: str) -> str:
+        return hashlib.sha1(value.encode()).hexdigest()[:16]
+
+    db = EvaluationStore(store)
+    try:
+        db.claim({"command": "fidelity", "tests": [digest(t.key()) for t in lset.tests], "runs": int(runs),
+                  "seed": int(seed), "sim": digest(repr(config))})
+    except BaseException:
+        db.close()
+        raise
+    return db
+
+
+def _store_runs(db, i: int, test, records) -> None:
+    """Write a chunk of runs of test ``i`` (with their trajectories) and commit it."""
+    from ..store import StoredEvaluation
+
+    db.add(StoredEvaluation(test.key(), {}, tuple(r.index for r in records), tuple(r.to_dict() for r in records),
+                            None, {"test": i, "trajectories": [r.trajectory.xyz.tolist() for r in records]}))
 
 
 # --- the report --------------------------------------------------------------------------------------------------
@@ -303,7 +345,8 @@ def _durations(rows) -> FrozenDict | None:
 def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: int = 0, uav: str | None = None,
                      config=None, workers: int | None = None, limit: int | None = None, every: int = 1,
                      close: float = 3.0, buffer: float = 0.0,
-                     progress: Callable[[int, int], None] | None = None, executor=None) -> FidelityReport:
+                     progress: Callable[[int, int], None] | None = None, executor=None,
+                     store=None) -> FidelityReport:
     """Fly a labelled set (see :func:`load_labelled_set`) and report how far our UAV agrees with the labels.
 
     Args:
@@ -316,6 +359,8 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
             ``every``-th test, at most ``limit``.
         close: the close region is theirs < ``close`` [m]; buffer: polyline buffer of the distance [m].
         progress: called with (tests done, tests) as tests finish.
+        store: an SQLite file holding the runs (:func:`fly_labelled_set`): a measurement interrupted and run again
+            on it flies only the runs it lacks, and reports as an uninterrupted one.
     """
     if runs < 1 or every < 1 or (limit is not None and limit < 1) or close <= 0 or buffer < 0:
         raise ValueError(f"invalid options: runs={runs}, every={every}, limit={limit}, close={close}, "
@@ -324,7 +369,7 @@ def measure_fidelity(path, *, labels=None, mission=None, runs: int = 1, seed: in
     lset = path if isinstance(path, LabelledSet) else load_labelled_set(path, labels, mission)
     lset = lset.subset(limit, every)
     start = time.perf_counter()
-    outcomes = fly_labelled_set(lset, runs, seed, config, workers, buffer, progress, executor)
+    outcomes = fly_labelled_set(lset, runs, seed, config, workers, buffer, progress, executor, store)
     return build_report(lset, outcomes, runs=runs, seed=seed, close=close, buffer=buffer, uav=config.profile,
                         wall_s=time.perf_counter() - start)
 

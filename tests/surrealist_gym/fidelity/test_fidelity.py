@@ -259,3 +259,33 @@ def test_csv_without_case_studies_names_the_default_mission(tmp_path, capsys, sh
         load_labelled_set(path)
     assert main(["fidelity", str(path), "--mission", str(COMPETITION / "case_studies" / "mission1.yaml"),
                  "--workers", "1", "--out", str(tmp_path / "out")]) == 0  # no obstacles: distance inf, no pairs
+
+
+def test_cli_killed_mid_run_resumes_to_the_same_report(tmp_path, capsys, shared_data):
+    """kill -9 of ``surrealist fidelity`` while it flies: the runs stored are kept, the killed run's lock does not
+    stand in the way, and the same command flies the rest and reports as an uninterrupted run."""
+    from surrealist_gym.results import ResultsFolder
+    from tests.conftest import killed_and_resumed
+
+    def argv(out):
+        return ["fidelity", str(RILAST), "--limit", "6", "--every", "50", "--workers", "1", "--runs", "1",
+                "--out", str(out)]
+
+    def rows(out):  # fidelity.csv, and the summary's figures but its wall time
+        with open(out / "fidelity.csv", newline="") as f:
+            table = list(csv.DictReader(f))
+        summary = json.loads((out / "fidelity.json").read_text())
+        return table, {k: v for k, v in summary.items() if "wall" not in k and "per_s" not in k}
+
+    full = tmp_path / "full"
+    assert main(argv(full)) == 0
+    out = tmp_path / "killed"
+    stored = ResultsFolder(out, "fidelity").stored
+    killed_and_resumed(argv(out), out, stored, at_least=2)
+    kept = stored()
+    assert 2 <= kept < 6 and not (out / "fidelity.json").exists()
+    assert main(argv(out)) == 0
+    assert stored() == 6 and rows(out) == rows(full)
+    capsys.readouterr()
+    assert main([*argv(out)[:-2], "--runs", "2", "--out", str(out)]) == 2  # other settings: refused, named
+    assert "(runs: 1 there, 2 here)" in capsys.readouterr().err
