@@ -1,5 +1,9 @@
 """``surrealist calibrate LOG... --profile uav.yaml``: fit a UAV profile to real flights (docs/calibration.md).
 
+Every run flown is kept as it completes in a results folder named after the profile (``uav/`` beside ``uav.yaml``:
+``run.json``, ``evaluations.sqlite``): the same command resumes an interrupted calibration and flies only the runs it
+lacks.
+
 Example::
 
     surrealist calibrate m0.ulg --profile m0-uav.yaml   # prints each fitted value and residual; m0-uav.png
@@ -54,6 +58,7 @@ def run(args) -> int:
     from ..executors import make_executor
     from ..fidelity.calibration import calibrate, format_calibration, plot_calibration
     from ..logs import read_flight
+    from ..results import EVALUATIONS, ResultsFolder
     from ..sim.profiles import save_profile
     from ..sim.uav import decide_uav
 
@@ -69,17 +74,31 @@ def run(args) -> int:
         flights.append(flight)
     base = decide_uav(uav=args.uav or None, flight=flights[0]).profile  # --uav, else the first log's vehicle
     seed = load_test(args.seed) if args.seed else None
+    # the runs, kept as they fly in a results folder named after the profile: the same command resumes
+    folder = ResultsFolder.claim(out.with_suffix(""), "calibrate", _settings(args), free=("workers",))
     start = time.perf_counter()
-    executor = make_executor(args.dask_scheduler, args.workers)
-    try:
-        cal = calibrate(flights, base, seed, runs=args.runs, executor=executor, seed=args.random_seed,
-                        progress=lambda line: print(f"  {line}", flush=True))
-    finally:
-        executor.close()
+    with folder.keeping("the same command resumes it", "record(s) of runs"):
+        executor = make_executor(args.dask_scheduler, args.workers)
+        try:
+            cal = calibrate(flights, base, seed, runs=args.runs, executor=executor, seed=args.random_seed,
+                            store=folder.path / EVALUATIONS[0], progress=lambda line: print(f"  {line}", flush=True))
+        finally:
+            executor.close()
     print(format_calibration(cal))
     out.parent.mkdir(parents=True, exist_ok=True)
     save_profile(cal.profile, out)
     plot_calibration(cal, plot)
     print(f"profile {cal.profile.name} -> {out} ({cal.simulations} simulations, "
-          f"{time.perf_counter() - start:.1f} s); phases plotted in {plot}")
+          f"{time.perf_counter() - start:.1f} s); phases plotted in {plot}; runs kept in {folder.path}/")
     return 0
+
+
+def _settings(args) -> dict:
+    """What the runs folder records of the calibration (``run.json``): the same command resumes only with the same."""
+    from pathlib import Path
+
+    from ..sim.uav import recorded_choice
+
+    return {"logs": [str(Path(log).absolute()) for log in args.logs], "uav": recorded_choice(args.uav or None),
+            "seed": None if args.seed is None else str(Path(args.seed).absolute()), "runs": args.runs,
+            "random_seed": args.random_seed}

@@ -110,7 +110,7 @@ def _mission_test(flight, seed_test: TestCase | None) -> TestCase:
 
 def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: TestCase | None = None, runs: int = 2,
               executor=None, grid: int = 5, passes: int = 2, seed: int = 0,
-              progress: Callable[[str], None] | None = None) -> Calibration:
+              progress: Callable[[str], None] | None = None, store=None) -> Calibration:
     """Fit the settings of ``base`` (default: the first log's vehicle, :func:`~surrealist_gym.sim.uav.decide_uav`)
     that the logs' PX4 parameters do not fix, to the logs' phases.
 
@@ -122,6 +122,9 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
             logs' missions fly together (:func:`~surrealist_gym.executors.fly_many`).
         grid: values of each setting's range flown before interpolating.
         passes: rounds over the settings (the pace moves the altitude a little, and back).
+        store: an SQLite file (:class:`~surrealist_gym.store.EvaluationStore`) that keeps every run as it completes:
+            a calibration interrupted and run again on it reads those back instead of flying them, and ends as an
+            uninterrupted one (a store of another calibration is a one-line error).
     """
     from ..executors import InlineExecutor, fly_many
 
@@ -142,14 +145,16 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
     values = {fit.setting: settings[fit.setting].value(base) for fit in FITS[base.avoidance_model]}
     count = [0]
     cache: dict[tuple, tuple] = {}
+    db, stored = _runs_store(store, tests, runs, seed, config) if store is not None else (None, {})
 
     def fly(vals: dict) -> tuple[list[Phases], list[Trajectory]]:
         key = tuple(sorted((k, round(v, 6)) for k, v in vals.items()))
         if key not in cache:
             got, trajs = [], []
             settings_of = {UAV_SETTING_PREFIX + k: v for k, v in vals.items()}
-            flown_runs = fly_many([replace(test, params={**test.params, **settings_of}) for test in tests], runs,
-                                  seed, config, executor)
+            batch = [replace(test, params={**test.params, **settings_of}) for test in tests]
+            flown_runs = fly_many(batch, runs, seed, config, executor, have=[stored.get(t.key(), {}) for t in batch],
+                                  done=None if db is None else lambda i, records: _keep(db, batch[i], records))
             for flight, results in zip(flights, flown_runs):
                 count[0] += len(results)
                 flown = [r for r in results if len(r.trajectory) >= 4]
@@ -162,6 +167,15 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
             cache[key] = (got, trajs)
         return cache[key]
 
+    try:
+        return _fit(flights, base, real, goals, settings, values, fly, grid, passes, progress, count)
+    finally:
+        if db is not None:
+            db.close()
+
+
+def _fit(flights, base, real, goals, settings, values, fly, grid, passes, progress, count) -> Calibration:
+    """The passes over the settings (``fly``: the logs' missions flown with some values), then the calibration."""
     def mean(figs: list[Phases], name: str) -> float:
         return float(np.mean([getattr(f, name) for f in figs]))
 
@@ -204,6 +218,39 @@ def calibrate(flights: Sequence, base: UavProfile | None = None, seed_test: Test
     flown = tuple((str(f.path), f.trajectory, b, a, g)
                   for f, b, a, g in zip(flights, before_trajs, after_trajs, goals))
     return Calibration(fitted_profile, fitted, checks, flown, count[0])
+
+
+def _runs_store(store, tests, runs: int, seed: int, config) -> tuple:
+    """The calibration's store, claimed for its identity (the logs' missions, runs, seed, simulator settings), and
+    the runs it holds by test key ({key: {index: RunRecord}})."""
+    import hashlib
+
+    from ..outcomes import RunRecord
+    from ..store import EvaluationStore
+
+    def digest(value: str) -> str:
+        return hashlib.sha1(value.encode()).hexdigest()[:16]
+
+    db = EvaluationStore(store)
+    try:
+        db.claim({"command": "calibrate", "tests": [digest(t.key()) for t in tests], "runs": int(runs),
+                  "seed": int(seed), "sim": digest(repr(config))})
+        held: dict[str, dict] = {}
+        for row in db:
+            held.setdefault(row.test_key, {}).update(
+                (r["index"], RunRecord.from_dict(r, t)) for r, t in zip(row.runs, row.info["trajectories"]))
+    except BaseException:
+        db.close()
+        raise
+    return db, held
+
+
+def _keep(db, test: TestCase, records) -> None:
+    """Store a chunk of runs of ``test`` (with their trajectories) and commit it."""
+    from ..store import StoredEvaluation
+
+    db.add(StoredEvaluation(test.key(), {}, tuple(r.index for r in records), tuple(r.to_dict() for r in records),
+                            None, {"trajectories": [r.trajectory.xyz.tolist() for r in records]}))
 
 
 def _solve(xs: np.ndarray, ys: np.ndarray, target: float) -> float | None:

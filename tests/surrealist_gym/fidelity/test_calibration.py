@@ -182,3 +182,28 @@ def test_a_seed_with_an_invalid_uav_setting_is_one_line_naming_its_file(tmp_path
     assert lines[1].startswith(f"error: {seed.resolve()}: params.uav.planner.nope")
     assert lines[2] == "error: --seed middle: not a test YAML file nor one of tall, paper, detours"
     assert not (tmp_path / "r").exists()
+
+
+def test_calibrate_killed_mid_run_resumes_to_the_same_profile(tmp_path, capsys):
+    """kill -9 of ``surrealist calibrate`` while it flies: the runs kept in its folder (``m0-uav/``) are read back,
+    the killed run's lock does not stand in the way, and the same command fits the profile an uninterrupted one
+    fits."""
+    from surrealist_gym.results import ResultsFolder
+    from tests.conftest import killed_and_resumed
+
+    def argv(out):
+        return ["calibrate", str(M0_ULG), "--profile", str(out), "--runs", "1", "--workers", "1"]
+
+    full = tmp_path / "full" / "m0-uav.yaml"
+    assert main(argv(full)) == 0
+    printed = capsys.readouterr().out
+    out = tmp_path / "killed" / "m0-uav.yaml"
+    stored = ResultsFolder(out.with_suffix(""), "calibrate").stored
+    killed_and_resumed(argv(out), out, stored, at_least=3)
+    kept = stored()
+    assert kept >= 3 and not out.exists()
+    assert main(argv(out)) == 0
+    again = capsys.readouterr().out
+    assert out.read_text() == full.read_text().replace(str(full.parent), str(out.parent))
+    assert printed.split(" simulations, ")[0].rsplit("(", 1)[1] == again.split(" simulations, ")[0].rsplit("(", 1)[1]
+    assert stored() > kept  # the rest was flown and kept
