@@ -6,7 +6,9 @@ and returns Aerialist's own results from ULogs. Prints where the tool's output f
 written, simulations flown and refused past the budget, failures by the competition's distance. A tool that
 crashes, is stopped for asking on and on past its budget, or leaves no output folder (neither printed as
 ``output folder: PATH`` nor a folder of test YAMLs under ``generated_tests/``) gets one line and exit code 2, with
-what it wrote kept. The tool runs with this Python, or in an environment of its own (``--tool-env``).
+what it wrote kept. The tool runs with this Python, or in an environment of its own (``--tool-env``). Every
+simulation is stored in ``--out`` as it completes: the same command with the same ``--out`` resumes a run that was
+killed, answering the simulations stored instead of flying them again (docs/compete.md).
 
 Example::
 
