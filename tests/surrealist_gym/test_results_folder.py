@@ -25,15 +25,17 @@ def test_a_new_folder_records_its_settings_and_the_same_claim_resumes_it(tmp_pat
     again.release()
     with pytest.raises(SurrealistError, match=r"holds a evaluate run with other settings \(runs: 2 there, 3 here\)"):
         ResultsFolder.claim(out, "evaluate", {"runs": 3, "workers": 1})
+    (out / ".lock").unlink()
     with pytest.raises(SurrealistError, match="holds 'evaluate' run, not a run of compete"):
         ResultsFolder.claim(out, "compete", {"runs": 2})
+    assert sorted(p.name for p in out.iterdir()) == ["run.json"]  # a folder refused is left as it was
 
 
 def test_a_folder_holding_something_else_is_refused_and_left_as_it_is(tmp_path):
     (tmp_path / "notes.txt").write_text("mine\n")
     with pytest.raises(SurrealistError, match=r"holds something else \(notes.txt\), not a run of fidelity"):
         ResultsFolder.claim(tmp_path, "fidelity", {"runs": 1})
-    assert sorted(p.name for p in tmp_path.iterdir()) == [".lock", "notes.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]  # nothing written in it
     afile = tmp_path / "notes.txt"
     with pytest.raises(SurrealistError, match="exists and is not a folder"):
         ResultsFolder.claim(afile, "fidelity", {"runs": 1})
