@@ -281,8 +281,7 @@ def tool_environment(source: AerialistSource, address: str, authkey: bytes, runs
 
 # --- the run ---------------------------------------------------------------------------------------------------------
 def claim(plan: CompetePlan):
-    """The run's output folder, claimed (:class:`~surrealist_gym.results.ResultsFolder`: made or resumed, locked,
-    its settings recorded); one line if another process writes there or it holds something else."""
+    """The run's output folder claimed (:class:`~surrealist_gym.results.ResultsFolder`: made or resumed, locked)."""
     from ...results import ResultsFolder
     from .record import FLIGHTS
 
