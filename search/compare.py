@@ -163,12 +163,17 @@ def _one_search(env_id, name, rep, budget, runs, env_kwargs, executor, out, prog
                 random_seed: int = 0) -> SearchRecord:
     import gymnasium as gym
 
+    from surrealist_gym.sim.uav import UAV_RECORD
+
     seed = random_seed + rep
 
     def make_env(store):
         # the bare env (flyable=False): agents compared on the paper's semantics, an invalid test refused
         kwargs = dict(env_kwargs, budget=budget, random_seed=seed, store=str(store), executor=executor, flyable=False)
-        return gym.make(env_id, **(kwargs if runs is None else dict(kwargs, runs=runs)))
+        env = gym.make(env_id, **(kwargs if runs is None else dict(kwargs, runs=runs)))
+        if not (out / UAV_RECORD).exists():  # the UAV the searches fly and why (all of them alike)
+            env.unwrapped.uav.write(out)
+        return env
 
     def report(evaluations, done: bool) -> None:
         if progress is not None:
