@@ -62,8 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _params(items: list[str]) -> dict:
     """``--param NAME=VALUE`` overrides, each a finite number in its physical range (ranges.RANGES)."""
-    from ..errors import SimulationError
-    from ..sim.ranges import param_problem
+    from ..errors import SimulationError, param_problem
 
     out = {}
     for item in items:

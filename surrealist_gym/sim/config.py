@@ -15,8 +15,8 @@ from enum import Enum
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Mapping
 
-from ..errors import SurrealistError
-from .ranges import UAV_SETTING_PREFIX, FrozenDict  # a test's params uav.<setting> set the simulated UAV (profiles.py)
+# a test's params uav.<setting> set the simulated UAV (profiles.py)
+from ..errors import UAV_SETTING_PREFIX, FrozenDict, SurrealistError
 
 if TYPE_CHECKING:  # the planners and the sensor load numba and PyBullet; a config names them only
     from .planner import PlannerConfig

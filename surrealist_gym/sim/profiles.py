@@ -26,10 +26,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import InvalidProfile, InvalidTestCase, LogFormatError, regular_file
+from ..errors import (
+    UAV_TIMINGS,
+    FrozenDict,
+    InvalidProfile,
+    InvalidTestCase,
+    LogFormatError,
+    param_problem,
+    problem,
+    regular_file,
+)
 from ..trajectory import phases
 from .config import AvoidanceModel, SimConfig, VehicleModel
-from .ranges import UAV_TIMINGS, FrozenDict, param_problem, problem
 
 __all__ = ["PRESETS", "SETTINGS", "Setting", "UavProfile", "check_multirotor", "default_profile", "load_profile",
            "profile_for_flight", "save_profile", "test_uav_settings", "vehicle_of", "with_uav_settings"]

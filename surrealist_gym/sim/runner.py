@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Callable, Mapping
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import FrozenDict, SimulationError
 from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
 from ..outcomes import RunStatus
@@ -27,7 +27,6 @@ from .control import inner_step, kernel_params, position_params, position_step
 from .navigator import Navigator, Phase
 from .noise import NoiseSource, run_seed_sequence
 from .pybullet_quiet import pb
-from .ranges import FrozenDict
 from .vehicle import GRAVITY, preset
 from .world import World
 
