@@ -100,6 +100,7 @@ def _fly_on_workers(args: argparse.Namespace, test, config) -> list:
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from .. import load_test
+    from ..logs.ulog_writer import write_run_ulog
     from ..sim import simulate
     from .options import check_at_least, check_writable, default_out, refuse_workers_with_dask
 
@@ -143,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
             row["frechet_m"] = round(frechet(r.trajectory, reference.trajectory), 3)
         if not args.no_ulog:
             path = out / f"{stem}-run{r.index}.ulg"
-            r.save_ulog(path, mission=test.mission)
+            write_run_ulog(path, r, mission=test.mission)
             row["ulog"] = str(path)
         rows.append(row)
     plot = None

@@ -103,14 +103,6 @@ class RunResult:
     message: str = ""
     params: Mapping[str, float] = field(default_factory=dict)
 
-    def save_ulog(self, path, mission=None) -> None:
-        """Write the run as a ULog (``vehicle_local_position`` and the parameters) that pyulog reads."""
-        from ..logs.ulog_writer import write_ulog
-
-        lp = self.local_position
-        write_ulog(path, lp.timestamp_us, lp.x, lp.y, lp.z, lp.vx, lp.vy, lp.vz, lp.heading,
-                   params=dict(self.params), mission=mission)
-
 
 class _Run:
     """Mutable per-vehicle state inside the loop."""
