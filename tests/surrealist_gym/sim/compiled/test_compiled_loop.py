@@ -16,7 +16,7 @@ from surrealist_gym.mission import Command
 from surrealist_gym.sim import NoiseConfig, Physics, RunStatus, SimConfig, runner, simulate
 from surrealist_gym.sim.sensing.noise import NoiseSource, run_seed_sequence
 from surrealist_gym.sim.uav import decide_uav
-from tests.surrealist_gym.sim.vehicle.test_compiled_physics import _rilast, _scenarios
+from tests.surrealist_gym.sim.vehicle.test_compiled_physics import rilast_case, shipped_scenarios
 
 
 def _fly_both(test, runs, config, monkeypatch):
@@ -73,7 +73,7 @@ def test_compiled_loop_equals_the_python_outer_loop(monkeypatch):
     """Two runs of every scenario of the physics agreement test (PX4 Vision with the simple planner; SITL Iris
     with PX4-Avoidance: 1-3 boxes, cylinders, wind): the same results bit for bit."""
     total = 0
-    for name, test in _scenarios().items():
+    for name, test in shipped_scenarios().items():
         old, new = _fly_both(test, 2, decide_uav(test).config, monkeypatch)
         _assert_same(old, new, name)
         total += len(new)
@@ -87,7 +87,7 @@ def test_compiled_loop_equals_the_python_outer_loop_with_the_sitl_timing(monkeyp
     from surrealist_gym.sim.profiles import SITL_TIMING
 
     total = 0
-    for name, test in _scenarios().items():
+    for name, test in shipped_scenarios().items():
         config = decide_uav(test).config
         config = dataclasses.replace(config, noise=dataclasses.replace(config.noise, **SITL_TIMING))
         old, new = _fly_both(test, 2, config, monkeypatch)
@@ -106,7 +106,7 @@ def test_compiled_loop_collision_timeout_and_stuck(monkeypatch):
         old, new = _fly_both(box, 2, SimConfig(avoidance=False, noise=noise, takeoff_delay_s=1.0), monkeypatch)
         assert [r.status for r in new] == [RunStatus.COLLISION] * 2
         _assert_same(old, new, "collision")
-    test = _rilast("random_run3_194")
+    test = rilast_case("random_run3_194")
     cfg = dataclasses.replace(decide_uav(test).config, timeout_s=21.37)
     old, new = _fly_both(test, 2, cfg, monkeypatch)
     assert [r.status for r in new] == [RunStatus.TIMEOUT] * 2
@@ -121,7 +121,7 @@ def test_compiled_loop_collision_timeout_and_stuck(monkeypatch):
 def test_compiled_loop_without_noise(monkeypatch):
     """Both planners with every noise off (the scan without range noise) and with the depth sensor's own noise off:
     the same results bit for bit."""
-    scenarios = _scenarios()
+    scenarios = shipped_scenarios()
     for name in ("rq1-seed1", "rilast 2 boxes"):
         test = scenarios[name]
         base = decide_uav(test).config

@@ -84,24 +84,24 @@ def test_takeoff_and_box_collision_agree():
     assert _deviation(a, b, last=False) < 2e-3
 
 
-def _rilast(test_id: str):
+def rilast_case(test_id: str):
     with open(RILAST, newline="") as f:
         row = next(r for r in csv.DictReader(f) if r["test_id"] == test_id)
     obstacles = [Obstacle(**o) for o in json.loads(row["obstacles"])]
     return load_test(CASE_STUDIES / "mission1.yaml").with_obstacles(obstacles)
 
 
-def _scenarios():
+def shipped_scenarios():
     mission1 = load_test(CASE_STUDIES / "mission1.yaml")
     return {
         "rq1-seed1": load_test(EXPERIMENTS / "rq1-seed1.yaml"),  # case0, PX4 Vision, the simple planner
         "rq2-seed": load_test(EXPERIMENTS / "rq2-seed.yaml"),
-        "rilast 1 box": _rilast("random_run0_1"),  # mission1, SITL Iris, PX4-Avoidance
-        "rilast 2 boxes": _rilast("random_run3_194"),
-        "rilast 3 boxes": _rilast("random_run0_0"),
+        "rilast 1 box": rilast_case("random_run0_1"),  # mission1, SITL Iris, PX4-Avoidance
+        "rilast 2 boxes": rilast_case("random_run3_194"),
+        "rilast 3 boxes": rilast_case("random_run0_0"),
         "mission1 cylinders": mission1.with_obstacles([Obstacle(6, 6, 20, -5, 20, shape="cylinder"),
                                                        Obstacle(4, 4, 15, 3, 35, shape="cylinder")]),
-        "mission1 box, wind": dataclasses.replace(_rilast("random_run0_1"), wind=Wind(
+        "mission1 box, wind": dataclasses.replace(rilast_case("random_run0_1"), wind=Wind(
             velocity_mean=6.0, velocity_variance=1.0, direction=(0.0, 1.0, 0.0))),
     }
 
@@ -113,7 +113,7 @@ def test_agreement_over_shipped_scenarios():
     within 0.05 m (measured: equal to 1e-4 m) and every true trajectory within 0.05 m of the other at the same times
     (measured: 25 mm at most, in the landing of an rq2-seed run, where the ground contacts differ)."""
     total = 0
-    for name, test in _scenarios().items():
+    for name, test in shipped_scenarios().items():
         a, b = _both(test, 2, decide_uav(test).config)
         for ra, rb in zip(a, b):
             assert ra.status == rb.status, (name, ra.message, rb.message)
