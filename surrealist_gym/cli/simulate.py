@@ -92,7 +92,7 @@ def _fly_on_workers(args: argparse.Namespace, test, config) -> list:
     finally:
         executor.close()
     for r in results:
-        if not hasattr(r, "save_ulog"):  # executors.FailedRun
+        if not hasattr(r, "local_position"):  # executors.FailedRun
             raise SimulationError(r.message)
     return results
 
