@@ -10,8 +10,8 @@ import time
 
 import numpy as np
 
-from surrealist_gym.sim.avoidance import LocalPlanner
-from surrealist_gym.sim.sensor import DepthSensor
+from surrealist_gym.sim.avoidance.reactive import LocalPlanner
+from surrealist_gym.sim.sensing.sensor import DepthSensor
 from surrealist_gym.testcase import Obstacle, Shape
 
 START, GOAL = np.array([0.0, 0.0, 3.0]), np.array([-16.6, 6.9, 3.0])

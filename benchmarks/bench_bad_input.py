@@ -227,7 +227,7 @@ def _write(name: str, text: str | bytes) -> Callable[[Path], None]:
 
 def _violation(rng: np.random.Generator, key: str):
     """A value outside ``key``'s physical range: below it, above it, not finite, or not a number."""
-    from surrealist_gym.sim.ranges import RANGES
+    from surrealist_gym.errors import RANGES
 
     r = RANGES[key]
     choices = ["nan", "inf", "string"]
@@ -277,7 +277,7 @@ def _folder(name: str) -> Callable[[Path], None]:
 
 def corpus(rng: np.random.Generator) -> list[Case]:
     """The seeded refusal corpus: every case an input that must be refused."""
-    from surrealist_gym.sim.ranges import RANGES
+    from surrealist_gym.errors import RANGES
 
     cases = []
 

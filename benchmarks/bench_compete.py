@@ -8,7 +8,7 @@ the 2025 snippet builds its tests), runs through ``surrealist compete`` (the rea
 times each ``DockerAgent(test).run()`` in its own process: the request to the server, the flight, the ULog, and
 Aerialist's ``AerialistTestResult`` reading it back into its ``Trajectory``. Baseline, in this process afterwards:
 a plain simulate of the very same test and run (the server's YAML of it, the same run index, so the same noise
-and flight): ``load_test``, ``simulate_runs`` and ``save_ulog``, as ``surrealist simulate --runs 1 --no-plot``
+and flight): ``load_test``, ``simulate_runs`` and ``write_run_ulog``, as ``surrealist simulate --runs 1 --no-plot``
 does. The first test of each side is a warm-up (the simulator's first flight in a process compiles its kernels)
 and is not counted. Target: a tool's simulation costs at most 1.5x the plain simulate.
 """
@@ -74,6 +74,7 @@ def make_tool(folder: Path, layouts) -> Path:
 def plain(flights, seed: int) -> list[tuple[float, float]]:
     """Wall time [s] of a plain simulate of each flight's test and run, and its simulated duration [s]."""
     from surrealist_gym.aerialist import load_test
+    from surrealist_gym.logs import write_run_ulog
     from surrealist_gym.sim import simulate_runs
     from surrealist_gym.sim.profiles import load_profile
 
@@ -84,7 +85,7 @@ def plain(flights, seed: int) -> list[tuple[float, float]]:
             start = time.perf_counter()
             test = load_test(flight.test_file)
             run = simulate_runs(test, [n], seed, config)[0]
-            run.save_ulog(Path(tmp) / f"{n}.ulg", mission=test.mission)
+            write_run_ulog(Path(tmp) / f"{n}.ulg", run, mission=test.mission)
             out.append((time.perf_counter() - start, run.duration))
     return out
 

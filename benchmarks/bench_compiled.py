@@ -7,7 +7,7 @@ rayTestBatch; one vehicle contact query; one control step of the rigid body by t
 read, force, step); the navigator and flight task (every ``Navigator.update`` call of the flight below replayed
 through the class, through the kernel called from Python and through the kernel in a compiled loop); the
 PX4-Avoidance look-ahead tree (every build of the flight below replayed through the dense reference and through
-``_build_tree``, and the whole flight with each); one px4-v1.12-sitl-iris flight of mission1 + rilast
+``build_tree``, and the whole flight with each); one px4-v1.12-sitl-iris flight of mission1 + rilast
 random_run3_194 with each physics, and the bare PyBullet loop over the same simulated time. Best of several
 repetitions after a warm-up, except where two versions alternate (medians).
 """
@@ -22,7 +22,7 @@ import numpy as np
 from bench_sim import ROOT, _best, plain_pybullet
 from numba import njit
 
-from surrealist_gym.sim import navigator_kernels as nk, navigator_state as ns
+from surrealist_gym.sim.navigation import navigator_kernels as nk, navigator_state as ns
 
 
 def _per_call(fn, n: int, repeat: int = 5) -> float:
@@ -32,7 +32,7 @@ def _per_call(fn, n: int, repeat: int = 5) -> float:
 def _navigator_calls(test, config) -> tuple[tuple, list[tuple]]:
     """One flight's Navigator: its constructor's arguments and the arguments of every ``update`` call."""
     from surrealist_gym.sim import simulate
-    from surrealist_gym.sim.navigator import Navigator
+    from surrealist_gym.sim.navigation.navigator import Navigator
 
     made, calls = [], []
     init, update = Navigator.__init__, Navigator.update
@@ -69,7 +69,7 @@ def _replay_navigator(state, mission, params, table):  # pragma: no cover - comp
 def navigator_per_call(test, config) -> None:
     """Print the navigator + flight task's cost per update: the class, the kernel from Python, the kernel in a
     compiled loop, on every update call of one flight."""
-    from surrealist_gym.sim.navigator import Navigator
+    from surrealist_gym.sim.navigation.navigator import Navigator
 
     made, calls = _navigator_calls(test, config)
     mission, params = ns.mission_array(made[0]), ns.param_vector(made[1], *made[2:])
@@ -99,43 +99,45 @@ def navigator_per_call(test, config) -> None:
 
 
 def _tree_calls(test, config) -> list[tuple]:
-    """The arguments of every look-ahead tree build of one flight (``_build_tree`` as ``Px4LocalPlanner.update``
+    """The arguments of every look-ahead tree build of one flight (``build_tree`` as ``Px4LocalPlanner.update``
     calls it), without the output buffer."""
-    from surrealist_gym.sim import px4_avoidance, runner, simulate
+    from surrealist_gym.sim import runner, simulate
+    from surrealist_gym.sim.avoidance.px4 import local_planner as px4_avoidance
 
-    calls, build, fly = [], px4_avoidance._build_tree, runner._fly_compiled
+    calls, build, fly = [], px4_avoidance.build_tree, runner._fly_compiled
 
     def recording(cloud, *args):
         calls.append((cloud.copy(), *args[:-1]))
         return build(cloud, *args)
 
     # the Python outer loop (the compiled loop's bit-identical reference) runs the planner class, which calls
-    # px4_avoidance._build_tree; the compiled loop calls the kernel from compiled code
-    px4_avoidance._build_tree, runner._fly_compiled = recording, runner._fly_compiled_outer
+    # px4_avoidance.build_tree; the compiled loop calls the kernel from compiled code
+    px4_avoidance.build_tree, runner._fly_compiled = recording, runner._fly_compiled_outer
     try:
         simulate(test, runs=1, config=config)
     finally:
-        px4_avoidance._build_tree, runner._fly_compiled = build, fly
+        px4_avoidance.build_tree, runner._fly_compiled = build, fly
     return calls
 
 
 def tree_per_build(test, config, repeat: int = 9) -> None:
     """Print the look-ahead tree's cost per build on every build of one flight, the dense reference
-    (``_build_tree_reference``) against ``_build_tree`` (checked equal first), and the whole flight with each (on
+    (``build_tree_reference``) against ``build_tree`` (checked equal first), and the whole flight with each (on
     the Python outer loop, where the planner class calls the tree); the two alternate, medians."""
     import time
 
-    from surrealist_gym.sim import px4_avoidance, runner, simulate
-    from surrealist_gym.sim.px4_avoidance_settings import MAX_NODES
-    from surrealist_gym.sim.px4_avoidance_tree import _build_tree, tree_work
-    from surrealist_gym.sim.px4_avoidance_tree_reference import _build_tree_reference
+    from surrealist_gym.sim import runner, simulate
+    from surrealist_gym.sim.avoidance.px4 import local_planner as px4_avoidance
+    from surrealist_gym.sim.avoidance.px4.settings import MAX_NODES
+    from surrealist_gym.sim.avoidance.px4.tree import build_tree, tree_work
+    from surrealist_gym.sim.reference.px4_tree import build_tree_reference
 
     calls = _tree_calls(test, config)
     path, other = np.empty((MAX_NODES, 3)), np.empty((MAX_NODES, 3))
     work = tree_work(calls[0][5])
     for args in calls:
-        k = _build_tree_reference(*args, path)
-        assert _build_tree(*args, other, work) == k and np.array_equal(path[:k], other[:k])
+        k = build_tree_reference(*args, path)
+        assert build_tree(*args, other, work) == k and np.array_equal(path[:k], other[:k])
 
     def replay(build, *extra):
         t0 = time.perf_counter()
@@ -145,41 +147,42 @@ def tree_per_build(test, config, repeat: int = 9) -> None:
 
     ref, new = [], []
     for _ in range(repeat):
-        ref.append(replay(_build_tree_reference))
-        new.append(replay(_build_tree, work))
+        ref.append(replay(build_tree_reference))
+        new.append(replay(build_tree, work))
     ref, new = float(np.median(ref)), float(np.median(new))
     print(f"look-ahead tree, the flight's {len(calls)} builds (same paths): dense reference {ref * 1e6:.0f} us, "
-          f"_build_tree {new * 1e6:.0f} us per build ({ref / new:.2f}x)")
+          f"build_tree {new * 1e6:.0f} us per build ({ref / new:.2f}x)")
 
-    def flight(build):  # on the Python outer loop, whose planner class calls px4_avoidance._build_tree
+    def flight(build):  # on the Python outer loop, whose planner class calls px4_avoidance.build_tree
         fly = runner._fly_compiled
-        px4_avoidance._build_tree, runner._fly_compiled = build, runner._fly_compiled_outer
+        px4_avoidance.build_tree, runner._fly_compiled = build, runner._fly_compiled_outer
         try:
             t0 = time.perf_counter()
             (run,) = simulate(test, runs=1, config=config)
             return time.perf_counter() - t0, run
         finally:
-            px4_avoidance._build_tree, runner._fly_compiled = _build_tree, fly
+            px4_avoidance.build_tree, runner._fly_compiled = build_tree, fly
 
-    flights = {build: [] for build in (_build_tree_reference, _build_tree)}
+    flights = {build: [] for build in (build_tree_reference, build_tree)}
     for _ in range(max(repeat // 2, 3)):
         for build, times in flights.items():
             times.append(flight(build))
     (before, a), (after, b) = ((float(np.median([t for t, _ in v])), v[0][1]) for v in flights.values())
     same = np.array_equal(a.true_xyz, b.true_xyz)
-    print(f"flight on the Python outer loop with the dense reference tree {before * 1e3:.0f} ms, with _build_tree "
+    print(f"flight on the Python outer loop with the dense reference tree {before * 1e3:.0f} ms, with build_tree "
           f"{after * 1e3:.0f} ms "
           f"({before / after:.2f}x; {a.duration:.1f} s simulated, same trajectory: {same})")
 
 
 def main() -> None:
     import surrealist_gym as sg
-    from surrealist_gym.sim import geometry_kernels as gk, rigid_body as rb, simulate
+    from surrealist_gym.sim import simulate
     from surrealist_gym.sim.profiles import load_profile
-    from surrealist_gym.sim.pybullet_quiet import pb
-    from surrealist_gym.sim.sensor import DepthSensor
-    from surrealist_gym.sim.vehicle import IRIS
-    from surrealist_gym.sim.world import World
+    from surrealist_gym.sim.sensing.sensor import DepthSensor
+    from surrealist_gym.sim.vehicle import geometry_kernels as gk, rigid_body as rb
+    from surrealist_gym.sim.vehicle.airframe import IRIS
+    from surrealist_gym.sim.vehicle.pybullet_quiet import pb
+    from surrealist_gym.sim.vehicle.world import World
 
     competition = ROOT.parent / "shared" / "data" / "competition"
     with open(competition / "rilast-mission1" / "tests.csv", newline="") as f:
@@ -219,9 +222,9 @@ def main() -> None:
     contact = _per_call(lambda: gk.vehicle_contact(centre, axes, half, thr, scene), 5000)
     state, body_p = rb.initial_state((0.0, 0.0, -10.0)), rb.body_params(IRIS)
     kstep = _per_call(lambda: rb.step(state, (0.0, 0.0, -14.7), (0.0, 0.0, 0.0), 0.01, 2, body_p, half), 5000)
-    from surrealist_gym.sim.compiled_physics import advance
     from surrealist_gym.sim.config import PX4_DEFAULTS
-    from surrealist_gym.sim.control import kernel_params
+    from surrealist_gym.sim.vehicle.compiled_physics import advance
+    from surrealist_gym.sim.vehicle.control import kernel_params
 
     kp, ks = kernel_params(dict(PX4_DEFAULTS), IRIS, 0.01, (IRIS.drag_xy, IRIS.drag_z, IRIS.drag_quad)), np.zeros(10)
     state = rb.initial_state((0.0, 0.0, -10.0))

@@ -6,8 +6,8 @@
 
 For each mission1 + rilast test (run 0, seed 0, px4-v1.12-sitl-iris): the flight on the compiled loop (status,
 simulated time, thread CPU time); every tree build of the same flight recorded on the Python outer loop (the
-compiled loop's bit-identical reference, whose planner class calls ``px4_avoidance._build_tree``): builds per
-simulated second, cloud sizes, and ``_build_tree`` replayed on every build (thread CPU time per build, the least of
+compiled loop's bit-identical reference, whose planner class calls ``px4_avoidance.build_tree``): builds per
+simulated second, cloud sizes, and ``build_tree`` replayed on every build (thread CPU time per build, the least of
 ``--repeat`` replays, by cloud size), with the replayed total against the flight's CPU time.
 """
 from __future__ import annotations
@@ -24,9 +24,9 @@ SIZES = (0, 200, 500, 800, 1100, 1400, 2000)
 
 def clouds(test_id: str, repeat: int) -> None:
     from surrealist_gym.sim import simulate
+    from surrealist_gym.sim.avoidance.px4.settings import MAX_NODES
+    from surrealist_gym.sim.avoidance.px4.tree import build_tree, tree_work
     from surrealist_gym.sim.profiles import load_profile
-    from surrealist_gym.sim.px4_avoidance_settings import MAX_NODES
-    from surrealist_gym.sim.px4_avoidance_tree import _build_tree, tree_work
 
     cfg = load_profile("px4-v1.12-sitl-iris").sim_config()
     (test,) = rilast_tests([test_id])
@@ -41,7 +41,7 @@ def clouds(test_id: str, repeat: int) -> None:
     for _ in range(repeat):
         for j, args in enumerate(calls):
             t0 = time.thread_time_ns()
-            _build_tree(*args, path, work)
+            build_tree(*args, path, work)
             per[j] = min(per[j], time.thread_time_ns() - t0)
     per *= 1e-9
     print(f"{test_id}: {run.status.value} after {run.duration:.1f} s, flight {flight:.2f} s CPU "

@@ -17,7 +17,6 @@ from pathlib import Path
 
 from .errors import InvalidTestCase, MissionError, input_file, one_line, read_text, regular_file, safe_yaml
 from .mission import read_mission
-from .sim.ranges import RANGES, UAV_SETTING_PREFIX, param_problem
 from .testcase import Obstacle, RuntimeCommand, Shape, TestCase, Wind, is_finite_number, parse_shape
 
 # --- YAML --------------------------------------------------------------------------------------------------------
@@ -373,6 +372,8 @@ def _csv_rows(path: str, what: str) -> list[tuple[int, list[str]]]:
 def _read_params(path: str) -> list[tuple[str, float]]:
     """PX4 parameters from ``NAME, value`` lines (no header). Errors name the line, never quote it (a test may name
     any file: docs/aerialist-yaml.md)."""
+    from .errors import RANGES, UAV_SETTING_PREFIX, param_problem
+
     out = []
     for n, row in _csv_rows(path, "params file"):
         if not row or not row[0].strip() or row[0].strip().startswith("#"):

@@ -15,9 +15,8 @@ from dataclasses import dataclass, field, fields, replace
 from enum import Enum
 from typing import Mapping
 
-from .errors import InvalidTestCase
+from .errors import FrozenDict, InvalidTestCase, param_problem
 from .mission import Mission
-from .sim.ranges import FrozenDict, param_problem
 
 
 class Shape(str, Enum):
@@ -188,9 +187,9 @@ class RuntimeCommand:
 
 # Physical range of a test's wind. 30 m/s is Beaufort force 11 ("violent storm", 28.5-32.6 m/s) and well past what a
 # ~1.5 kg Iris can hold: even at PX4's 45 degree tilt limit (MPC_TILTMAX_AIR) its horizontal thrust, m g = 14.7 N,
-# only balances the modelled Iris' drag (sim/vehicle.py: 0.21 v + 0.02 v^2 N) at ~22 m/s, and the simulated SITL Iris
-# already drifts ~70 m off mission1's track in a 15 m/s crosswind. A larger speed is a typo or a unit mix-up (km/h
-# for m/s), not a test; up to the bound, a test may still probe winds the vehicle cannot hold.
+# only balances the modelled Iris' drag (sim/vehicle/airframe.py: 0.21 v + 0.02 v^2 N) at ~22 m/s, and the simulated
+# SITL Iris already drifts ~70 m off mission1's track in a 15 m/s crosswind. A larger speed is a typo or a unit mix-up
+# (km/h for m/s), not a test; up to the bound, a test may still probe winds the vehicle cannot hold.
 MAX_WIND_SPEED_MS = 30.0  # [m/s] bound of every wind speed (means and maxima)
 # The speed's standard deviation may reach the bound itself, so a variance up to its square [m^2/s^2].
 MAX_WIND_SPEED_VARIANCE = MAX_WIND_SPEED_MS ** 2

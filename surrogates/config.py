@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields
 from enum import Enum
 
-from surrealist_gym.sim.ranges import FrozenDict
+from surrealist_gym.errors import FrozenDict
 
 RULES = ("auto", "lowfi", "ei", "pi", "none")
 

@@ -67,3 +67,51 @@ def test_the_package_top_level_holds_at_most_15_modules():
 def test_test_file_basenames_are_unique():
     names = Counter(path.name for path in Path(__file__).resolve().parent.rglob("test_*.py"))
     assert not [name for name, count in names.items() if count > 1]
+
+
+SIM = PACKAGE / "sim"
+MAX_FOLDER = 15  # modules per folder of the simulator, __init__.py included
+ABOVE_SIM = ("surrealist_gym.logs", "surrealist_gym.cli", "surrealist_gym.envs", "surrealist_gym.executors",
+             "surrealist_gym.evaluation", "surrealist_gym.results", "surrealist_gym.store", "surrealist_gym.mutators",
+             "surrealist_gym.fitness")
+BELOW_SIM = ("testcase.py", "mission.py", "geometry.py", "trajectory.py", "errors.py", "outcomes.py")
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def test_no_folder_of_the_simulator_holds_more_than_15_modules():
+    folders = {path.parent for path in SIM.rglob("*.py")}
+    full = {str(f.relative_to(ROOT)): n for f in folders if (n := len(list(f.glob("*.py")))) > MAX_FOLDER}
+    assert not full, f"folders over {MAX_FOLDER} modules: {full}"
+
+
+def test_the_simulator_modules_import_no_cycle():
+    modules = {_module_name(path): path for path in SIM.rglob("*.py")}
+    edges = {name: sorted({m for _, m in imported_modules(path) if m in modules and m != name})
+             for name, path in modules.items()}
+    done, on_path = set(), []
+
+    def visit(name):  # depth-first; a module met again on the current path closes a cycle
+        if name in on_path:
+            raise AssertionError("import cycle: " + " -> ".join(on_path[on_path.index(name):] + [name]))
+        if name in done:
+            return
+        on_path.append(name)
+        for other in edges[name]:
+            visit(other)
+        on_path.pop()
+        done.add(name)
+
+    for name in sorted(modules):
+        visit(name)
+
+
+def test_the_simulator_imports_nothing_above_it_and_the_values_import_no_simulator():
+    up = [f"{path.relative_to(ROOT)}:{line}: {module}" for path in sorted(SIM.rglob("*.py"))
+          for line, module in imported_modules(path) if any(_reaches(module, t) for t in ABOVE_SIM)]
+    down = [f"{name}:{line}: {module}" for name in BELOW_SIM for line, module in imported_modules(PACKAGE / name)
+            if _reaches(module, "surrealist_gym.sim")]
+    assert not up and not down, "\n".join(up + down)

@@ -62,8 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _params(items: list[str]) -> dict:
     """``--param NAME=VALUE`` overrides, each a finite number in its physical range (ranges.RANGES)."""
-    from ..errors import SimulationError
-    from ..sim.ranges import param_problem
+    from ..errors import SimulationError, param_problem
 
     out = {}
     for item in items:
@@ -93,7 +92,7 @@ def _fly_on_workers(args: argparse.Namespace, test, config) -> list:
     finally:
         executor.close()
     for r in results:
-        if not hasattr(r, "save_ulog"):  # executors.FailedRun
+        if not hasattr(r, "local_position"):  # executors.FailedRun
             raise SimulationError(r.message)
     return results
 
@@ -101,6 +100,7 @@ def _fly_on_workers(args: argparse.Namespace, test, config) -> list:
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
     from .. import load_test
+    from ..logs.ulog_writer import write_run_ulog
     from ..sim import simulate
     from .options import check_at_least, check_writable, default_out, refuse_workers_with_dask
 
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
             row["frechet_m"] = round(frechet(r.trajectory, reference.trajectory), 3)
         if not args.no_ulog:
             path = out / f"{stem}-run{r.index}.ulg"
-            r.save_ulog(path, mission=test.mission)
+            write_run_ulog(path, r, mission=test.mission)
             row["ulog"] = str(path)
         rows.append(row)
     plot = None

@@ -37,9 +37,8 @@ from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
-from ..errors import InvalidTestCase, SurrealistError, one_line
+from ..errors import FrozenDict, InvalidTestCase, SurrealistError, one_line
 from ..outcomes import RunRecord, statuses_text
-from ..sim.ranges import FrozenDict
 from ..testcase import TestCase
 from .reports.tables import rounded
 

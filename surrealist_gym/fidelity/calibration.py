@@ -26,10 +26,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..errors import DependencyNotInstalled, InvalidProfile, LogFormatError, MissionError
+from ..errors import DependencyNotInstalled, FrozenDict, InvalidProfile, LogFormatError, MissionError
 from ..sim.config import UAV_SETTING_PREFIX, AvoidanceModel
 from ..sim.profiles import SETTINGS, TIMING_SETTINGS, UavProfile, check_multirotor, vehicle_of
-from ..sim.ranges import FrozenDict
 from ..sim.uav import decide_uav
 from ..testcase import TestCase
 from ..trajectory import Phases, Trajectory, phases, profile as time_profile

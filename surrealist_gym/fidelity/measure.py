@@ -29,9 +29,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..errors import SurrealistError
+from ..errors import FrozenDict, SurrealistError
 from ..outcomes import BLOCKED as _BLOCKED, UNSAFE_DISTANCE_M, RunRecord, RunStatus, status_counts, statuses_text
-from ..sim.ranges import FrozenDict
 from ..sim.uav import DEFAULT_UAV, decide_uav
 from ..trajectory import airborne_time  # noqa: F401 - the airborne time of the report, named here too
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set

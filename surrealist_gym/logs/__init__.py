@@ -1,7 +1,8 @@
 """Flight logs: PX4 ULog (pyulog), MAVLink telemetry logs and ArduPilot DataFlash logs (pymavlink).
 
 :func:`read_flight` picks the reader from the file's first bytes (else its extension) and returns an immutable
-:class:`FlightLog`. :func:`write_ulog` writes a simulated run as a ULog that the same reader loads.
+:class:`FlightLog`. :func:`write_run_ulog` writes a simulated run as a ULog that the same reader loads
+(:func:`write_ulog`: any local-position samples).
 
 Example::
 
@@ -18,7 +19,7 @@ from ..errors import LogFormatError, one_line, regular_file
 from .flight import FlightLog, LocalPositions, ModeSpan
 from .mavlink import DATAFLASH_MAGIC, MAVLINK_STX, read_dataflash, read_tlog
 from .ulog import ULOG_MAGIC, read_ulog
-from .ulog_writer import write_ulog
+from .ulog_writer import write_run_ulog, write_ulog
 
 _EXTENSIONS = {".ulg": "ulog", ".tlog": "tlog", ".mav": "tlog", ".bin": "dataflash"}
 
@@ -64,4 +65,5 @@ def read_flight(path) -> FlightLog:
         raise LogFormatError(f"{name}: corrupt {fmt} log ({type(err).__name__}: {one_line(err)})") from None
 
 
-__all__ = ["FlightLog", "LocalPositions", "ModeSpan", "detect_format", "read_flight", "read_ulog", "write_ulog"]
+__all__ = ["FlightLog", "LocalPositions", "ModeSpan", "detect_format", "read_flight", "read_ulog", "write_run_ulog",
+           "write_ulog"]

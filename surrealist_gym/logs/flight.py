@@ -13,9 +13,8 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import LogFormatError
+from ..errors import FrozenDict, LogFormatError
 from ..mission import Mission
-from ..sim.ranges import FrozenDict
 from ..trajectory import Trajectory, frozen_array as _frozen
 
 

@@ -145,6 +145,14 @@ def write_ulog(path, timestamp_us, x, y, z, vx, vy, vz, heading, params: Mapping
             f.write(out)
 
 
+def write_run_ulog(path, run, mission: Mission | None = None) -> None:
+    """Write a simulated run (a :class:`~surrealist_gym.sim.runner.RunResult`: its recorded local position and its
+    parameters) as a ULog that pyulog and :func:`~surrealist_gym.logs.read_flight` read."""
+    lp = run.local_position
+    write_ulog(path, lp.timestamp_us, lp.x, lp.y, lp.z, lp.vx, lp.vy, lp.vz, lp.heading,
+               params=dict(run.params), mission=mission)
+
+
 def _mission_columns(mission: Mission, t0: int) -> dict[str, np.ndarray]:
     lat0, lon0, _ = mission.home
     lat, lon, alt = [], [], []

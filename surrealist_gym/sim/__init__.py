@@ -7,8 +7,13 @@ Public face::
     results[0].status, results[0].min_distance, results[0].duration, results[0].trajectory
 
 No gymnasium import here (the envs build on this package). The names below are loaded on first use (PEP 562), so
-importing a light module of the package (``sim.ranges``, which the test-case values use) loads neither PyBullet nor
-the run loop, and the values can import it without a cycle.
+importing a light module of the package (``sim.config``) loads neither PyBullet nor the run loop.
+
+The rooms: the front door here (``config``, ``profiles``, ``uav``, ``runner``, ``run_end``); ``vehicle``
+(airframe, PX4's controllers, rigid-body physics, compiled and PyBullet); ``navigation`` (PX4's navigator and flight
+task, in Python and as kernels); ``sensing`` (depth camera, estimator noise and wind); ``avoidance`` (the planner
+protocol, the reactive planner, and ``avoidance.px4``: PX4-Avoidance); ``compiled`` (the compiled run loop);
+``reference`` (readable Python versions of kernels, which tests and benchmarks compare against).
 """
 from __future__ import annotations
 
@@ -20,7 +25,8 @@ _EXPORTS = {
     "Clearance": "runner", "LocalPosition": "runner", "RunResult": "runner", "RunStatus": "runner",
     "simulate": "runner", "simulate_runs": "runner",
     "DEFAULT_UAV": "uav", "UavDecision": "uav", "decide_uav": "uav",
-    "IRIS": "vehicle", "VEHICLES": "vehicle", "PX4_VISION": "vehicle", "VehicleParams": "vehicle", "preset": "vehicle",
+    "IRIS": "vehicle.airframe", "VEHICLES": "vehicle.airframe", "PX4_VISION": "vehicle.airframe",
+    "VehicleParams": "vehicle.airframe", "preset": "vehicle.airframe",
 }
 
 

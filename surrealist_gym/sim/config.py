@@ -13,14 +13,18 @@ import os
 from dataclasses import dataclass, field
 from enum import Enum
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping, Union
 
-from ..errors import SurrealistError
-from .ranges import UAV_SETTING_PREFIX, FrozenDict  # a test's params uav.<setting> set the simulated UAV (profiles.py)
+# a test's params uav.<setting> set the simulated UAV (profiles.py)
+from ..errors import UAV_SETTING_PREFIX, FrozenDict, SurrealistError
 
 if TYPE_CHECKING:  # the planners and the sensor load numba and PyBullet; a config names them only
-    from .planner import PlannerConfig
-    from .sensor import DepthSensorConfig
+    from .avoidance.px4.local_planner import Px4AvoidanceConfig
+    from .avoidance.reactive import AvoidanceConfig
+    from .sensing.sensor import DepthSensorConfig
+
+#: The configuration of either planner (``SimConfig.avoidance_config``).
+PlannerConfig = Union["AvoidanceConfig", "Px4AvoidanceConfig"]
 
 # PX4 v1.12 defaults of the parameters the simulated UAV reads (sources: the *_params.c / *_params.yaml of
 # mc_pos_control, mc_att_control, mc_rate_control, navigator, land_detector, commander in PX4-Autopilot v1.12).
@@ -51,7 +55,7 @@ PX4_DEFAULTS: Mapping[str, float] = FrozenDict({
 
 
 class VehicleModel(str, Enum):
-    """Vehicle presets (see :mod:`surrealist_gym.sim.vehicle`)."""
+    """Vehicle presets (see :mod:`surrealist_gym.sim.vehicle.airframe`)."""
 
     PX4_VISION = "px4_vision"
     IRIS = "iris"
@@ -60,15 +64,15 @@ class VehicleModel(str, Enum):
 class AvoidanceModel(str, Enum):
     """Which obstacle-avoidance planner flies with ``COM_OBS_AVOID = 1``."""
 
-    PX4 = "px4"        #: PX4-Avoidance's local planner as in Aerialist's SITL (sim/px4_avoidance.py)
-    SIMPLE = "simple"  #: a reactive histogram planner tuned to the real PX4 Vision flight case0 (sim/avoidance.py)
+    PX4 = "px4"        #: PX4-Avoidance's local planner as in Aerialist's SITL (avoidance/px4/local_planner.py)
+    SIMPLE = "simple"  #: a reactive histogram planner tuned to the real PX4 Vision flight case0 (avoidance/reactive.py)
 
 
 class Physics(str, Enum):
     """What integrates the vehicles and finds their contacts."""
 
-    PYBULLET = "pybullet"  #: PyBullet (sim/world.py): the reference
-    COMPILED = "compiled"  #: numba kernels: Bullet's integration, closed-form contacts (sim/compiled_physics.py)
+    PYBULLET = "pybullet"  #: PyBullet (vehicle/world.py): the reference
+    COMPILED = "compiled"  #: numba kernels: Bullet's integration, closed-form contacts (vehicle/compiled_physics.py)
 
 
 PHYSICS_ENV = "SURREALIST_PHYSICS"
@@ -152,12 +156,12 @@ class SimConfig:
         obstacle_collision_scale: horizontal scale of the obstacles' collision shapes; the depth camera and the
             reported distances use the full obstacle (Aerialist's Gazebo boxes: 0.8).
         avoidance_config / sensor_config: the planner's and the depth sensor's configurations (None = the
-            model's defaults: :class:`~surrealist_gym.sim.px4_avoidance.Px4AvoidanceConfig` and the SITL Iris depth
-            camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.AvoidanceConfig` and the PX4 Vision's camera
-            for ``simple``).
+            model's defaults: :class:`~surrealist_gym.sim.avoidance.px4.local_planner.Px4AvoidanceConfig` and the SITL
+            Iris depth camera for ``px4``, :class:`~surrealist_gym.sim.avoidance.reactive.AvoidanceConfig` and the PX4
+            Vision's camera for ``simple``).
         physics: what integrates the vehicles and finds their contacts (:class:`Physics`): the compiled kernels
             (default; ``$SURREALIST_PHYSICS`` sets another), which fly the same runs as PyBullet within the
-            tolerances of tests/surrealist_gym/sim/test_compiled_physics.py, or PyBullet, the reference.
+            tolerances of tests/surrealist_gym/sim/vehicle/test_compiled_physics.py, or PyBullet, the reference.
         competition_buffer_m: half width added to the flight's polyline in each run's competition distance [m]
             (``--buffer``): 0.125 is Aerialist's since Oct 2024, whose figures read that much lower; 0 (default) is
             Aerialist's before then, as the labelled PX4 flights were measured.

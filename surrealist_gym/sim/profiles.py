@@ -4,7 +4,7 @@ A profile is saved as YAML (every key optional except ``name``)::
 
     name: my-iris
     description: PX4 v1.12 SITL Iris with a narrower camera
-    vehicle: iris                      # a preset of sim/vehicle.py
+    vehicle: iris                      # a preset of sim/vehicle/airframe.py
     avoidance_model: px4               # px4 (PX4-Avoidance) or simple (the case0-tuned reactive planner)
     params: {MPC_XY_CRUISE: 5}         # PX4 parameters of the airframe, above PX4's defaults, below the test's
     planner: {max_sensor_range: 15}    # fields of the model's planner config
@@ -26,10 +26,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import InvalidProfile, InvalidTestCase, LogFormatError, regular_file
+from ..errors import (
+    UAV_TIMINGS,
+    FrozenDict,
+    InvalidProfile,
+    InvalidTestCase,
+    LogFormatError,
+    param_problem,
+    problem,
+    regular_file,
+)
 from ..trajectory import phases
 from .config import AvoidanceModel, SimConfig, VehicleModel
-from .ranges import UAV_TIMINGS, FrozenDict, param_problem, problem
 
 __all__ = ["PRESETS", "SETTINGS", "Setting", "UavProfile", "check_multirotor", "default_profile", "load_profile",
            "profile_for_flight", "save_profile", "test_uav_settings", "vehicle_of", "with_uav_settings"]
@@ -88,14 +96,14 @@ class UavProfile:
     def planner_config(self):
         """The planner configuration of the profile's avoidance model."""
         if self.avoidance_model == AvoidanceModel.PX4:
-            from .px4_avoidance import Px4AvoidanceConfig as cls
+            from .avoidance.px4.local_planner import Px4AvoidanceConfig as cls
         else:
-            from .avoidance import AvoidanceConfig as cls
+            from .avoidance.reactive import AvoidanceConfig as cls
         return _construct(cls, self.planner, f"profile {self.name!r}", "planner")
 
     def sensor_config(self):
         """The depth camera of the profile."""
-        from .sensor import DepthSensorConfig
+        from .sensing.sensor import DepthSensorConfig
 
         return _construct(DepthSensorConfig, self.sensor, f"profile {self.name!r}", "sensor")
 

@@ -14,26 +14,25 @@ from typing import TYPE_CHECKING, Callable, Mapping
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import FrozenDict, SimulationError
 from ..geometry import competition_distance, obstacle_distances
 from ..mission import Command
 from ..outcomes import RunStatus
 from ..trajectory import Trajectory
 from . import run_end
-from .compiled_loop import compiling, fly_kernel
-from .compiled_physics import CompiledWorld, fly
+from .compiled.loop import compiling, fly_kernel
 from .config import Physics, SimConfig, auto_timeout, resolve_params
-from .control import inner_step, kernel_params, position_params, position_step
-from .navigator import Navigator, Phase
-from .noise import NoiseSource, run_seed_sequence
-from .pybullet_quiet import pb
-from .ranges import FrozenDict
-from .vehicle import GRAVITY, preset
-from .world import World
+from .navigation.navigator import Navigator, Phase
+from .sensing.noise import NoiseSource, run_seed_sequence
+from .vehicle.airframe import GRAVITY, preset
+from .vehicle.compiled_physics import CompiledWorld, fly
+from .vehicle.control import inner_step, kernel_params, position_params, position_step
+from .vehicle.pybullet_quiet import pb
+from .vehicle.world import World
 
 if TYPE_CHECKING:
-    from .planner import Planner
-    from .sensor import DepthSensor
+    from .avoidance.planner import Planner
+    from .sensing.sensor import DepthSensor
 
 
 @dataclass(frozen=True, slots=True)
@@ -103,14 +102,6 @@ class RunResult:
     true_xyz: np.ndarray
     message: str = ""
     params: Mapping[str, float] = field(default_factory=dict)
-
-    def save_ulog(self, path, mission=None) -> None:
-        """Write the run as a ULog (``vehicle_local_position`` and the parameters) that pyulog reads."""
-        from ..logs.ulog_writer import write_ulog
-
-        lp = self.local_position
-        write_ulog(path, lp.timestamp_us, lp.x, lp.y, lp.z, lp.vx, lp.vy, lp.vz, lp.heading,
-                   params=dict(self.params), mission=mission)
 
 
 class _Run:
@@ -184,7 +175,7 @@ def _simulate_runs(test, indices, seed: int, config: SimConfig | None) -> list[R
         sensor = None
         if avoidance:
             sensor, make_planner = _avoidance(test, cfg, params)
-        yaw0 = _initial_yaw(mission)
+        yaw0 = initial_yaw(mission)
         runs = []
         for body, index in zip(world.vehicles, indices):
             r = _Run()
@@ -213,27 +204,27 @@ def _simulate_runs(test, indices, seed: int, config: SimConfig | None) -> list[R
 
 
 def _avoidance(test, cfg: SimConfig, params) -> tuple[DepthSensor, Callable[[], Planner]]:
-    """The depth sensor and a factory of per-run planners (:class:`~surrealist_gym.sim.planner.Planner`) for the
-    configured avoidance model; the run loop calls their ``step`` and does not care which planner flies."""
+    """The depth sensor and a factory of per-run planners (:class:`~surrealist_gym.sim.avoidance.planner.Planner`) for
+    the configured avoidance model; the run loop calls their ``step`` and does not care which planner flies."""
     from .config import AvoidanceModel
-    from .sensor import DepthSensor, DepthSensorConfig
+    from .sensing.sensor import DepthSensor, DepthSensorConfig
 
     if cfg.avoidance_model == AvoidanceModel.PX4:
+        from .avoidance.px4.local_planner import Px4AvoidanceConfig, Px4LocalPlanner
         from .profiles import SITL_IRIS
-        from .px4_avoidance import Px4AvoidanceConfig, Px4LocalPlanner
 
         sensor = DepthSensor(test.obstacles, cfg.sensor_config or SITL_IRIS.sensor_config())
         plan_cfg = cfg.avoidance_config or Px4AvoidanceConfig()
         return sensor, lambda: Px4LocalPlanner(plan_cfg, params["MPC_XY_CRUISE"], params["MPC_ACC_HOR"],
                                                params["MPC_JERK_MAX"])
-    from .avoidance import AvoidanceConfig, LocalPlanner
+    from .avoidance.reactive import AvoidanceConfig, LocalPlanner
 
     sensor = DepthSensor(test.obstacles, cfg.sensor_config or DepthSensorConfig())
     plan_cfg = cfg.avoidance_config or AvoidanceConfig()
     return sensor, lambda: LocalPlanner(plan_cfg)
 
 
-def _initial_yaw(mission) -> float:
+def initial_yaw(mission) -> float:
     """Heading of the vehicle on the ground: toward the first position that is not straight above home."""
     for it in mission.items:
         if it.has_position and it.command != Command.TAKEOFF and math.hypot(it.x, it.y) > 1.0:
@@ -318,14 +309,15 @@ def _loop(world: World, runs: list[_Run], cfg: SimConfig, params, vehicle, senso
 
 def _fly_compiled(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float, mission,
                   params) -> None:
-    """The compiled loop (:func:`~surrealist_gym.sim.compiled_loop.fly_kernel`): everything in kernels."""
+    """The compiled loop (:func:`~surrealist_gym.sim.compiled.loop.fly_kernel`): everything in kernels."""
     fly_kernel(world, runs, cfg, sensor, timeout, mission, params)
 
 
 def _fly_compiled_outer(world: CompiledWorld, runs: list[_Run], cfg: SimConfig, sensor, timeout: float, mission,
                         params) -> None:
     """The reference of :func:`_fly_compiled` (the same results bit for bit, tests/.../test_compiled_loop): the
-    Python :func:`_outer` per outer period, :func:`~surrealist_gym.sim.compiled_physics.advance` for the rest."""
+    Python :func:`_outer` per outer period, :func:`~surrealist_gym.sim.vehicle.compiled_physics.advance` for the
+    rest."""
     outer_dt = int(round(cfg.control_hz / cfg.outer_hz)) * (1.0 / cfg.control_hz)  # as _loop's
     log_div = int(round(cfg.outer_hz / cfg.log_hz))
     rest_z, stuck_w, stuck_d = world.rest_z, cfg.stuck_window_s, cfg.stuck_distance_m

@@ -31,7 +31,7 @@ from surrealist_gym.cli import main
 from surrealist_gym.competition.compete import tool_environment
 from surrealist_gym.competition.compete.locate import source_of
 from surrealist_gym.errors import InvalidTestCase
-from surrealist_gym.logs import read_flight
+from surrealist_gym.logs import read_flight, write_run_ulog
 from surrealist_gym.results import export_test
 from surrealist_gym.sim.profiles import load_profile
 from surrealist_gym.sim.runner import simulate
@@ -159,7 +159,7 @@ def flights(tmp_path_factory, written):
         buffered = simulate(test, runs=1, seed=0, config=replace(config, competition_buffer_m=0.125))[0]
         assert np.array_equal(plain.local_position.x, buffered.local_position.x)  # the buffer flies nothing else
         ulog = folder / f"flight-{i}.ulg"
-        plain.save_ulog(ulog, mission=test.mission)
+        write_run_ulog(ulog, plain, mission=test.mission)
         out.append({"yaml": path, "test": test, "ulog": ulog, "ours": {"0.2.1": plain.competition_distance,
                                                                       "master": buffered.competition_distance}})
     return out

@@ -1,5 +1,6 @@
-"""Every shipped planner and mutator satisfies its Protocol (sim/planner.py, mutators.PropertyMutator): declared, by
-shape (each member present) and through isinstance on real instances; the planner's run-loop step is its update."""
+"""Every shipped planner and mutator satisfies its Protocol (sim/avoidance/planner.py, mutators.PropertyMutator):
+declared, by shape (each member present) and through isinstance on real instances; the planner's run-loop step is its
+update."""
 from __future__ import annotations
 
 import dataclasses
@@ -12,9 +13,10 @@ import numpy as np
 from surrealist_gym import mutators
 from surrealist_gym.competition.rules import layout_mutators, seed_layout
 from surrealist_gym.mutators import PropertyMutator, default_mutators, uav_mutators, wind_mutators
-from surrealist_gym.sim import avoidance, px4_avoidance
-from surrealist_gym.sim.config import SimConfig
-from surrealist_gym.sim.planner import Planner, PlannerCommand, PlannerConfig
+from surrealist_gym.sim.avoidance import reactive
+from surrealist_gym.sim.avoidance.planner import Planner, PlannerCommand
+from surrealist_gym.sim.avoidance.px4 import local_planner
+from surrealist_gym.sim.config import PlannerConfig, SimConfig
 from surrealist_gym.sim.profiles import PRESETS
 from surrealist_gym.testcase import TestCase
 
@@ -40,8 +42,8 @@ def test_the_protocols_name_what_the_run_loop_and_the_agents_use():
 
 
 def test_every_shipped_planner_declares_and_has_the_planner_shape():
-    planners = _classes(avoidance, "Planner") + _classes(px4_avoidance, "Planner")
-    outputs = _classes(avoidance, "PlannerOutput") + _classes(px4_avoidance, "PlannerOutput")
+    planners = _classes(reactive, "Planner") + _classes(local_planner, "Planner")
+    outputs = _classes(reactive, "PlannerOutput") + _classes(local_planner, "PlannerOutput")
     assert {c.__name__ for c in planners} == {"LocalPlanner", "Px4LocalPlanner"}
     assert {c.__name__ for c in outputs} == {"PlannerOutput", "Px4PlannerOutput"}
     for cls in planners:
@@ -55,7 +57,7 @@ def test_every_shipped_planner_declares_and_has_the_planner_shape():
 def test_a_planner_step_is_its_update_and_returns_a_command():
     hits = np.array([[10.0, y, z] for y in np.linspace(-4, 6, 21) for z in (8.0, 10.0, 12.0)])  # a wall ahead
     args = (0.1, (0.0, 0.0, 10.0), (1.0, 0.0, 0.0), 0.0, (40.0, 0.0, 10.0), (0.0, 0.0, 10.0), hits, 3.0)
-    for make in (avoidance.LocalPlanner, px4_avoidance.Px4LocalPlanner):
+    for make in (reactive.LocalPlanner, local_planner.Px4LocalPlanner):
         planner = make()
         assert isinstance(planner, Planner)
         out = planner.step(*args)
@@ -64,10 +66,10 @@ def test_a_planner_step_is_its_update_and_returns_a_command():
         again = planner.step(*args)
         assert np.array_equal(np.asarray(again.yaw), np.asarray(out.yaw))
     t, pos, vel, yaw, goal, prev, hits, cruise = args
-    simple = avoidance.LocalPlanner().update(t, pos, vel, goal, hits, max_speed=cruise)
-    assert avoidance.LocalPlanner().step(*args) == simple and simple.position is None
-    px4 = px4_avoidance.Px4LocalPlanner().update(t, pos, vel, yaw, goal, prev, hits)
-    stepped = px4_avoidance.Px4LocalPlanner().step(*args)
+    simple = reactive.LocalPlanner().update(t, pos, vel, goal, hits, max_speed=cruise)
+    assert reactive.LocalPlanner().step(*args) == simple and simple.position is None
+    px4 = local_planner.Px4LocalPlanner().update(t, pos, vel, yaw, goal, prev, hits)
+    stepped = local_planner.Px4LocalPlanner().step(*args)
     assert (stepped.position, stepped.yaw, stepped.state) == (px4.position, px4.yaw, px4.state)
     assert np.array_equal(stepped.path, px4.path)
 
@@ -76,7 +78,7 @@ def test_every_preset_planner_config_is_in_the_config_union():
     union = typing.get_args(PlannerConfig)
     names = {ref.__forward_arg__ for ref in union}
     assert names == {"AvoidanceConfig", "Px4AvoidanceConfig"}
-    classes = (avoidance.AvoidanceConfig, px4_avoidance.Px4AvoidanceConfig)
+    classes = (reactive.AvoidanceConfig, local_planner.Px4AvoidanceConfig)
     for profile in PRESETS.values():
         assert isinstance(profile.sim_config().avoidance_config, classes)
     hint = {f.name: f.type for f in dataclasses.fields(SimConfig)}

@@ -14,7 +14,7 @@ import numpy as np
 
 import surrealist_gym as sg
 from surrealist_gym.sim.profiles import load_profile
-from surrealist_gym.sim.runner import _initial_yaw
+from surrealist_gym.sim.runner import initial_yaw
 from surrealist_gym.testcase import Obstacle
 
 DATA = Path(__file__).resolve().parents[3].parent / "shared" / "data"
@@ -40,7 +40,7 @@ for r in csv.DictReader(open(DATA / "competition/rilast-mission1/trajectories.cs
 ours = "--ours" in sys.argv
 base = sg.load_test(DATA / "competition/case_studies/mission1.yaml")
 config = load_profile("px4-v1.12-sitl-iris").sim_config()
-start = _initial_yaw(base.mission)
+start = initial_yaw(base.mission)
 all_px4, all_ours = [], []
 for tid, p in sorted(flights.items()):
     lp = lags(np.array(p))

@@ -4,7 +4,7 @@ L seconds late (L first, then variants.py's arguments):
     python benchmarks/lab/2026-11-24-heading-offset/latency.py 0.5 dev close 2
 """
 import sys, collections, runpy
-from surrealist_gym.sim import px4_avoidance
+from surrealist_gym.sim.avoidance.px4 import local_planner as px4_avoidance
 L=float(sys.argv.pop(1))
 orig=px4_avoidance.Px4LocalPlanner.update
 def upd(self, t, pos, vel, yaw, goal, prev, hits, pitch=0.0):

@@ -7,7 +7,7 @@ import json, csv, sys, math, numpy as np
 import surrealist_gym as sg
 from surrealist_gym.testcase import Obstacle
 from surrealist_gym.sim.profiles import load_profile
-from surrealist_gym.sim import px4_avoidance
+from surrealist_gym.sim.avoidance.px4 import local_planner as px4_avoidance
 from surrealist_gym.geometry import competition_distance, obstacle_distances
 from pathlib import Path
 DATA = str(Path(__file__).resolve().parents[3].parent / "shared" / "data")

@@ -283,14 +283,16 @@ class SimulationServer:
                 return self._record(Flight(number, agent, api, str(test_file), stored["logs"], stored["statuses"],
                                            stored["distances"], stored["wall_s"], error=stored["error"]))
         results = self._executor.run(test, range(first, first + runs), self.seed, self.config)
+        from ...logs.ulog_writer import write_run_ulog
+
         logs, statuses, distances, failures = [], [], [], 0
         for i, run in enumerate(results):
             statuses.append(str(getattr(run.status, "value", run.status)))
-            if not hasattr(run, "save_ulog"):  # executors.FailedRun: its simulation raised twice
+            if not hasattr(run, "local_position"):  # executors.FailedRun: its simulation raised twice
                 failures += 1
                 continue
             log = f"{stem}-run{i}.ulg"
-            run.save_ulog(log, mission=test.mission)
+            write_run_ulog(log, run, mission=test.mission)
             logs.append(log)
             distances.append(float(run.competition_distance))
         error = "" if logs else f"the simulation failed ({failures} of {runs} runs raised)"

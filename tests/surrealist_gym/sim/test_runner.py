@@ -12,7 +12,7 @@ from surrealist_gym.errors import SimulationError
 from surrealist_gym.geometry import obstacle_distances
 from surrealist_gym.mission import Command
 from surrealist_gym.sim import NoiseConfig, RunStatus, SimConfig, simulate, simulate_runs
-from surrealist_gym.sim.noise import run_seed_sequence
+from surrealist_gym.sim.sensing.noise import run_seed_sequence
 
 LAND_XY = (-16.645876487856597, 6.859186808331832)  # case0.plan's landing point [m from home]
 OFF = SimConfig(avoidance=False)

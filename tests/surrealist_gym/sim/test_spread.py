@@ -11,8 +11,8 @@ import surrealist_gym as sg
 from surrealist_gym.aerialist import load_test
 from surrealist_gym.metrics import dtw
 from surrealist_gym.sim import NoiseConfig, simulate
-from surrealist_gym.sim.noise import NoiseSource, run_seed_sequence
 from surrealist_gym.sim.profiles import PRESETS, SITL_TIMING, VISION_SITL
+from surrealist_gym.sim.sensing.noise import NoiseSource, run_seed_sequence
 
 
 def _flags(config: NoiseConfig, steps: int, seed: int = 0) -> np.ndarray:
