@@ -109,7 +109,7 @@ def main() -> int:
     if not CAMBA.is_dir():
         print(f"needs the shared data folder {COMPETITION}", file=sys.stderr)
         return 1
-    from surrealist_gym.cli.evaluate import summary_text
+    from surrealist_gym.cli.competition.evaluate import summary_text
     from surrealist_gym.competition.reevaluation import evaluate
     from surrealist_gym.competition.reports.evaluation import write_report
     from surrealist_gym.competition.tool_output import load_tests

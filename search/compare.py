@@ -76,19 +76,6 @@ class CompareResult:
         return sum(s.new_simulations for s in self.searches)
 
 
-class _Shared:
-    """An executor shared by the searches: each env's close() leaves it open."""
-
-    def __init__(self, executor):
-        self.executor, self.workers = executor, getattr(executor, "workers", 1)
-
-    def run(self, *args):
-        return self.executor.run(*args)
-
-    def close(self):
-        pass
-
-
 def _slug(name: str) -> str:
     """A file-name stem for an agent name (``ppo:results/policies/x.zip`` holds a colon, slashes and dots)."""
     return re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_")
@@ -134,11 +121,11 @@ def compare(env_id: str, agents: Sequence[str], repetitions: int = 10, budget: i
 
 def _compare(env_id, agents, repetitions, budget, runs, out: Path, settings, env_kwargs, executor, workers, parallel,
              progress, random_seed) -> CompareResult:
-    from surrealist_gym.executors import InlineExecutor, make_executor
+    from surrealist_gym.executors import InlineExecutor, SharedExecutor, make_executor
 
     (out / "searches").mkdir(exist_ok=True)
     real = make_executor(executor, workers)
-    shared = _Shared(real)
+    shared = SharedExecutor(real)
     lock = threading.Lock()
     tasks = [(name, rep) for name in agents for rep in range(repetitions)]
 

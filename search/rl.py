@@ -273,12 +273,10 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
         env.seed(seed)
     else:
         if executor not in (None, "inline"):  # one pool or client for every problem drawn (each env closes its own)
-            from surrealist_gym.executors import make_executor
-
-            from .compare import _Shared
+            from surrealist_gym.executors import SharedExecutor, make_executor
 
             pool = make_executor(executor, workers)
-            executor = _Shared(pool)
+            executor = SharedExecutor(pool)
         env = training_env(config, sim_config, seed, executor or "inline")
         env.reset(seed=seed)
     hyper = algorithm_settings(algorithm, steps, envs, config.problem, **hyper)

@@ -282,6 +282,20 @@ def make_executor(spec=None, workers: int | None = None):
     return spec  # an executor object: submit, run(test, indices, seed, config) and close()
 
 
+class SharedExecutor:
+    """An executor lent to several envs: each env's ``close()`` leaves it open; its owner closes ``executor``."""
+
+    def __init__(self, executor):
+        self.executor, self.workers = executor, getattr(executor, "workers", 1)
+
+    def run(self, *args):
+        """Fly on the shared executor."""
+        return self.executor.run(*args)
+
+    def close(self) -> None:
+        """Nothing: the owner closes the shared executor."""
+
+
 @contextmanager
 def executor_for(spec=None, workers: int | None = None):
     """:func:`make_executor` for the length of a ``with``, closed after it unless ``spec`` was an executor already;

@@ -30,11 +30,15 @@ COMMANDS = {
     "train": ("surrealist_gym.cli.train", "train an RL policy (--algorithm ppo or sac) across generated problems"),
     "surrogate": ("surrealist_gym.cli.surrogate", "train or evaluate a surrogate model on evaluation stores"),
     "fidelity": ("surrealist_gym.cli.fidelity", "fly a labelled set of tests and report how far our UAV agrees"),
-    "evaluate": ("surrealist_gym.cli.evaluate", "re-fly a suite of tests N times: failure odds, points, diversity"),
-    "compete": ("surrealist_gym.cli.compete", "run a UAV Testing Competition tool, unedited, on our simulator"),
-    "leaderboard": ("surrealist_gym.cli.leaderboard", "run competition tools on case studies and rank them as an "
-                                                      "edition did, with PX4's published results beside"),
-    "export-tool": ("surrealist_gym.cli.export_tool", "write a competition tool that picks its tests on our simulator"),
+    "evaluate": ("surrealist_gym.cli.competition.evaluate",
+                 "re-fly a suite of tests N times: failure odds, points, diversity"),
+    "compete": ("surrealist_gym.cli.competition.compete",
+                "run a UAV Testing Competition tool, unedited, on our simulator"),
+    "leaderboard": ("surrealist_gym.cli.competition.leaderboard",
+                    "run competition tools on case studies and rank them as an edition did, with PX4's published "
+                    "results beside"),
+    "export-tool": ("surrealist_gym.cli.competition.export_tool",
+                    "write a competition tool that picks its tests on our simulator"),
 }
 
 

@@ -72,7 +72,7 @@ def add_out_argument(parser: argparse.ArgumentParser, command: str, what: str = 
     parser.add_argument("--out", metavar="DIR", default=None, help=out_help(command, what))
 
 
-class _Refused(argparse.Action):
+class Refused(argparse.Action):
     """An option kept only to be refused in one line (argparse's error: exit code 2, before any work) with what to
     type instead. ``instead``: the words, or a function of the value typed (None when none was) that gives them."""
 
@@ -103,7 +103,7 @@ class _RefusedPositional(argparse.Action):
 def refuse_argument(parser: argparse.ArgumentParser, flag: str, instead) -> None:
     """Keep ``flag`` (an old spelling) only to refuse it in one line before any work: ``instead`` says what to type
     (words, or a function of the value typed)."""
-    parser.add_argument(flag, dest="_refused_" + flag.lstrip("-").replace("-", "_"), action=_Refused, default=None,
+    parser.add_argument(flag, dest="_refused_" + flag.lstrip("-").replace("-", "_"), action=Refused, default=None,
                         instead=instead)
 
 

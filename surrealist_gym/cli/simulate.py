@@ -23,7 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist simulate``."""
     from .options import (
         WORKERS_ONE_HELP,
-        _Refused,
+        Refused,
         add_dask_argument,
         add_out_argument,
         add_random_seed_argument,
@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     reference.add_argument("--no-reference", action="store_true",
                            help="do not compare with the test's assertion log")
     add_out_argument(parser, "simulate")
-    parser.add_argument("--vehicle", dest="_refused_vehicle", action=_Refused, default=None,
+    parser.add_argument("--vehicle", dest="_refused_vehicle", action=Refused, default=None,
                         instead="--uav names the UAV that flies: a preset, or a profile YAML whose 'vehicle:' is "
                                 "px4_vision or iris")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,

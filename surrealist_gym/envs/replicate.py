@@ -15,7 +15,6 @@ from ..aerialist import load_test
 from ..errors import InvalidTestCase, LogFormatError
 from ..evaluation import ReplicationObjective
 from ..mutators import AUTHORS_ORDER, default_mutators, uav_mutators as uav_mutators_of
-from ..sim.profiles import default_profile
 from ..sim.uav import decide_uav
 from ..testcase import Obstacle, TestCase
 from .base import EnvSetup, SurrealistEnv
@@ -66,7 +65,7 @@ class ReplicateEnv(SurrealistEnv):
         mutators = tuple(mutators or default_mutators(seed_test, AUTHORS_ORDER))
         if uav_mutators:
             if uav_mutators is True or all(isinstance(m, str) for m in uav_mutators):
-                profile = self.uav.profile or default_profile(seed_test)  # a SimConfig given as it is: the seed's UAV
+                profile = self.uav.profile or decide_uav(seed_test).profile  # a SimConfig as it is: the seed's UAV
                 names = None if uav_mutators is True else list(uav_mutators)
                 uav_mutators = uav_mutators_of(profile, names)
             mutators += tuple(uav_mutators)

@@ -42,9 +42,9 @@ def _commands() -> dict[str, argparse.ArgumentParser]:
 
 def _options(parser: argparse.ArgumentParser) -> dict[str, argparse.Action]:
     """The options a parser offers (those kept only to be refused left out), by flag."""
-    from surrealist_gym.cli.options import _Refused
+    from surrealist_gym.cli.options import Refused
 
-    return {flag: a for a in parser._actions if not isinstance(a, _Refused) for flag in a.option_strings}
+    return {flag: a for a in parser._actions if not isinstance(a, Refused) for flag in a.option_strings}
 
 
 def _positionals(parser: argparse.ArgumentParser) -> list[argparse.Action]:

@@ -28,10 +28,10 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..competition.scoring import EDITIONS, Draw
-from ..errors import SurrealistError
-from ..sim.uav import recorded_choice, write_record
-from .options import RUN_FILE, default_out
+from ...competition.scoring import EDITIONS, Draw
+from ...errors import SurrealistError
+from ...sim.uav import recorded_choice, write_record
+from ..options import RUN_FILE, default_out
 
 STORE_FILE = "evaluations.sqlite"
 DEFAULT_RUNS = 5  # runs per test without --competition
@@ -58,7 +58,7 @@ class EvaluateOptions:
     def from_args(cls, args: argparse.Namespace) -> "EvaluateOptions":
         """The options of a new evaluation; with ``--competition``, each folder's tests are loaded and drawn here
         (one-line errors before anything is flown)."""
-        from ..competition.scoring import draw_folder, edition
+        from ...competition.scoring import draw_folder, edition
 
         ed = None if args.competition is None else edition(args.competition)
         runs = args.runs if args.runs is not None else ed.runs if ed else DEFAULT_RUNS
@@ -94,7 +94,7 @@ class EvaluateOptions:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist evaluate``."""
-    from .options import (
+    from ..options import (
         add_buffer_argument,
         add_dask_argument,
         add_out_argument,
@@ -129,7 +129,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def summary_text(ev) -> str:
     """The table ``surrealist evaluate`` prints: one row per test, then the suite's figures."""
-    from ..competition.reports.evaluation import suite_lines
+    from ...competition.reports.evaluation import suite_lines
 
     width = max([len("test"), *(len(t.name) for t in ev.tests)])
     head = (f"{'test':{width}}  {'fail':>5}  {'err':>3}  {'p':>5}  {'95% CI':>12}  {'pts/run':>7}  {'median':>6}  "
@@ -153,13 +153,13 @@ def run(args: argparse.Namespace) -> int:
     """Check the options, the output folder and the tests; fly the missing runs into the folder's store; print the
     summary and write the report. ``--resume DIR``, or ``--out DIR`` naming a folder that holds an evaluation,
     finishes that evaluation."""
-    from ..competition.reevaluation import uav_decisions
-    from ..competition.scoring import edition
-    from ..competition.tool_output import load_tests, rule_broken
-    from ..geometry import check_buffer
-    from ..results import ResultsFolder
-    from ..sim.uav import decide_uav
-    from .options import check_at_least, check_writable
+    from ...competition.reevaluation import uav_decisions
+    from ...competition.scoring import edition
+    from ...competition.tool_output import load_tests, rule_broken
+    from ...geometry import check_buffer
+    from ...results import ResultsFolder
+    from ...sim.uav import decide_uav
+    from ..options import check_at_least, check_writable
 
     check_at_least(args, runs=1, workers=1)
     check_buffer(args.buffer)
@@ -241,8 +241,8 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict, da
     breaks)."""
     from tqdm import tqdm
 
-    from ..competition.reevaluation import evaluate
-    from ..competition.reports.evaluation import scoring_lines, write_report
+    from ...competition.reevaluation import evaluate
+    from ...competition.reports.evaluation import scoring_lines, write_report
 
     store = out / STORE_FILE
     resume = f"surrealist evaluate --resume {out}"
@@ -282,7 +282,7 @@ def _evaluate(out: Path, options: EvaluateOptions, tests, uav, invalid: dict, da
 
 def _board(options: EvaluateOptions, ev, tests: dict, invalid: dict):
     """The folders' draws scored as the edition did and ranked per case study."""
-    from ..competition.scoring import edition, score_draws
+    from ...competition.scoring import edition, score_draws
 
     return score_draws(edition(options.competition), options.draws, tests, {t.file: t.runs for t in ev.tests},
                        invalid)

@@ -17,8 +17,8 @@ import argparse
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist export-tool``."""
-    from ..competition.export_tool import AGENTS, ToolSettings
-    from .options import add_random_seed_argument
+    from ...competition.export_tool import AGENTS, ToolSettings
+    from ..options import add_random_seed_argument
 
     default = ToolSettings()
     parser.add_argument("dir", metavar="DIR", help="the tool's folder to write (new or empty)")
@@ -44,8 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit code."""
-    from ..competition.export_tool import SETTINGS_FILE, ToolSettings, write_tool
-    from .options import check_writable
+    from ...competition.export_tool import SETTINGS_FILE, ToolSettings, write_tool
+    from ..options import check_writable
 
     settings = ToolSettings(sim_budget_factor=args.sim_budget_factor, obstacles=args.obstacles, confirm=args.confirm,
                             buffer=args.buffer, seed=args.random_seed, workers=args.workers, agent=args.agent).check()

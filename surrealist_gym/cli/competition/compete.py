@@ -29,9 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("case_study", metavar="CASE_STUDY",
                         help="mission1, mission2, mission3 (the tool's case_studies/ first) or an Aerialist YAML")
     parser.add_argument("budget", metavar="BUDGET", type=int, help="simulations the tool may fly (given to its cli.py)")
-    from ..competition.compete.process import ToolLimits
-    from ..competition.compete.toolenv import TOOL_ENV_MODES
-    from .options import (
+    from ...competition.compete.process import ToolLimits
+    from ...competition.compete.toolenv import TOOL_ENV_MODES
+    from ..options import (
         WORKERS_ONE_HELP,
         add_dask_argument,
         add_out_argument,
@@ -50,7 +50,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="Aerialist's folder (default: the folders in $SURREALIST_AERIALIST holding the API the "
                              "tool imports, then the installed aerialist)")
     add_random_seed_argument(parser, "base seed of the runs' noise (default 0)")
-    from ..sim.uav import DEFAULT_UAV
+    from ...sim.uav import DEFAULT_UAV
 
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=DEFAULT_UAV,
                         help=f"UAV profile flown (default {DEFAULT_UAV}, the competition's PX4 SITL)")
@@ -74,11 +74,11 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from ..competition.compete import claim, prepare, run as run_tool
-    from ..competition.compete.process import ToolLimits
-    from ..competition.compete.toolenv import CACHE_ENV
-    from ..errors import SurrealistError
-    from .options import check_at_least, check_writable, default_out, refuse_workers_with_dask
+    from ...competition.compete import claim, prepare, run as run_tool
+    from ...competition.compete.process import ToolLimits
+    from ...competition.compete.toolenv import CACHE_ENV
+    from ...errors import SurrealistError
+    from ..options import check_at_least, check_writable, default_out, refuse_workers_with_dask
 
     if args.budget < 1:  # the positional BUDGET, named as the usage names it
         raise SurrealistError(f"BUDGET: expected a whole number >= 1, got {args.budget}")
@@ -130,7 +130,7 @@ def _allow_the_tools_files(plan) -> None:
     case study given): the tests may read there, for this command (cli.main restores the environment)."""
     import os
 
-    from ..errors import ALLOW_OUTSIDE_ENV
+    from ...errors import ALLOW_OUTSIDE_ENV
 
     folders = [os.environ.get(ALLOW_OUTSIDE_ENV)] + [str(Path(p).resolve()) for p in
                                                       (plan.tool, plan.out, Path(plan.case_study_file).parent)]

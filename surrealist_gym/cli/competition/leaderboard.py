@@ -23,8 +23,8 @@ import time
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist leaderboard``."""
-    from ..competition.scoring import EDITIONS
-    from .options import add_dask_argument, add_out_argument, add_random_seed_argument
+    from ...competition.scoring import EDITIONS
+    from ..options import add_dask_argument, add_out_argument, add_random_seed_argument
 
     parser.add_argument("tools", metavar="TOOL_DIR", nargs="+",
                         help="competition tools' folders (each with its cli.py), named on the board by their folder "
@@ -48,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="cells run at once, and processes flying the scoring's runs (default: all cores, at "
                              "most 8)")
     add_dask_argument(parser)
-    from ..sim.uav import DEFAULT_UAV
+    from ...sim.uav import DEFAULT_UAV
 
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=DEFAULT_UAV,
                         help=f"UAV profile flown (default {DEFAULT_UAV}, the competition's PX4 SITL)")
@@ -57,12 +57,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Check everything, run the missing cells, score, write the board; returns the exit code."""
-    from ..competition import leaderboard as lb
-    from ..competition.reports.leaderboard import write_report
-    from ..errors import SurrealistError
-    from ..executors import default_workers
-    from ..results import ResultsFolder
-    from .options import check_at_least, check_writable, default_out
+    from ...competition import leaderboard as lb
+    from ...competition.reports.leaderboard import write_report
+    from ...errors import SurrealistError
+    from ...executors import default_workers
+    from ...results import ResultsFolder
+    from ..options import check_at_least, check_writable, default_out
 
     check_at_least(args, workers=1)
     if args.workers is not None and args.dask_scheduler:
@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     workers = args.workers or default_workers()
     executor = None
     if args.dask_scheduler:
-        from ..executors import DaskExecutor
+        from ...executors import DaskExecutor
 
         executor = DaskExecutor(args.dask_scheduler)
     print(f"leaderboard: {len(board.tools)} tools ({', '.join(t.name for t in board.tools)}) x "
