@@ -10,7 +10,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -21,6 +20,7 @@ from surrealist_gym.competition.compete.locate import AERIALIST_ENV
 from surrealist_gym.competition.compete.process import ToolLimits
 from surrealist_gym.competition.compete.toolcopy import copy_folder
 from surrealist_gym.errors import SurrealistError
+from tests.conftest import alive, until
 
 ROOT = Path(__file__).resolve().parents[3]
 THIRD_PARTY = ROOT.parent / "shared" / "third_party"
@@ -229,23 +229,6 @@ def _compete(tool: Path, out: Path, *extra: str) -> subprocess.Popen:
                             text=True)
 
 
-def _until(condition, what: str, limit_s: float = 120.0) -> None:
-    """Poll ``condition`` (a bounded wait for another process, not a timing assertion)."""
-    end = time.monotonic() + limit_s
-    while not condition():
-        if time.monotonic() > end:
-            raise AssertionError(f"gave up waiting for {what}")
-        time.sleep(0.1)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (FileNotFoundError, ProcessLookupError):
-        return False
-    return state != "Z"
-
-
 PLAIN = "import os, subprocess, sys, time\n"
 WAITING = '''
 import subprocess
@@ -268,13 +251,13 @@ def test_a_signal_to_compete_ends_the_tool_and_its_children(tmp_path, monkeypatc
     out = tmp_path / "out"
     compete = _compete(tool, out)
     pids_file = out / "tool" / "pids.txt"
-    _until(lambda: pids_file.is_file() and len(pids_file.read_text().split()) == 2, "the tool to start")
+    until(lambda: pids_file.is_file() and len(pids_file.read_text().split()) == 2, "the tool to start")
     pids = [int(p) for p in pids_file.read_text().split()]
-    assert all(_alive(p) for p in pids)
+    assert all(alive(p) for p in pids)
     compete.send_signal(signum)
     compete.communicate(timeout=120)
     assert compete.returncode != 0
-    _until(lambda: not any(_alive(p) for p in pids), "the tool's processes to end")
+    until(lambda: not any(alive(p) for p in pids), "the tool's processes to end")
 
 
 def test_a_second_compete_on_one_out_is_refused_and_the_first_goes_on(tmp_path, monkeypatch, capsys):
@@ -284,7 +267,7 @@ def test_a_second_compete_on_one_out_is_refused_and_the_first_goes_on(tmp_path, 
     out = tmp_path / "out"
     second_plan = prepare(tool, "mission1", 1, out)  # checked before the first made the folder: the race
     first = _compete(tool, out)
-    _until(lambda: (out / "tool" / "pids.txt").is_file(), "the first tool to start")
+    until(lambda: (out / "tool" / "pids.txt").is_file(), "the first tool to start")
     before = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
     _refused(capsys, ["compete", str(tool), "mission1", "1", "--out", str(out)],
              f"--out {out}: another process (process {first.pid}) is writing to this folder")
@@ -304,4 +287,4 @@ def test_a_tool_past_its_time_limit_is_stopped(tmp_path, monkeypatch, capsys):
     assert main(["compete", str(tool), "mission1", "1", "--out", str(tmp_path / "out"), "--tool-timeout", "5"]) == 2
     assert "the tool ran past its time limit of 5 s and was stopped" in capsys.readouterr().err
     pids = [int(p) for p in (tmp_path / "out" / "tool" / "pids.txt").read_text().split()]
-    _until(lambda: not any(_alive(p) for p in pids), "the tool's processes to end")
+    until(lambda: not any(alive(p) for p in pids), "the tool's processes to end")
