@@ -72,10 +72,12 @@ def run(args) -> int:
         if flight.damage:
             raise SurrealistError(f"{flight.path}: {flight.damage}; a flight cut short cannot be calibrated on")
         flights.append(flight)
-    base = decide_uav(uav=args.uav or None, flight=flights[0]).profile  # --uav, else the first log's vehicle
+    uav = decide_uav(uav=args.uav or None, flight=flights[0])  # --uav, else the first log's vehicle
+    base = uav.profile
     seed = load_test(args.seed) if args.seed else None
     # the runs, kept as they fly in a results folder named after the profile: the same command resumes
     folder = ResultsFolder.claim(out.with_suffix(""), "calibrate", _settings(args), free=("workers",))
+    uav.write(folder.path)  # the UAV the calibration starts from, and why
     start = time.perf_counter()
     with folder.keeping("the same command resumes it", "record(s) of runs"):
         executor = make_executor(args.dask_scheduler, args.workers)

@@ -62,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
     from ...errors import SurrealistError
     from ...executors import default_workers
     from ...results import ResultsFolder
+    from ...sim.uav import decide_uav
     from ..options import check_at_least, check_writable, default_out
 
     check_at_least(args, workers=1)
@@ -83,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
           f"{'Dask ' + args.dask_scheduler if executor else f'{workers} workers'}; {board.out}", flush=True)
     folder = ResultsFolder.claim(board.out, "leaderboard", None, settings_file=lb.BOARD_FILE, stores=())
     lb.start(board)  # its settings, written by the one writer (a board grows: lb.plan compared them)
+    decide_uav(uav=board.uav).write(board.out)  # each cell's compete folder records it too
     started = time.perf_counter()
     try:
         summaries = lb.run_cells(board, workers, executor and executor.client,

@@ -121,6 +121,7 @@ def local_board(tmp_path_factory, boxes, windy, aerialist) -> Path:
 
 def test_a_board_runs_each_cell_through_compete_and_scores_with_and_without_wind(local_board):
     rows = _rows(local_board / "leaderboard.csv")
+    assert '"uav": "px4-v1.12-sitl-iris"' in (local_board / "uav.json").read_text()
     assert [(r["tool"], r["case_study"], r["wind"]) for r in rows] == [
         ("boxes", "mission1-wind", "with"), ("boxes", "mission1-wind", "without")]
     assert list(rows[0])[:12] == ["tool", "case_study", "repetition", "wind", "reported_tests", "evaluated_tests",

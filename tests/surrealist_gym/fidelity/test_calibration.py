@@ -71,6 +71,7 @@ def test_calibrate_fits_m0_pace_and_take_off_and_writes_a_profile_replicate_acce
     printed = capsys.readouterr().out
     assert "planner.heading_offset_deg" in printed and "resid" in printed
     assert (tmp_path / "m0-uav.png").stat().st_size > 10_000
+    assert "the vehicle of the log" in (tmp_path / "m0-uav" / "uav.json").read_text()  # the UAV it started from
     profile = load_profile(out)
     assert profile.vehicle == SITL_IRIS.vehicle and yaml.safe_load(out.read_text())["name"] == "calibrated-m0"
     assert -30 < profile.planner["heading_offset_deg"] < 0
