@@ -157,6 +157,11 @@ def _ctrl_c_answered_once():
             state["retry"].cancel()
         sys.unraisablehook = sys.__unraisablehook__
         signal.signal(signal.SIGINT, signal.SIG_IGN if state["answered"] else signal.default_int_handler)
+        if state["answered"]:
+            # A KeyboardInterrupt that ended code run from a string (a dataclass's or numba's generated source) leaves
+            # CPython's "unhandled Ctrl-C" flag set although the command caught it, and `python -m` then ends by
+            # SIGINT (exit code -2) instead of 130; every string evaluation starts by clearing that flag.
+            exec("pass", {})  # noqa: S102 - a constant
 
 
 def _allow_outside(folders: list[str]) -> None:
