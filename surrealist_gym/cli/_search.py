@@ -10,8 +10,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import SurrealistError
-from ..results import ResultsFolder
-from .options import RUN_FILE, SearchOptions, check_writable, default_out
+from ..results import RUN_FILE, ResultsFolder
+from .options import SearchOptions, check_writable, default_out
 
 
 @contextmanager

@@ -17,7 +17,6 @@ from typing import ClassVar
 from ..errors import SurrealistError
 from ..geometry import check_buffer
 
-RUN_FILE = "run.json"
 SCREEN_RULES = ("auto", "lowfi", "ei", "pi", "none")  # surrogates.config.RULES, without importing torch here
 
 
@@ -450,7 +449,7 @@ def check_writable(path, flag: str = "--out", kind: str = "folder", suffixes: tu
 
 
 __all__ = ["BUFFER_HELP", "CASE_STUDY_DEFAULTS", "DASK_HELP", "FLYING_COMMANDS", "GenerateOptions", "OUT_PATTERN",
-           "PROBLEM_DEFAULTS", "PROBLEM_ENVS", "RUN_FILE", "ReplicateOptions", "SCREEN_RULES", "SearchOptions",
+           "PROBLEM_DEFAULTS", "PROBLEM_ENVS", "ReplicateOptions", "SCREEN_RULES", "SearchOptions",
            "WORKERS_HELP", "WORKERS_ONE_HELP", "add_buffer_argument", "add_dask_argument", "add_out_argument",
            "add_random_seed_argument", "add_workers_argument", "check_at_least", "check_writable", "default_out",
            "out_help", "race_stages", "refuse_argument", "refuse_inapplicable", "refuse_leftover", "refuse_positional",

@@ -4,8 +4,9 @@ from __future__ import annotations
 import dataclasses
 import json
 
+from ..results import RUN_FILE
 from ._search import run_search, search_folder
-from .options import RUN_FILE, ReplicateOptions, refuse_inapplicable
+from .options import ReplicateOptions, refuse_inapplicable
 
 
 def add_arguments(parser) -> None:
@@ -33,8 +34,8 @@ def run(args) -> int:
             if options.seed and str(err).startswith("params."):
                 raise InvalidTestCase(f"{options.seed}: {err}") from None
             raise
-        if options.uav is None and env.uav_profile is not None:  # the log's own vehicle, recorded for --resume
-            profile = env.uav_profile
+        if options.uav is None and env.uav.profile is not None:  # the log's own vehicle, recorded for --resume
+            profile = env.uav.profile
             uav = profile.name
             if PRESETS.get(profile.name) != profile:
                 save_profile(profile, out / "uav.yaml")

@@ -23,11 +23,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``surrealist simulate``."""
     from .options import (
         WORKERS_ONE_HELP,
-        Refused,
         add_dask_argument,
         add_out_argument,
         add_random_seed_argument,
         add_workers_argument,
+        refuse_argument,
     )
 
     parser.add_argument("test", metavar="TEST.yaml", help="Aerialist test case")
@@ -42,9 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     reference.add_argument("--no-reference", action="store_true",
                            help="do not compare with the test's assertion log")
     add_out_argument(parser, "simulate")
-    parser.add_argument("--vehicle", dest="_refused_vehicle", action=Refused, default=None,
-                        instead="--uav names the UAV that flies: a preset, or a profile YAML whose 'vehicle:' is "
-                                "px4_vision or iris")
+    refuse_argument(parser, "--vehicle", "--uav names the UAV that flies: a preset, or a profile YAML whose "
+                                          "'vehicle:' is px4_vision or iris")
     parser.add_argument("--uav", metavar="NAME_OR_YAML", default=None,
                         help="UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), "
                              "px4-vision-case0, or a profile YAML (default: px4-vision-case0 for a test with a "

@@ -123,7 +123,6 @@ class SurrealistEnv(gym.Env):
         store = EvaluationStore(store) if isinstance(store, (str, Path)) else store
         # a seed whose uav.* settings are invalid fails here in one line, not as error runs in the workers
         self.uav = self._decide_uav(seed_test, setup)
-        self.uav_profile = self.uav.profile  # the UavProfile flown, None for a SimConfig given as it is
         self.evaluator = Evaluator(self._objective(), runs=setup.runs, seed=setup.random_seed,
                                    sim_config=self.uav.config, executor=executor, store=store)
         n = len(self._mutators)

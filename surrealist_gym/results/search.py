@@ -64,10 +64,11 @@ def write_results(out: Path, env, result, wall_seconds: float, problem: str) -> 
     }
     settings = uav_settings(best_eval.test)
     summary["best_uav_settings"] = settings
-    if settings and getattr(env, "uav_profile", None) is not None:  # the UAV configuration the search found
-        save_profile(env.uav_profile.with_settings(settings, name=f"{env.uav_profile.name}-found",
-                                                   description=f"{env.uav_profile.name} with the UAV settings of "
-                                                               f"the best test ({out.name})"),
+    profile = env.uav.profile
+    if settings and profile is not None:  # the UAV configuration the search found
+        save_profile(profile.with_settings(settings, name=f"{profile.name}-found",
+                                           description=f"{profile.name} with the UAV settings of "
+                                                       f"the best test ({out.name})"),
                      out / "best-uav.yaml")
     reference = getattr(env, "reference", None)
     goal = search_goal(seed_eval, reference)

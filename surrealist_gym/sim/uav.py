@@ -113,7 +113,7 @@ def decide_uav(test=None, uav=None, *, flight=None, config: SimConfig | Mapping[
             reasons += ("overrides: " + ", ".join(f"{k}={v}" for k, v in sorted(dict(config).items())),)
         decision = UavDecision(profile.sim_config(SimConfig.coerce(config)), profile, reasons)
     if test is not None and (settings := uav_settings(test)):
-        flown_config(decision.config, test)  # the test's uav.* settings, checked before anything flies
+        with_uav_settings(decision.config, settings)  # the test's uav.* settings, checked before anything flies
         decision = dataclasses.replace(decision, reasons=decision.reasons + (
             "the test's settings: " + ", ".join(f"uav.{k}={v:g}" for k, v in sorted(settings.items())),))
     return decision

@@ -40,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         refuse_argument,
     )
 
-    add_out_argument(parser, "compete", "output folder, must not exist")
+    add_out_argument(parser, "compete", "output folder: new, or one holding this run (then it resumes)")
     parser.add_argument("--runs", type=int, default=1, metavar="N",
                         help="runs an agent flies per test (default 1; a test's own agent.count wins)")
     refuse_argument(parser, "--runs-per-test", "use --runs (runs an agent flies per test)")

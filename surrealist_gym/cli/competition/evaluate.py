@@ -30,8 +30,9 @@ from pathlib import Path
 
 from ...competition.scoring import EDITIONS, Draw
 from ...errors import SurrealistError
+from ...results import RUN_FILE
 from ...sim.uav import recorded_choice, write_record
-from ..options import RUN_FILE, default_out
+from ..options import default_out
 
 STORE_FILE = "evaluations.sqlite"
 DEFAULT_RUNS = 5  # runs per test without --competition

@@ -63,11 +63,10 @@ def run(args: argparse.Namespace) -> int:
     from ...executors import default_workers
     from ...results import ResultsFolder
     from ...sim.uav import decide_uav
-    from ..options import check_at_least, check_writable, default_out
+    from ..options import check_at_least, check_writable, default_out, refuse_workers_with_dask
 
     check_at_least(args, workers=1)
-    if args.workers is not None and args.dask_scheduler:
-        raise SurrealistError("--workers: not with --dask-scheduler (the cluster's workers run the cells)")
+    refuse_workers_with_dask(args)
     out = args.out or default_out("leaderboard")
     check_writable(out, "--out")
     board = lb.plan(args.tools, args.case_studies, args.edition, budget=args.budget, repetitions=args.repetitions,

@@ -389,7 +389,12 @@ def compiling():
     from numba.core import config
 
     level = getattr(config, "_process_opt_level", None)  # numba's parser of NUMBA_OPT values
-    with _FIRST_COMPILE:
+    _FIRST_COMPILE.acquire()
+    if fly_span.overloads:  # another thread compiled it while this one waited: fly without the lock
+        _FIRST_COMPILE.release()
+        yield
+        return
+    try:
         _notice_compiling()
         if level is None or os.environ.get("NUMBA_OPT"):
             yield
@@ -399,6 +404,8 @@ def compiling():
             yield
         finally:
             config.OPT = before
+    finally:
+        _FIRST_COMPILE.release()
 
 
 def _notice_compiling() -> None:
