@@ -8,10 +8,11 @@ from .compare import CompareResult, compare
 from .greedy import AdaptiveGreedy, GreedyConfig
 from .metrics import SearchMetrics, search_metrics
 from .novelty import SuiteSearch, SuiteSearchConfig
+from .policy import PPOAgent
 from .random import RandomConfig, RandomSearch
 from .registry import agent_names, make_agent, register_agent
 from .repetitions import Repetition, run_repetition
-from .rl import PPOAgent, ProceduralEnv, train_policy
+from .rl import ProceduralEnv, train_policy
 
 __all__ = ["Agent", "AdaptiveGreedy", "CMAES", "CMAESConfig", "CompareResult", "GreedyConfig", "PPOAgent",
            "ProceduralEnv", "RandomConfig", "RandomSearch", "Repetition", "SearchMetrics", "SearchResult",

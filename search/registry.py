@@ -85,7 +85,7 @@ def make_agent(name: str, seed: int | None = None, **options) -> Agent:
     """A new agent from its name (see the module docstring); unknown names raise UnknownAgent with a hint."""
     prefix, sep, rest = name.partition(":")
     if sep and prefix in POLICY_PREFIXES:
-        from .rl import PPOAgent
+        from .policy import PPOAgent
         algorithm, _, sample = prefix.partition("-")
         return PPOAgent(rest, seed=seed, algorithm=algorithm, sample=bool(sample), **options)
     if sep:

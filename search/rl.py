@@ -1,5 +1,6 @@
-"""Reinforcement-learning agents on stable-baselines3: train a policy across procedurally generated problems, or on
-a competition case study, then roll it out as a search agent.
+"""Reinforcement learning on stable-baselines3: train a policy across procedurally generated problems, on a
+competition case study, or on case studies drawn at random (one policy for every mission); :mod:`search.policy` rolls
+it out as a search agent.
 
 Training (:func:`train_policy`) on the paper's problems uses :class:`ProceduralEnv`, a Gymnasium env that draws a new
 problem at every reset. A replication problem is the seed test (by default the paper's case0 seed 1) plus a HIDDEN
@@ -7,24 +8,16 @@ obstacle layout: the seed mutated by a random action, so the answer is reachable
 once and that flight plays the "real" one (``ReplicateEnv(reference_trajectory=...)``). A generation problem is the RQ2
 seed with its first obstacle moved at random. A case-study problem is ``Surrealist-CaseStudy-v1`` itself: the action
 box is the rules' box, so every action is a layout within the rules (overlapping or walled-off ones are refused with a
-penalty). Episodes are short searches (``budget`` evaluations of ``runs`` simulations); ``envs`` > 1 steps that many
-envs in SB3's ``SubprocVecEnv``, whose workers fly their runs inline.
-
-Search (:class:`PPOAgent`): the trained policy acts deterministically on the env; an action the env answers from
-its memo (already evaluated) or rejects as invalid is followed by one sampled from the policy, so the rollout keeps
-spending the budget. ``sample=True`` samples every action from the policy, as training does: the policy is then a
-search distribution, not one answer (on a case study, where failures are many and scattered, that is what finds them).
-RL libraries are run-style, so the agent overrides ``run`` and returns a SearchResult.
+penalty). A missions problem draws a new case study, wind and number of boxes at every reset and acts in the
+mission's frame (:class:`~surrealist_gym.competition.missions.MissionCaseStudies`). Episodes are short searches
+(``budget`` evaluations of ``runs`` simulations); ``envs`` > 1 steps that many envs in SB3's ``SubprocVecEnv``, whose
+workers fly their runs inline.
 
 Example:
     >>> train_policy(steps=256, out="ppo.zip", problem="replicate")            # doctest: +SKIP
-    >>> env = gym.make("Surrealist-Replicate-v0", budget=20)                  # doctest: +SKIP
-    >>> PPOAgent("ppo.zip", seed=0).run(env).best_fitness                     # doctest: +SKIP
 """
 from __future__ import annotations
 
-import os
-import threading
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -33,9 +26,7 @@ from typing import Callable
 import gymnasium as gym
 import numpy as np
 
-from surrealist_gym.errors import DependencyNotInstalled, SurrealistError, regular_file
-
-from .base import Agent, SearchResult
+from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
 
 
 class Problem(str, Enum):
@@ -44,6 +35,7 @@ class Problem(str, Enum):
     REPLICATE = "replicate"
     GENERATE = "generate"
     CASE_STUDY = "case-study"
+    MISSIONS = "missions"
 
 
 class Algorithm(str, Enum):
@@ -66,8 +58,9 @@ class ProblemConfig:
     """How training problems are drawn.
 
     Attributes:
-        problem: replicate (hidden obstacle layouts), generate (random seed placements) or case-study (the
-            competition's case study ``case_study``, searched within its rules).
+        problem: replicate (hidden obstacle layouts), generate (random seed placements), case-study (the
+            competition's case study ``case_study``, searched within its rules) or missions (case studies drawn at
+            random, in their mission's frame: :class:`~surrealist_gym.competition.missions.MissionCaseStudies`).
         budget: evaluations per episode (one problem).
         runs: simulations per evaluation.
         spread: hidden layouts are the seed mutated by an action uniform in ``[-spread, spread]`` per mutator
@@ -183,6 +176,11 @@ def training_env(config: ProblemConfig, sim_config=None, seed: int = 0, executor
     """The env a policy trains on: :class:`ProceduralEnv` for the paper's problems, ``Surrealist-CaseStudy-v1`` (made
     through Gymnasium's registry, whose noise seed is ``seed``) for a case study. Picklable by reference, so
     ``functools.partial(training_env, ...)`` is what SB3's ``SubprocVecEnv`` starts in each worker."""
+    if config.problem is Problem.MISSIONS:
+        from surrealist_gym.competition.missions import MissionCaseStudies
+
+        return MissionCaseStudies(budget=config.budget, runs=config.runs, random_seed=seed, sim_config=sim_config,
+                                  executor=executor)
     if config.problem is Problem.CASE_STUDY:
         return gym.make("surrealist_gym:Surrealist-CaseStudy-v1", case_study=config.case_study,
                         obstacles=config.obstacles, budget=config.budget, runs=config.runs, random_seed=seed,
@@ -283,6 +281,8 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     model = cls("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **hyper)
     if init is not None:
         try:
+            from .policy import load_policy
+
             model.policy.load_state_dict(load_policy(init, algorithm).state_dict())
         except RuntimeError as err:
             raise SurrealistError(f"{init}: its weights do not fit this problem's policy "
@@ -319,6 +319,8 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
                 "hyper": recorded_settings(hyper)}
     if config.problem is Problem.CASE_STUDY:
         settings.update(case_study=str(case_study), obstacles=obstacles)
+    elif config.problem is Problem.MISSIONS:
+        settings.update(frame="mission")
     else:
         settings.update(spread=spread, seed_test=None if seed_test is None else str(seed_test))
     summary = {**settings, "policy": path.name, "wall_seconds": round(time.perf_counter() - start, 1),
@@ -340,7 +342,7 @@ def algorithm_settings(algorithm: Algorithm | str, steps: int, envs: int = 1,
     The discount follows the problem. A replicate or generate action mutates the current test, so it shapes the
     steps after it: ``gamma=0.95``. A case-study action is the whole layout and its reward depends on it alone, so
     a discount would only add the unrelated rewards of later layouts to each return: ``gamma=0`` (SAC too)."""
-    bandit = Problem(problem) is Problem.CASE_STUDY
+    bandit = Problem(problem) in (Problem.CASE_STUDY, Problem.MISSIONS)
     if Algorithm(algorithm) is Algorithm.PPO:
         rollout = max(2, min(64, -(-int(steps) // envs)))
         return {"n_steps": rollout, "batch_size": min(32, rollout * envs), "n_epochs": 5,
@@ -352,104 +354,3 @@ def algorithm_settings(algorithm: Algorithm | str, steps: int, envs: int = 1,
 def recorded_settings(settings: dict) -> dict:
     """The settings a policy's ``.json`` records (``hyper``): the plain values among them."""
     return {k: v for k, v in settings.items() if isinstance(v, (int, float, str, bool))}
-
-
-def load_policy(path, algorithm: Algorithm | str = "ppo"):
-    """The policy network of a policy file written by :func:`train_policy`, read without running code from it:
-    only its weights (``policy.pth``, ``torch.load(weights_only=True)``) go into a freshly built default
-    ``MlpPolicy`` whose spaces follow from the weights (one action per mutator, the env's observation). SB3's own
-    ``load`` would unpickle the file's other entries, which can carry code."""
-    import io
-    import pickle
-    import zipfile
-
-    import torch
-
-    algorithm = Algorithm(algorithm)
-    regular_file(path, "policy file")
-    try:
-        with zipfile.ZipFile(path) as archive:
-            state = torch.load(io.BytesIO(archive.read("policy.pth")), weights_only=True, map_location="cpu")
-    except pickle.UnpicklingError:  # torch refuses what is not plain tensors; it is never loaded unsafely
-        raise SurrealistError(f"{path}: cannot be loaded safely: its policy.pth holds pickled objects besides "
-                              f"tensors (a policy of `surrealist train` holds weights only)") from None
-    except (OSError, KeyError, zipfile.BadZipFile, RuntimeError, ValueError, EOFError) as err:
-        raise SurrealistError(f"{path}: not a policy file of `surrealist train` ({type(err).__name__})") from None
-    if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
-        raise SurrealistError(f"{path}: not a policy file of `surrealist train` (policy.pth holds no weights)")
-    first, action = (("mlp_extractor.policy_net.0.weight", "action_net.weight") if algorithm is Algorithm.PPO
-                     else ("actor.latent_pi.0.weight", "actor.mu.weight"))
-    if first not in state or action not in state:
-        raise SurrealistError(f"{path}: not a default {algorithm.value.upper()} MlpPolicy (no {first!r} weights)")
-    n_obs, n_act = int(state[first].shape[1]), int(state[action].shape[0])
-    observations = gym.spaces.Box(-np.inf, np.inf, shape=(n_obs,), dtype=np.float32)
-    actions = gym.spaces.Box(-1.0, 1.0, shape=(n_act,), dtype=np.float32)
-    if algorithm is Algorithm.PPO:
-        from stable_baselines3.common.policies import ActorCriticPolicy as policy_class
-    else:
-        from stable_baselines3.sac.policies import SACPolicy as policy_class
-    policy = policy_class(observations, actions, lambda _: 0.0)
-    try:
-        policy.load_state_dict(state)
-    except RuntimeError as err:
-        raise SurrealistError(f"{path}: weights do not fit a default {algorithm.value.upper()} MlpPolicy "
-                              f"({str(err).splitlines()[0]})") from None
-    policy.set_training_mode(False)
-    return policy
-
-
-_TORCH_RNG = threading.Lock()  # searches run in threads (compare --parallel) share torch's global generator
-
-
-class PPOAgent(Agent):
-    """A trained stable-baselines3 policy (PPO by default, or SAC) rolled out as a search agent."""
-
-    name = "ppo"
-
-    def __init__(self, policy, seed: int | None = None, algorithm: Algorithm | str = "ppo", sample: bool = False):
-        super().__init__(seed)
-        self.algorithm = Algorithm(algorithm)
-        self.sample = bool(sample)
-        self.name = self.algorithm.value + ("-sample" if self.sample else "")
-        if isinstance(policy, (str, os.PathLike)):
-            if not Path(policy).is_file():
-                raise SurrealistError(f"{policy}: no such policy file (train one with `surrealist train`)")
-            self.policy_path = str(policy)
-            policy = load_policy(self.policy_path, self.algorithm)
-        self.model = policy
-        self._obs = None
-        self._explore = False
-
-    def _ask(self) -> list[np.ndarray]:
-        if not (self._explore or self.sample):
-            action, _ = self.model.predict(self._obs, deterministic=True)
-        else:  # sample with torch's global generator, seeded from this agent's: reproducible beside other threads
-            import torch
-            with _TORCH_RNG:
-                torch.manual_seed(int(self.rng.integers(2**31 - 1)))
-                action, _ = self.model.predict(self._obs, deterministic=False)
-        return [np.asarray(action, dtype=np.float64).reshape(-1)]
-
-    def _tell(self, actions, fitnesses, infos) -> None:
-        self._explore = bool(infos) and (bool(infos[-1].get("memo")) or infos[-1].get("invalid") is not None)
-
-    def run(self, env, seed: int | None = None, callback=None) -> SearchResult:
-        """Roll the policy out on ``env`` until its budget is spent."""
-        expected = self.model.action_space.shape
-        if env.action_space.shape != expected:
-            raise SurrealistError(f"policy {getattr(self, 'policy_path', '')}: trained for {expected[0]} mutators, "
-                                  f"the env has {env.action_space.shape[0]}")
-        self._obs, info = env.reset(seed=seed)  # the episode's noise: seed, else the env's own (random_seed)
-        self._explore = False
-        self.setup(env, info)
-        done = False
-        while not done:
-            actions = self.ask()
-            self._obs, reward, terminated, truncated, step_info = env.step(actions[0])
-            if callback is not None:
-                callback(step_info)
-            done = terminated or truncated
-            if done:
-                self._stop_reason = "budget spent" if self._env.budget_left <= 0 else "episode ended"
-            self.tell(actions, [reward], [step_info])
-        return self.result

@@ -17,9 +17,10 @@ def add_arguments(parser) -> None:
                              f"{OUT_PATTERN.format(command='train')}/policy.zip): a new file unless --overwrite")
     refuse_argument(parser, "--out", _out_refused)
     parser.add_argument("--overwrite", action="store_true", help="replace the policy an existing --policy holds")
-    parser.add_argument("--problem", default="replicate", choices=["replicate", "generate", "case-study"],
-                        help="training problems: hidden layouts of case0 (replicate), RQ2 seeds (generate), or a "
-                             "competition case study's layouts within its rules (case-study, with --case-study)")
+    parser.add_argument("--problem", default="replicate", choices=["replicate", "generate", "case-study", "missions"],
+                        help="training problems: hidden layouts of case0 (replicate), RQ2 seeds (generate), a "
+                             "competition case study's layouts within its rules (case-study, with --case-study), or "
+                             "case studies drawn at random, for one policy on every mission (missions)")
     parser.add_argument("--case-study", default=None, metavar="NAME|YAML",
                         help="the case study of --problem case-study: mission1-mission3 or an Aerialist YAML")
     parser.add_argument("--obstacles", type=int, default=3, metavar="N",
@@ -68,11 +69,12 @@ def run(args) -> int:
     from .options import check_at_least, check_writable, default_out, refuse_inapplicable, refuse_workers_with_dask
 
     case_study = args.problem == "case-study"
+    competition = args.problem in ("case-study", "missions")
     refuse_inapplicable(args, [
-        ("--case-study", case_study, "applies only to --problem case-study"),
-        ("--obstacles", case_study, "applies only to --problem case-study"),
-        (("--spread", "--seed"), not case_study, "not with --problem case-study (its boxes are searched within the "
-                                                 "competition's rules, not drawn around a seed test)"),
+        ("--case-study", case_study, "applies only to --problem case-study (missions draws its case studies)"),
+        ("--obstacles", case_study, "applies only to --problem case-study (missions draws 1 to 3 boxes)"),
+        (("--spread", "--seed"), not competition, f"not with --problem {args.problem} (its boxes are searched within "
+                                                  f"the competition's rules, not drawn around a seed test)"),
     ])
     if case_study and args.case_study is None:
         raise SurrealistError("--problem case-study: name the case study with --case-study NAME|YAML (e.g. mission2)")
@@ -120,8 +122,8 @@ def run(args) -> int:
 
     start = time.perf_counter()
     try:
-        extra = dict(case_study=args.case_study, obstacles=args.obstacles) if case_study else dict(
-            spread=args.spread, seed_test=args.seed)
+        extra = (dict(case_study=args.case_study, obstacles=args.obstacles) if case_study else {} if competition
+                 else dict(spread=args.spread, seed_test=args.seed))
         executor = args.dask_scheduler or ("process" if args.workers > 1 else "inline")
         path = train_policy(args.steps, args.policy, problem=args.problem, algorithm=args.algorithm,
                             budget=args.episode_budget, runs=args.runs, seed=args.random_seed, progress=progress,
@@ -140,12 +142,13 @@ def run(args) -> int:
         return 130
     bar.close()
     record = json.loads(path.with_suffix(".json").read_text())["record"]
-    what = f"case study {Path(args.case_study).stem}" if case_study else f"{args.problem} problems"
+    what = (f"case study {Path(args.case_study).stem}" if case_study else "drawn case studies"
+            if competition else f"{args.problem} problems")
     print(f"trained {args.algorithm} for {args.steps} steps on {what} in {time.perf_counter() - start:.0f} s; "
           f"policy in {path}")
     print(f"{record['episodes']} episodes: {record['flown']} evaluations flown ({record['simulations']} simulations), "
           f"{record['refused']} actions refused, {record['memo']} answered from the memo"
-          + (f", {record['soft_failures']} soft failures" if case_study else "")
+          + (f", {record['soft_failures']} soft failures" if competition else "")
           + f"; record in {path.with_suffix('.json')}")
     print(f"use it: {compare_command(args, path)}")
     return 0
@@ -159,7 +162,10 @@ def compare_command(args, policy) -> str:
     from .options import PROBLEM_ENVS
 
     agent = f"{args.algorithm}:{policy}"
-    if args.problem == "case-study":
+    if args.problem == "missions":  # a policy for every mission: on a case study it never trained on
+        words = ["--case-study", "mission2", "--obstacles", "3", "--agents", f"suite,random,{args.algorithm}-sample:"
+                                                                              f"{policy}"]
+    elif args.problem == "case-study":
         words = ["--case-study", args.case_study, "--obstacles", str(args.obstacles), "--agents",
                  f"suite,random,{agent}"]
     else:

@@ -37,11 +37,12 @@ class CaseStudyEnv(SurrealistEnv):
     # episode may take many of them
     steps_per_budget = 50
 
-    def __init__(self, case_study="mission1", obstacles: int = 3, runs: int = 1, budget: int = 200,
+    def __init__(self, case_study: str | TestCase = "mission1", obstacles: int = 3, runs: int = 1, budget: int = 200,
                  aggregate: str = "riskiest", executor=None, store=None, random_seed: int = 0, sim_config=None,
                  workers: int | None = None, uav=None, wind: bool = False, feasibility: bool = True,
                  rules=RULES, render_mode: str | None = None):
-        self.case_study = load_case_study(case_study)
+        self.case_study = (case_study.with_obstacles(()) if isinstance(case_study, TestCase)
+                           else load_case_study(case_study))
         self.rules = rules
         self.feasibility = feasibility
         self.aggregate = aggregate

@@ -7,8 +7,8 @@ import pytest
 
 import surrealist_gym  # noqa: F401 - registers the envs
 from search import CMAES, Agent, PPOAgent, RandomSearch, make_agent, register_agent
+from search.policy import load_policy
 from search.registry import agent_label
-from search.rl import load_policy
 from surrealist_gym.errors import SurrealistError, UnknownAgent
 
 BUDGET = 5
@@ -197,7 +197,8 @@ def test_interrupted_training_saves_the_policy_so_far_and_trains_on_from_it(tmp_
     pytest.importorskip("stable_baselines3")
     import json
 
-    from search.rl import load_policy, train_policy
+    from search.policy import load_policy
+    from search.rl import train_policy
 
     def ctrl_c_at_6(steps: int) -> None:
         if steps >= 6:
