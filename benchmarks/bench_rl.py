@@ -19,6 +19,11 @@ mean and standard deviation, and the paper's test (Shapiro-Wilk, then ANOVA or M
 ``search.statistics.compare``) with the Vargha-Delaney A12 of the first agent against each other agent on soft failures
 per simulation.
 
+``--policy FILE.zip`` (or ``pretrained``, the policy for every mission that ships with the package) skips training
+and searches with that policy: zero-shot, on a case study it never trained on, with ``--obstacles`` boxes. The agent
+``random-frame`` is random search in the mission's frame (uniform frame actions,
+:class:`~surrealist_gym.competition.mission_frame.MissionFrame`): what the frame gives without any learning.
+
 Everything is kept in ``--out``: the policy, trained in parts of ``--part`` steps (``ppo-STEPS-partKofN.zip``, each
 with its record ``.json``; ``ppo-STEPS.zip`` when one part), each search's evaluations (``searches/AGENT-seedN.sqlite``)
 and figures (``.json``), and ``summary.md``/``summary.json``. A rerun with the same ``--out`` reads back the parts
@@ -32,6 +37,8 @@ Usage::
     python benchmarks/bench_rl.py --steps 50000 --seeds 5 --first-seed 300 --agents ppo-sample,random --budget 100 \
         --envs 2 --out results/rl                                   # the study
     python benchmarks/bench_rl.py ... --hyper gamma=0.95 --out results/rl-discounted   # another SB3 setting
+    python benchmarks/bench_rl.py --policy pretrained --mission mission1 --obstacles 2 --seeds 5 --first-seed 300 \
+        --agents ppo-sample,random,random-frame --budget 50 --out results/rl-pretrained/mission1-2   # zero-shot
 """
 from __future__ import annotations
 
@@ -150,6 +157,27 @@ def train(args, out: Path) -> Path:
     return previous
 
 
+def frame_random(seed: int):
+    """Random search in the mission's frame: uniform frame actions, each the case study's layout it stands for."""
+    from search.base import Agent
+    from surrealist_gym.competition.mission_frame import FRAME_ACTION_SIZE, MissionFrame
+
+    class FrameRandom(Agent):
+        name = "random-frame"
+
+        def _setup(self, info):
+            inner = self._env.unwrapped
+            self.frame = MissionFrame(inner.case_study, len(inner.seed_test.obstacles), inner.rules)
+
+        def _ask(self):
+            return [self.frame.env_action(self.rng.uniform(-1.0, 1.0, FRAME_ACTION_SIZE))]
+
+        def _tell(self, actions, fitnesses, infos):
+            pass
+
+    return FrameRandom(seed=seed)
+
+
 def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     """One search on a held-out noise seed, cached in ``out/searches/AGENT-seedN.json`` (its store beside it)."""
     from search.registry import POLICY_PREFIXES, make_agent
@@ -162,13 +190,14 @@ def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     if cached.is_file():
         return json.loads(cached.read_text())
     stem.parent.mkdir(parents=True, exist_ok=True)
-    env = RecordSuite(CaseStudyEnv(case_study(args.mission), budget=args.budget, runs=1, random_seed=seed,
-                                   executor="inline", store=stem.with_suffix(".sqlite")))
+    env = RecordSuite(CaseStudyEnv(case_study(args.mission), obstacles=args.obstacles, budget=args.budget, runs=1,
+                                   random_seed=seed, executor="inline", store=stem.with_suffix(".sqlite")))
     counts = TrainingRecord()  # counts a search's steps as it counts a training's
     start = time.perf_counter()
     name = f"{agent}:{policy}" if agent in POLICY_PREFIXES else agent
     try:
-        result = make_agent(name, seed=seed).run(env, seed=seed, callback=lambda info: counts.add(info, False))
+        searcher = frame_random(seed) if agent == "random-frame" else make_agent(name, seed=seed)
+        result = searcher.run(env, seed=seed, callback=lambda info: counts.add(info, False))
     finally:
         env.close()
     kept = ("steps", "refused", "memo", "simulations", "soft_failures")
@@ -215,6 +244,10 @@ def summarise(records: list[dict], agents: list[str]) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mission", default="mission2", help="case study (default mission2)")
+    parser.add_argument("--obstacles", type=int, default=3, help="boxes per test (default 3)")
+    parser.add_argument("--policy", default=None, metavar="FILE.zip|pretrained",
+                        help="search with this policy instead of training one (pretrained: the shipped policy for "
+                             "every mission)")
     parser.add_argument("--samples", type=int, default=2000, help="actions sampled in part 1 (default 2000)")
     parser.add_argument("--sample-only", action="store_true", help="part 1 only: no training, no flight")
     parser.add_argument("--steps", type=int, default=256, help="PPO training steps (default 256; the study: 50000)")
@@ -252,7 +285,7 @@ def main(argv=None) -> int:
         return 0 if figures["within_rules"] == 1.0 else 1
 
     args.out.mkdir(parents=True, exist_ok=True)
-    policy = train(args, args.out)
+    policy = args.policy or train(args, args.out)
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     seeds = [start + i for start in args.first_seed for i in range(args.seeds)]
     records = []
@@ -263,7 +296,8 @@ def main(argv=None) -> int:
             print(f"  {agent} seed {seed}: {record['soft_failures']} soft failures in {record['simulations']} "
                   f"simulations, {record['distinct_failures']} distinct ({record['wall_s']:.0f} s)")
     table = summarise(records, agents)
-    head = (f"{args.mission}: PPO trained for {args.steps} steps; {agents[0]} against "
+    trained = f"policy {args.policy}" if args.policy else f"PPO trained for {args.steps} steps"
+    head = (f"{args.mission}, {args.obstacles} boxes: {trained}; {agents[0]} against "
             f"{', '.join(agents[1:])}"
             f"; held-out seeds {', '.join(f'{s}-{s + args.seeds - 1}' for s in args.first_seed)}, "
             f"budget {args.budget} single-run evaluations")

@@ -338,6 +338,10 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
     (["train", "--problem", "case-study", "--case-study", "mission2", "--seed", RQ2],
      "--seed: not with --problem case-study"),
     (["train", "--problem", "case-study"], "--problem case-study: name the case study with --case-study"),
+    (["train", "--problem", "missions", "--case-study", "mission2"],
+     "--case-study: applies only to --problem case-study (missions draws its case studies)"),
+    (["train", "--problem", "missions", "--obstacles", "2"], "--obstacles: applies only to --problem case-study"),
+    (["train", "--problem", "missions", "--spread", "0.5"], "--spread: not with --problem missions"),
     (["train", "--problem", "case-study", "--case-study", "mission2", "--obstacles", "4"],
      "--obstacles: the competition allows 1 to 3 boxes, got 4"),
 ], ids=lambda v: " ".join(map(str, v)) if isinstance(v, list) else None)
@@ -415,6 +419,28 @@ def test_train_on_a_case_study_runs_a_few_steps_and_writes_its_results_folder(tm
         result = make_agent(f"ppo:{policy}", seed=0).run(env)
     assert result.evaluations == 2 and result.best_action.shape == (6,)
     env.close()
+
+
+def test_train_on_drawn_case_studies_prints_a_compare_command_that_runs(tmp_path, capsys, monkeypatch):
+    """``train --problem missions``: one policy for every mission, whose printed compare runs it on mission2."""
+    pytest.importorskip("stable_baselines3")
+    import shlex
+
+    monkeypatch.chdir(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["train", "--problem", "missions", "--steps", "4", "--episode-budget", "2",
+                     "--policy", "m.zip"]) == 0
+    printed = capsys.readouterr().out
+    assert "trained ppo for 4 steps on drawn case studies" in printed
+    assert json.loads((tmp_path / "m.json").read_text())["frame"] == "mission"
+    command = next(line for line in printed.splitlines() if line.startswith("use it: ")).removeprefix("use it: ")
+    argv = shlex.split(command)[1:]
+    assert "suite,random,ppo-sample:m.zip" in argv and "mission2" in argv
+    argv[argv.index("suite,random,ppo-sample:m.zip")] = "ppo-sample:m.zip"  # the policy only, to keep it short
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(argv + ["--repetitions", "1", "--budget", "2", "--out", str(tmp_path / "cmp")]) == 0
 
 
 # --- compare --case-study ---------------------------------------------------------------------------------------------
