@@ -1,10 +1,12 @@
 """Surrealist-CaseStudy-v1: generate tests for a UAV Testing Competition case study, under the competition's rules.
 
-The seed is the case study's mission with ``obstacles`` boxes (:func:`~surrealist_gym.competition.rules.seed_layout`).
-The action space is the rules' box: one value in [-1, 1] per box and field (x, y, l, w, h, r), -1 the rule's low
-bound, +1 its high bound, linearly between (:func:`~surrealist_gym.competition.rules.layout_mutators`), so every action
-(``action_space.sample()`` too) gives boxes within the rules' ranges and any agent of ``search/`` can search it; the
-seed is the action ``env.seed_action``. What the ranges cannot rule out is refused: boxes that overlap, a box within the
+The case study is a name, an Aerialist YAML or a test (its obstacles dropped: a drawn case study,
+:mod:`~surrealist_gym.competition.missions`). The seed is the case study's mission with ``obstacles`` boxes
+(:func:`~surrealist_gym.competition.rules.seed_layout`). The action space is the rules' box: one value in [-1, 1]
+per box and field (x, y, l, w, h, r), -1 the rule's low bound, +1 its high bound, linearly between
+(:func:`~surrealist_gym.competition.rules.layout_mutators`), so every action (``action_space.sample()`` too) gives
+boxes within the rules' ranges and any agent of ``search/`` can search it; the seed is the action
+``env.seed_action``. What the ranges cannot rule out is refused: boxes that overlap, a box within the
 1.5 m safety distance of the take-off or landing point (every run would fail before flying:
 :func:`~surrealist_gym.competition.rules.endpoint_failure`) and a layout the feasibility check finds walled off. Such
 a test is not flown: it costs no budget, the reward is the env's penalty and ``info["invalid"]`` gives the reason

@@ -5,11 +5,10 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Point
 
+from surrealist_gym.competition import mission_frame, missions
 from surrealist_gym.competition.case_study_env import CaseStudyEnv
-from surrealist_gym.competition.mission_frame import (FRAME_ACTION_SIZE, FRAME_OBSERVATION_SIZE, OFFSET_M,
-                                                      MissionFrame, MissionFrameEnv)
-from surrealist_gym.competition.missions import (DRAWN_TIMEOUT_S, MissionCaseStudies, random_case_study,
-                                                 random_mission)
+from surrealist_gym.competition.mission_frame import MissionFrame, MissionFrameEnv
+from surrealist_gym.competition.missions import MissionCaseStudies, random_case_study, random_mission
 from surrealist_gym.competition.rules import RULES, load_case_study, violations
 
 
@@ -22,13 +21,14 @@ def test_a_box_with_no_offset_stands_on_the_path_and_an_offset_one_beside_it(nam
     test = load_case_study(name)
     frame = MissionFrame(test, boxes=1)
     for along in (-0.8, 0.0, 0.6):
-        action = np.zeros(FRAME_ACTION_SIZE)
+        action = np.zeros(mission_frame.FRAME_ACTION_SIZE)
         action[0] = along
         (on,) = frame.layout(action)
         assert _path(test).distance(Point(on.x, on.y)) < 1e-6
         action[1] = 0.5
         (beside,) = frame.layout(action)
-        assert math.hypot(beside.x - on.x, beside.y - on.y) == pytest.approx(0.5 * OFFSET_M, abs=0.05)  # unless kept within the rules
+        # half the offset from the path, less what keeps it within the rules' bounds
+        assert math.hypot(beside.x - on.x, beside.y - on.y) == pytest.approx(0.5 * mission_frame.OFFSET_M, abs=0.05)
         assert _path(test).distance(Point(beside.x, beside.y)) > 1.0
 
 
@@ -40,7 +40,7 @@ def test_every_frame_action_is_a_layout_within_the_rules_and_the_env_decodes_the
         frame = MissionFrame(test, boxes)
         env = CaseStudyEnv(test, obstacles=boxes, budget=2, executor="inline")
         for _ in range(10):
-            action = rng.uniform(-1, 1, FRAME_ACTION_SIZE)
+            action = rng.uniform(-1, 1, mission_frame.FRAME_ACTION_SIZE)
             layout = frame.layout(action)
             assert len(layout) == boxes
             assert violations(test.with_obstacles(layout[:1])) == ()
@@ -56,7 +56,7 @@ def test_the_observation_tells_missions_box_counts_and_winds_apart():
     wind = load_case_study("mission2-wind")
     obs = {key: MissionFrame(test, boxes).observation() for key, (test, boxes) in
            {"m1-2": (mission1, 2), "m2-2": (mission2, 2), "m2-3": (mission2, 3), "w2-3": (wind, 3)}.items()}
-    assert all(o.shape == (FRAME_OBSERVATION_SIZE,) and np.all(np.isfinite(o)) for o in obs.values())
+    assert all(o.shape == (mission_frame.FRAME_OBSERVATION_SIZE,) and np.all(np.isfinite(o)) for o in obs.values())
     assert len({o.tobytes() for o in obs.values()}) == 4
 
 
@@ -74,7 +74,7 @@ def test_drawn_missions_have_the_case_studies_shapes_and_follow_their_seed():
         assert all(RULES.x[0] <= x <= RULES.x[1] for x, _, _ in points)
     assert counts == {2, 3, 4, 5}
     drawn = random_case_study(np.random.default_rng(1))
-    assert drawn.timeout == DRAWN_TIMEOUT_S and drawn.obstacles == ()
+    assert drawn.timeout == missions.DRAWN_TIMEOUT_S and drawn.obstacles == ()
 
 
 def test_drawn_case_studies_reset_alike_for_a_seed_and_fly_in_the_frame():
@@ -84,7 +84,7 @@ def test_drawn_case_studies_reset_alike_for_a_seed_and_fly_in_the_frame():
     again = MissionCaseStudies(budget=3, executor="inline")
     assert np.array_equal(obs, again.reset(seed=5)[0])
     assert obs.shape == env.observation_space.shape
-    action = np.zeros(FRAME_ACTION_SIZE)
+    action = np.zeros(mission_frame.FRAME_ACTION_SIZE)
     action[1::6] = [-0.9, 0.0, 0.9]  # the boxes side by side across the path: none overlaps
     action[0::6] = [-0.6, 0.0, 0.6]
     obs, reward, _, _, info = env.step(action)
@@ -97,5 +97,6 @@ def test_drawn_case_studies_reset_alike_for_a_seed_and_fly_in_the_frame():
 def test_the_frame_wrapper_refuses_nothing_the_case_study_accepts():
     env = MissionFrameEnv(CaseStudyEnv("mission2", obstacles=1, budget=1, executor="inline"))
     obs, _ = env.reset(seed=0)
-    assert obs.shape == (FRAME_OBSERVATION_SIZE,) and env.action_space.shape == (FRAME_ACTION_SIZE,)
+    assert obs.shape == (mission_frame.FRAME_OBSERVATION_SIZE,)
+    assert env.action_space.shape == (mission_frame.FRAME_ACTION_SIZE,)
     env.close()
