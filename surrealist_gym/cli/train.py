@@ -43,6 +43,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--random-seed", type=int, default=0, metavar="N",
                         help="seed of the problems (their noise and hidden layouts), the policy and its sampling "
                              "(default 0)")
+    parser.add_argument("--learning-rate", type=float, default=None, metavar="RATE",
+                        help="the optimiser's learning rate (default the algorithm's: 3e-4)")
     parser.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
     parser.add_argument("--init", default=None, metavar="POLICY.zip",
                         help="start from this policy's weights (its optimiser afresh): train on after an "
@@ -88,6 +90,8 @@ def run(args) -> int:
         from ..competition.rules import case_study_path
         args.case_study = str(case_study_path(args.case_study).resolve())
     args.policy = args.policy or str(default_out("train") / "policy.zip")
+    if args.learning_rate is not None and not (math.isfinite(args.learning_rate) and 0 < args.learning_rate < 1):
+        raise SurrealistError(f"--learning-rate: expected a number in (0, 1), got {args.learning_rate:g}")
     if not (math.isfinite(args.spread) and 0 < args.spread <= 1):
         raise SurrealistError(f"--spread: expected a number in (0, 1] (action units), got {args.spread:g}")
     out = Path(args.policy)  # stable-baselines3 saves to the path with .zip added unless it ends in .zip
@@ -127,7 +131,8 @@ def run(args) -> int:
         executor = args.dask_scheduler or ("process" if args.workers > 1 else "inline")
         path = train_policy(args.steps, args.policy, problem=args.problem, algorithm=args.algorithm,
                             budget=args.episode_budget, runs=args.runs, seed=args.random_seed, progress=progress,
-                            envs=args.envs, init=args.init, executor=executor, workers=args.workers, **extra)
+                            envs=args.envs, init=args.init, executor=executor, workers=args.workers, **extra,
+                            **({} if args.learning_rate is None else {"learning_rate": args.learning_rate}))
     except KeyboardInterrupt:
         bar.close()
         saved = out

@@ -342,6 +342,7 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
      "--case-study: applies only to --problem case-study (missions draws its case studies)"),
     (["train", "--problem", "missions", "--obstacles", "2"], "--obstacles: applies only to --problem case-study"),
     (["train", "--problem", "missions", "--spread", "0.5"], "--spread: not with --problem missions"),
+    (["train", "--learning-rate", "0"], "--learning-rate: expected a number in (0, 1), got 0"),
     (["train", "--problem", "case-study", "--case-study", "mission2", "--obstacles", "4"],
      "--obstacles: the competition allows 1 to 3 boxes, got 4"),
 ], ids=lambda v: " ".join(map(str, v)) if isinstance(v, list) else None)
