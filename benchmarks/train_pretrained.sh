@@ -1,7 +1,8 @@
 #!/bin/bash
 # Train the policy for every mission that ships as ppo-sample:pretrained (surrealist_gym/data/policies/ppo-missions.zip):
 # PPO on drawn case studies (surrealist train --problem missions, 2 envs), in parts of 2048 steps, part k on random
-# seed k - 1 and started from part k - 1's weights (--init). A rerun skips the parts already in OUT and trains on.
+# seed k - 1 and started from part k - 1's weights (--init); part 1 at PPO's default learning rate (3e-4), the later
+# parts at 1e-3. A rerun skips the parts already in OUT and trains on.
 #
 #   bash benchmarks/train_pretrained.sh [PARTS] [OUT]      # default: 8 parts (16,384 steps) into results/pretrained
 #
@@ -15,8 +16,10 @@ prev=""
 for k in $(seq 1 "$parts"); do
   policy="$out/part$k.zip"
   if [ -f "$policy" ] && [ -f "$out/part$k.json" ]; then prev=$policy; continue; fi
-  $surrealist train --problem missions --steps 2048 --envs 2 --random-seed $((k - 1)) --policy "$policy" \
-    --overwrite ${prev:+--init "$prev"}
+  rate=()
+  if [ "$k" -gt 1 ]; then rate=(--learning-rate 1e-3); fi
+  $surrealist train --problem missions --steps 2048 --envs 2 --random-seed $((k - 1)) "${rate[@]}" \
+    --policy "$policy" --overwrite ${prev:+--init "$prev"}
   prev=$policy
 done
 echo "trained $parts parts in $out; last: $prev"
