@@ -54,7 +54,8 @@ def _register_envs() -> None:
     for env_id, entry_point in (("Surrealist-Replicate-v0", "surrealist_gym.envs.flyable:replicate"),
                                 ("Surrealist-Generate-v0", "surrealist_gym.envs.flyable:generate"),
                                 ("Surrealist-CaseStudy-v1",
-                                 "surrealist_gym.competition.case_study_env:flyable_case_study")):
+                                 "surrealist_gym.competition.case_study_env:flyable_case_study"),
+                                ("Surrealist-Missions-v0", "surrealist_gym.competition.missions:MissionCaseStudies")):
         if env_id not in registry:
             register(id=env_id, entry_point=entry_point)
 

@@ -40,6 +40,12 @@ FIELDS_PER_BOX = 6
 FRAME_ACTION_SIZE = FIELDS_PER_BOX * RULES.max_obstacles
 FRAME_OBSERVATION_SIZE = 3 * MAX_WAYPOINTS + 1 + RULES.max_obstacles + 4 + 1
 _X_SCALE, _Y_SCALE, _WIND_SCALE = 40.0, 60.0, 10.0  # the observation's units: metres and m/s over these
+OBSERVATION_BOUND = 5.0  # every observation value is clipped to +-this (a waypoint 200 m out, a 50 m/s wind)
+
+
+OBSERVATION_SPACE = gym.spaces.Box(-OBSERVATION_BOUND, OBSERVATION_BOUND, shape=(FRAME_OBSERVATION_SIZE,),
+                                   dtype=np.float32)
+ACTION_SPACE = gym.spaces.Box(-1.0, 1.0, shape=(FRAME_ACTION_SIZE,), dtype=np.float32)
 
 
 class MissionFrame:
@@ -90,7 +96,8 @@ class MissionFrame:
 
     def observation(self, budget_share: float = 1.0) -> np.ndarray:
         """The observation: the mission, the boxes, the wind and the share of the budget left."""
-        return np.concatenate([self._mission_obs, [float(budget_share)]]).astype(np.float32)
+        obs = np.concatenate([self._mission_obs, [float(budget_share)]])
+        return np.clip(obs, -OBSERVATION_BOUND, OBSERVATION_BOUND).astype(np.float32)
 
     # --- action ---------------------------------------------------------------------------------------------------
     def layout(self, action) -> tuple[Obstacle, ...]:
@@ -137,8 +144,7 @@ class MissionFrameEnv(gym.Wrapper):
         super().__init__(env)
         inner = env.unwrapped
         self.frame = MissionFrame(inner.case_study, len(inner.seed_test.obstacles), inner.rules)
-        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(FRAME_ACTION_SIZE,), dtype=np.float32)
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(FRAME_OBSERVATION_SIZE,), dtype=np.float32)
+        self.action_space, self.observation_space = ACTION_SPACE, OBSERVATION_SPACE
 
     def _observation(self) -> np.ndarray:
         inner = self.env.unwrapped

@@ -9,9 +9,11 @@ and commands are the base case study's (``mission1``: the competition's). Half o
 (1-6 m/s mean, gusting up to 3 m/s more, from a random horizontal direction), as the 2026 case studies do. The
 number of boxes is drawn from 1 to the rules' maximum. A drawn case study times out at ``DRAWN_TIMEOUT_S``.
 
+Registered as ``Surrealist-Missions-v0``.
+
 Example::
 
-    env = MissionCaseStudies(budget=15)
+    env = gym.make("Surrealist-Missions-v0", budget=15)
     obs, info = env.reset(seed=0)       # a drawn case study, in its mission's frame (MissionFrameEnv)
 """
 from __future__ import annotations
@@ -23,7 +25,7 @@ import numpy as np
 
 from ..mission import Command, Mission, MissionItem
 from ..testcase import TestCase, Wind
-from .mission_frame import FRAME_ACTION_SIZE, FRAME_OBSERVATION_SIZE, MissionFrameEnv
+from .mission_frame import ACTION_SPACE, OBSERVATION_SPACE, MissionFrameEnv
 from .rules import RULES, load_case_study
 
 ALTITUDE_M = 10.0
@@ -101,8 +103,7 @@ class MissionCaseStudies(gym.Env):
         self.boxes = tuple(boxes) if boxes is not None else tuple(range(1, RULES.max_obstacles + 1))
         self._base = load_case_study("mission1")
         self._seed = int(random_seed)
-        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(FRAME_ACTION_SIZE,), dtype=np.float32)
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(FRAME_OBSERVATION_SIZE,), dtype=np.float32)
+        self.action_space, self.observation_space = ACTION_SPACE, OBSERVATION_SPACE
         self.inner = None
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):

@@ -100,3 +100,21 @@ def test_the_frame_wrapper_refuses_nothing_the_case_study_accepts():
     assert obs.shape == (mission_frame.FRAME_OBSERVATION_SIZE,)
     assert env.action_space.shape == (mission_frame.FRAME_ACTION_SIZE,)
     env.close()
+
+
+def test_drawn_case_studies_are_a_gymnasium_env_that_warns_nothing(tmp_path, monkeypatch):
+    import warnings
+
+    import gymnasium as gym
+    from gymnasium.utils.env_checker import check_env
+
+    import surrealist_gym  # noqa: F401 - registers the envs
+
+    monkeypatch.chdir(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        env = gym.make("Surrealist-Missions-v0", budget=3, executor="inline")
+        check_env(env.unwrapped)
+        env.close()
+    assert [str(w.message) for w in caught] == []
+    assert list(tmp_path.iterdir()) == []
