@@ -98,12 +98,16 @@ def main() -> int:
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--no-camba", action="store_true")
+    parser.add_argument("--table", default=None, help="also write the training table (all 1,350 tests) here")
     args = parser.parse_args()
     config = decide_uav(uav="px4-v1.12-sitl-iris").config
     start = time.perf_counter()
     lset = load_labelled_set(DATA / "rilast-mission1" / "tests.csv")
     outcomes = fly_labelled_set(lset, args.runs, 0, config, args.workers, store=args.store)
     rows = training_table(lset, outcomes)
+    if args.table:
+        from surrealist_gym.fidelity.verdict import write_table
+        write_table(rows, args.table)
     print(f"rilast-mission1: {len(rows)} tests, {args.runs} runs each, features in {time.perf_counter() - start:.0f} s")
     run0 = {label.test_id: o[0].distance if o[0].status != "timeout" else math.nan
             for label, o in zip(lset.labels, outcomes)}

@@ -9,12 +9,15 @@ command with the same ``--out`` resumes).
 
 ``--fit LABELS`` refits the model instead: it flies the labelled set (a tests CSV or a folder of YAMLs with
 ``--labels``, as ``surrealist fidelity`` reads them) ``--runs`` times, writes the training table
-(``training.csv``) to ``--out`` and the fitted parameters to ``--model FILE.json``.
+(``training.csv``) to ``--out`` and the fitted parameters to ``--model FILE.json``. ``--fit TABLE.csv`` refits on a
+training table that holds the flights' features already (``training.csv``; the shipped model's is
+``benchmarks/data/px4-verdict-training.csv``), without flying.
 
 Example::
 
     surrealist predict ../shared/data/competition/camba-collection --workers 2
     surrealist predict --fit ../shared/data/competition/rilast-mission1/tests.csv --model px4-verdict.json
+    surrealist predict --fit benchmarks/data/px4-verdict-training.csv --model px4-verdict.json
 """
 from __future__ import annotations
 
@@ -89,7 +92,10 @@ def run(args: argparse.Namespace) -> int:
     uav = decide_uav(uav=args.uav or DEFAULT_UAV)  # a bad profile fails before anything is read
     if args.fit is not None:
         from ..fidelity.labels import load_labelled_set
+        from ..fidelity.verdict import is_table
 
+        if is_table(args.fit):  # a training table: refit without flying
+            return _fit_table(args, uav)
         lset = load_labelled_set(args.fit, args.labels)
         runs = args.runs or load_verdict().runs
         folder = ResultsFolder.claim(args.out, "predict", _settings(args, runs), free=("workers", "dask_scheduler"))
@@ -166,6 +172,24 @@ def _predict(args, verdict, tests, runs: int, out, uav) -> int:
         print(f"{r['test'][:31]:32}{r['p_px4_under_1_5m']:>16.2f}{r['p_px4_under_1m']:>14.2f}{ours:>10}"
               f"{r['our_failure_share']:>14.2f}")
     print(f"predictions: {table}")
+    return 0
+
+
+def _fit_table(args, uav) -> int:
+    from pathlib import Path
+
+    from ..fidelity.verdict import DEFAULT_L2, DEFAULT_RUNS, fit_verdict, read_table
+
+    if args.labels is not None:
+        raise SurrealistError("--labels: not with a training table (it holds PX4's distances already)")
+    verdict = fit_verdict(read_table(args.fit), l2=args.l2 or DEFAULT_L2, trained_on={
+        "source": Path(args.fit).name, "runs": args.runs or DEFAULT_RUNS, "seed": args.random_seed, "uav": uav.name})
+    model = verdict.save(args.model)
+    info = verdict.trained_on
+    print(f"fitted on {info['tests']} tests PX4 flew ({info['positives']['unsafe']} under 1.5 m, "
+          f"{info['positives']['hard']} under 1 m) of the training table {args.fit} (its flights: {info['runs']} "
+          f"run(s) each, seed {info['seed']}, {info['uav']}, as --runs and --random-seed say)")
+    print(f"model: {model}")
     return 0
 
 

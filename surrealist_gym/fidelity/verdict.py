@@ -31,6 +31,7 @@ from .verdict_features import FEATURES, test_features
 #: target -> PX4's distance below which a test counts [m]
 TARGETS = {"unsafe": 1.5, "hard": 1.0}
 DEFAULT_L2 = 1.0   #: the ridge penalty chosen by cross-validation on the development half (docs/predict.md)
+DEFAULT_FEATURES = FEATURES  #: the features chosen the same way
 DEFAULT_RUNS = 3   #: runs per test the shipped model's features were computed from
 SHIPPED = Path(__file__).resolve().parents[1] / "data" / "px4-verdict.json"
 TABLE_COLUMNS = ("test", "half", "px4_result", "px4_distance_m", *FEATURES)
@@ -199,8 +200,21 @@ def read_table(path) -> list[dict]:
     return rows
 
 
+def is_table(path) -> bool:
+    """Whether ``path`` is a training table (a CSV whose header holds :data:`TABLE_COLUMNS`), not a labelled set."""
+    path = Path(path)
+    if not path.is_file() or path.suffix.lower() != ".csv":
+        return False
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            header = next(csv.reader(f), [])
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return False
+    return "d_min" in header and "px4_distance_m" in header
+
+
 def fit_verdict(rows: Sequence[dict], *, halves: Sequence[str] | None = None, l2: float = DEFAULT_L2,
-                features: Sequence[str] = FEATURES, trained_on: dict | None = None) -> PX4Verdict:
+                features: Sequence[str] = DEFAULT_FEATURES, trained_on: dict | None = None) -> PX4Verdict:
     """Fit both targets on the rows PX4 flew (a distance), of ``halves`` only when given."""
     used = [r for r in rows if r["px4_result"] == "flown" and math.isfinite(r["px4_distance_m"])
             and (halves is None or r["half"] in halves)]
@@ -287,6 +301,6 @@ def write_ranking(path, files: Sequence, predictions: Sequence[Prediction], expe
     return path
 
 
-__all__ = ["DEFAULT_L2", "DEFAULT_RUNS", "Logistic", "PX4Verdict", "Prediction", "SHIPPED", "TARGETS", "fit_verdict",
-           "half_of", "load_verdict", "predict_runs", "predict_tests", "rank_by_verdict", "read_table",
-           "training_table", "write_ranking", "write_table"]
+__all__ = ["DEFAULT_FEATURES", "DEFAULT_L2", "DEFAULT_RUNS", "Logistic", "PX4Verdict", "Prediction", "SHIPPED",
+           "TARGETS", "fit_verdict", "half_of", "is_table", "load_verdict", "predict_runs", "predict_tests",
+           "rank_by_verdict", "read_table", "training_table", "write_ranking", "write_table"]
