@@ -16,6 +16,7 @@ Example::
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 import re
@@ -31,7 +32,9 @@ from .verdict_features import FEATURES, test_features
 #: target -> PX4's distance below which a test counts [m]
 TARGETS = {"unsafe": 1.5, "hard": 1.0}
 DEFAULT_L2 = 1.0   #: the ridge penalty chosen by cross-validation on the development half (docs/predict.md)
+DEFAULT_KIND = "logistic"  #: the model chosen the same way (logistic, log-distance)
 DEFAULT_FEATURES = FEATURES  #: the features chosen the same way
+DEFAULT_NEAR_M: float | None = None  #: trained on the tests whose closest run of ours is nearer (None: all), idem
 DEFAULT_RUNS = 3   #: runs per test the shipped model's features were computed from
 SHIPPED = Path(__file__).resolve().parents[1] / "data" / "px4-verdict.json"
 TABLE_COLUMNS = ("test", "half", "px4_result", "px4_distance_m", *FEATURES)
@@ -85,11 +88,50 @@ class Logistic:
 
 
 @dataclass(frozen=True)
+class LogDistance:
+    """PX4's distance as a log-normal: log(d + 0.1) = intercept + coef . (x - mean) / scale + N(0, sigma^2), so
+    P(d < limit) = Phi((log(limit + 0.1) - mu) / sigma) (the same regression for both targets, each its limit [m],
+    so P(d < 1 m) <= P(d < 1.5 m) always)."""
+
+    features: tuple[str, ...]
+    mean: tuple[float, ...]
+    scale: tuple[float, ...]
+    coef: tuple[float, ...]
+    intercept: float
+    sigma: float
+    l2: float
+    limit: float = TARGETS["unsafe"]
+
+    @classmethod
+    def fit(cls, table: np.ndarray, distance: np.ndarray, features: Sequence[str], l2: float = DEFAULT_L2,
+            limit: float = TARGETS["unsafe"]) -> "LogDistance":
+        """Ridge least squares (the intercept unpenalised); sigma from the residuals."""
+        x = np.asarray(table, dtype=np.float64)
+        y = np.log(np.asarray(distance, dtype=np.float64) + 0.1)
+        mean, scale = x.mean(axis=0), x.std(axis=0)
+        scale[scale == 0] = 1.0
+        z = (x - mean) / scale
+        coef = np.linalg.solve(z.T @ z + l2 * np.eye(z.shape[1]), z.T @ (y - y.mean()))
+        residual = y - y.mean() - z @ coef
+        return cls(tuple(features), tuple(map(float, mean)), tuple(map(float, scale)), tuple(map(float, coef)),
+                   float(y.mean()), float(max(residual.std(), 1e-6)), float(l2), float(limit))
+
+    def probability(self, table: np.ndarray, limit: float | None = None) -> np.ndarray:
+        """P(PX4's distance < ``limit`` [m], default :attr:`limit`) of each row of ``table``."""
+        limit = self.limit if limit is None else limit
+        from scipy.special import ndtr
+
+        z = (np.asarray(table, dtype=np.float64) - np.asarray(self.mean)) / np.asarray(self.scale)
+        mu = self.intercept + z @ np.asarray(self.coef)
+        return ndtr((math.log(limit + 0.1) - mu) / self.sigma)
+
+
+@dataclass(frozen=True)
 class PX4Verdict:
     """The two models and what they were trained on (``trained_on``: source, tests, runs, seed, UAV, halves)."""
 
-    unsafe: Logistic
-    hard: Logistic
+    unsafe: Logistic | LogDistance
+    hard: Logistic | LogDistance
     trained_on: dict = field(default_factory=dict)
 
     @property
@@ -104,11 +146,11 @@ class PX4Verdict:
 
     def to_dict(self) -> dict:
         """JSON-ready parameters."""
-        def model(m: Logistic) -> dict:
-            return {"features": list(m.features), "mean": list(m.mean), "scale": list(m.scale), "coef": list(m.coef),
-                    "intercept": m.intercept, "l2": m.l2}
+        def model(m) -> dict:
+            return {"kind": KINDS_OF[type(m)], **{k: list(v) if isinstance(v, tuple) else v
+                                                  for k, v in dataclasses.asdict(m).items()}}
 
-        return {"model": "logistic regression on standardised features (surrealist_gym.fidelity.verdict)",
+        return {"model": "surrealist_gym.fidelity.verdict: a model per target on standardised features",
                 "targets": {k: f"PX4 distance < {v:g} m" for k, v in TARGETS.items()},
                 "unsafe": model(self.unsafe), "hard": model(self.hard), "trained_on": self.trained_on}
 
@@ -131,9 +173,15 @@ class PX4Verdict:
             models = {}
             for target in TARGETS:
                 m = raw[target]
-                models[target] = Logistic(tuple(m["features"]), tuple(map(float, m["mean"])),
-                                          tuple(map(float, m["scale"])), tuple(map(float, m["coef"])),
-                                          float(m["intercept"]), float(m["l2"]))
+                kind = KINDS[m.get("kind", "logistic")]
+                values = {}
+                for f in dataclasses.fields(kind):
+                    if f.name in m:
+                        values[f.name] = (tuple(m[f.name]) if f.name == "features" else tuple(map(float, m[f.name]))
+                                          if f.name in ("mean", "scale", "coef") else float(m[f.name]))
+                    elif f.default is dataclasses.MISSING:
+                        raise KeyError(f.name)
+                models[target] = kind(**values)
                 unknown = set(m["features"]) - set(FEATURES)
                 if unknown or not len(m["features"]) == len(m["mean"]) == len(m["scale"]) == len(m["coef"]):
                     raise ValueError(f"field {target!r}: " + (f"unknown feature {sorted(unknown)[0]!r}" if unknown
@@ -143,6 +191,10 @@ class PX4Verdict:
             raise SurrealistError(f"{path}: cannot read the model ({err.strerror or err})") from err
         except (ValueError, KeyError, TypeError) as err:
             raise SurrealistError(f"{path}: not a PX4 verdict model ({err})") from err
+
+
+KINDS = {"logistic": Logistic, "log-distance": LogDistance}  #: the models a target may have, by the name JSON gives
+KINDS_OF = {kind: name for name, kind in KINDS.items()}
 
 
 def load_verdict(path=None) -> PX4Verdict:
@@ -213,17 +265,24 @@ def is_table(path) -> bool:
     return "d_min" in header and "px4_distance_m" in header
 
 
-def fit_verdict(rows: Sequence[dict], *, halves: Sequence[str] | None = None, l2: float = DEFAULT_L2,
-                features: Sequence[str] = DEFAULT_FEATURES, trained_on: dict | None = None) -> PX4Verdict:
-    """Fit both targets on the rows PX4 flew (a distance), of ``halves`` only when given."""
+def fit_verdict(rows: Sequence[dict], *, halves: Sequence[str] | None = None, kind: str = DEFAULT_KIND,
+                l2: float = DEFAULT_L2, features: Sequence[str] = DEFAULT_FEATURES,
+                near_m: float | None = DEFAULT_NEAR_M, trained_on: dict | None = None) -> PX4Verdict:
+    """Fit both targets on the rows PX4 flew (a distance), of ``halves`` only when given, and only those whose
+    closest run of ours came within ``near_m`` [m] when given (the model then learns where the verdict is in doubt;
+    it is applied to every test)."""
     used = [r for r in rows if r["px4_result"] == "flown" and math.isfinite(r["px4_distance_m"])
-            and (halves is None or r["half"] in halves)]
+            and (halves is None or r["half"] in halves) and (near_m is None or r["d_min"] < near_m)]
     if not used:
         raise SurrealistError("no labelled test PX4 flew to fit the model on")
     x = _matrix(used, features)
     distance = np.array([r["px4_distance_m"] for r in used])
-    models = {t: Logistic.fit(x, distance < limit, features, l2) for t, limit in TARGETS.items()}
+    if kind == "log-distance":
+        models = {t: LogDistance.fit(x, distance, features, l2, limit) for t, limit in TARGETS.items()}
+    else:
+        models = {t: KINDS[kind].fit(x, distance < limit, features, l2) for t, limit in TARGETS.items()}
     info = {**(trained_on or {}), "tests": len(used), "halves": sorted(halves) if halves else "all",
+            "near_m": near_m,
             "positives": {t: int((distance < limit).sum()) for t, limit in TARGETS.items()}}
     return PX4Verdict(models["unsafe"], models["hard"], info)
 
@@ -301,6 +360,7 @@ def write_ranking(path, files: Sequence, predictions: Sequence[Prediction], expe
     return path
 
 
-__all__ = ["DEFAULT_FEATURES", "DEFAULT_L2", "DEFAULT_RUNS", "Logistic", "PX4Verdict", "Prediction", "SHIPPED",
-           "TARGETS", "fit_verdict", "half_of", "is_table", "load_verdict", "predict_runs", "predict_tests",
-           "rank_by_verdict", "read_table", "training_table", "write_ranking", "write_table"]
+__all__ = ["DEFAULT_FEATURES", "DEFAULT_KIND", "DEFAULT_L2", "DEFAULT_NEAR_M", "DEFAULT_RUNS", "KINDS", "LogDistance",
+           "Logistic", "PX4Verdict", "Prediction", "SHIPPED", "TARGETS", "fit_verdict", "half_of", "is_table",
+           "load_verdict", "predict_runs", "predict_tests", "rank_by_verdict", "read_table", "training_table",
+           "write_ranking", "write_table"]
