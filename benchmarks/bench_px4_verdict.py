@@ -28,13 +28,11 @@ import numpy as np
 from surrealist_gym.fidelity.labels import load_labelled_set
 from surrealist_gym.fidelity.measure import _auc, fly_labelled_set
 from surrealist_gym.fidelity.verdict import fit_verdict, predict_runs, training_table
-from surrealist_gym.fidelity.verdict_features import FEATURES
+from surrealist_gym.fidelity.verdict_features import DISTANCE_FEATURES, FEATURES, RUN_FEATURES
 from surrealist_gym.sim.uav import decide_uav
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "competition"
-DISTANCE = ("d_min", "d_median", "d_max", "log_d_min", "log_d_median", "share_unsafe")
-RUNS = DISTANCE + ("d_spread", "share_collision", "share_timeout", "no_distance", "airborne_s", "crawl_s",
-                   "speed_at_closest", "box_on_right_at_closest", "detour_m")
+DISTANCE, RUNS = DISTANCE_FEATURES, RUN_FEATURES
 LAYOUT = DISTANCE + ("obstacles", "path_clearance", "log_path_clearance", "blocks_path", "nearest_on_right", "gap_m",
                      "nearest_along", "footprint_area")
 FEATURE_SETS = {"distance": DISTANCE, "runs": RUNS, "distance+layout": LAYOUT, "all": FEATURES}

@@ -27,14 +27,17 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..errors import SurrealistError
-from .verdict_features import FEATURES, test_features
+from .verdict_features import FEATURES, RUN_FEATURES, test_features
 
 #: target -> PX4's distance below which a test counts [m]
 TARGETS = {"unsafe": 1.5, "hard": 1.0}
-DEFAULT_L2 = 1.0   #: the ridge penalty chosen by cross-validation on the development half (docs/predict.md)
-DEFAULT_KIND = "logistic"  #: the model chosen the same way (logistic, log-distance)
-DEFAULT_FEATURES = FEATURES  #: the features chosen the same way
-DEFAULT_NEAR_M: float | None = None  #: trained on the tests whose closest run of ours is nearer (None: all), idem
+# Chosen by leave-one-search-run-out cross-validation on rilast-mission1's development half (docs/predict.md,
+# benchmarks/bench_px4_verdict.py): the kind of model, its ridge penalty, its features, and the tests it is trained on
+# (those whose closest run of ours came within DEFAULT_NEAR_M [m]; None: all).
+DEFAULT_KIND = "log-distance"
+DEFAULT_L2 = 100.0
+DEFAULT_FEATURES = RUN_FEATURES
+DEFAULT_NEAR_M: float | None = 6.0
 DEFAULT_RUNS = 3   #: runs per test the shipped model's features were computed from
 SHIPPED = Path(__file__).resolve().parents[1] / "data" / "px4-verdict.json"
 TABLE_COLUMNS = ("test", "half", "px4_result", "px4_distance_m", *FEATURES)

@@ -28,7 +28,12 @@ CRAWL_MPS = 0.5       #: a crawl: horizontal speed below this [m/s] ...
 AIRBORNE_M = 1.0      #: ... while higher than this [m]
 STEP_M = 0.25         #: the mission line is sampled every STEP_M [m]
 
-#: The features, in the model's order.
+#: The distances of our runs (the simulator alone, in features).
+DISTANCE_FEATURES = ("d_min", "d_median", "d_max", "log_d_min", "log_d_median", "share_unsafe")
+#: Everything our runs say (distances, outcomes, times, the closest approach, the detour): no layout feature.
+RUN_FEATURES = DISTANCE_FEATURES + ("d_spread", "share_collision", "share_timeout", "no_distance", "airborne_s",
+                                    "crawl_s", "speed_at_closest", "box_on_right_at_closest", "detour_m")
+#: The features, in the training table's order.
 FEATURES = ("d_min", "d_median", "d_max", "d_spread", "log_d_min", "log_d_median", "share_unsafe",
             "share_collision", "share_timeout", "no_distance", "airborne_s", "crawl_s", "speed_at_closest",
             "box_on_right_at_closest", "detour_m", "obstacles", "path_clearance", "log_path_clearance",
@@ -157,4 +162,5 @@ def _detour(xyz: np.ndarray, line: np.ndarray) -> float:
     return float(min(best.max(), CAP_M)) if len(best) else 0.0
 
 
-__all__ = ["CAP_M", "FEATURES", "UNSAFE_DISTANCE_M", "layout_features", "run_features", "test_features"]
+__all__ = ["CAP_M", "DISTANCE_FEATURES", "FEATURES", "RUN_FEATURES", "UNSAFE_DISTANCE_M", "layout_features",
+           "run_features", "test_features"]
