@@ -186,6 +186,11 @@ def main() -> int:
     prec_dev = (flagged & positive)[close].sum() / max(1, flagged[close].sum())
     rec_dev = (flagged & positive)[close].sum() / positive[close].sum()
     print(f"  {f'model, threshold {dev_threshold:.3f} from development':40}{'':>20}{prec_dev:>11.3f}{rec_dev:>8.3f}")
+    for kind in ("random", "ga"):
+        part = [i for i, r in enumerate(held) if r["test"].startswith(kind + "_")]
+        sub = [held[i] for i in part]
+        print(f"  {kind} search's held-out tests ({len(part)}): close AUC simulator alone "
+              f"{auc_of(sub, -ours[part]):.3f}, model {auc_of(sub, p_unsafe[part]):.3f}")
     print(f"  under 1 m ({(theirs < 1.0).sum()} tests): AUC of P(PX4 < 1 m) {_auc(theirs < 1.0, -p_hard):.3f}, of "
           f"our distance {_auc(theirs < 1.0, ours):.3f} (all tests)")
 
