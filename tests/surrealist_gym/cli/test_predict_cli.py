@@ -114,3 +114,21 @@ def test_generate_px4_verdict_ranks_the_suite_by_the_model(tmp_path, shared_data
     with open(out / "suite" / "suite.csv", newline="") as f:
         assert [float(r["expected_score"]) for r in csv.DictReader(f)] == \
             pytest.approx([float(r["expected_score"]) for r in rows], abs=1e-3)
+
+
+def test_fit_on_a_labelled_folder_writes_the_table_and_a_model_that_predicts(two_tests, tmp_path, capsys):
+    """``--fit`` on two labelled CAMBA YAMLs flown once each: the training table, the model file, then predict reads
+    it (a toy fit: two tests; the shipped model's refit is test_verdict's)."""
+    with open(two_tests / "labels.csv", "w", newline="") as f:
+        csv.writer(f).writerows([["test", "px4_min_distance_2d"], [NAMES[0], "0.53"], [NAMES[1], "1.80"]])
+    model, out = tmp_path / "m.json", tmp_path / "fit"
+    assert main(["predict", "--fit", str(two_tests), "--model", str(model), "--runs", "1", "--workers", "1",
+                 "--out", str(out)]) == 0
+    assert "fitted on" in capsys.readouterr().out
+    with open(out / "training.csv", newline="") as f:
+        assert sorted(r["test"] for r in csv.DictReader(f)) == sorted(NAMES)
+    assert json.loads(model.read_text())["trained_on"]["runs"] == 1
+    yaml = two_tests / f"{NAMES[0]}.yaml"
+    assert main(["predict", str(yaml), "--model", str(model), "--workers", "1", "--out", str(tmp_path / "p")]) == 0
+    with open(tmp_path / "p" / "predictions.csv", newline="") as f:
+        assert next(csv.DictReader(f))["runs"] == "1"  # the model's runs by default
