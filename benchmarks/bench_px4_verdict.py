@@ -1,6 +1,7 @@
 """The model of PX4's verdict against our simulator alone, on rilast-mission1 (docs/predict.md).
 
     python benchmarks/bench_px4_verdict.py [--store results/rilast-runs3/evaluations.sqlite] [--runs 3] [--workers 2]
+    python benchmarks/bench_px4_verdict.py --from-table benchmarks/data/px4-verdict-training.csv [--no-camba]
 
 1. Flies rilast-mission1's 1,350 tests ``--runs`` times (seed 0, px4-v1.12-sitl-iris), or reads them from ``--store``
    (the ``evaluations.sqlite`` of ``surrealist fidelity TESTS.csv --runs 3 --out DIR``; it flies what the store
