@@ -1,9 +1,11 @@
 """A model of PX4's verdict: from our simulator's runs of a test, the probability that PX4 v1.12 SITL flies it under
 1.5 m (the competition's soft failure) and under 1 m (its two-point band), learned on labelled PX4 SITL flights.
 
-The model is an L2-regularised logistic regression on standardised features
-(:mod:`~surrealist_gym.fidelity.verdict_features`), one per target, fitted by Newton's method (deterministic, numpy
-only). Its parameters are a JSON file (:meth:`PX4Verdict.save`); the shipped one, ``surrealist_gym/data/
+Two kinds of model on standardised features (:mod:`~surrealist_gym.fidelity.verdict_features`), both deterministic
+and numpy only: a ridge logistic regression per target (Newton's method), or a ridge regression of log(PX4's distance
++ 0.1) with a normal residual (:class:`LogDistance`), which gives both targets from one fit. The default, chosen on
+rilast-mission1's development half, is the latter on what the runs say, trained on the tests our runs bring within
+6 m. Its parameters are a JSON file (:meth:`PX4Verdict.save`); the shipped one, ``surrealist_gym/data/
 px4-verdict.json``, is refitted by ``surrealist predict --fit LABELS`` (docs/predict.md). The labelled sets hold no PX4
 crash (rilast-mission1's closest PX4 flight passes at 0.65 m), so no probability of a PX4 crash is learned: the
 under-1-m target is the nearest band the labels hold.
