@@ -49,8 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the model's parameters: read (default: the shipped surrealist_gym/data/px4-verdict.json)"
                              "; with --fit, the one file written")
     parser.add_argument("--fit", metavar="LABELS", default=None,
-                        help="refit the model on a labelled set (a tests CSV, or a folder of YAMLs with --labels) "
-                             "instead of predicting")
+                        help="refit the model instead of predicting: on a labelled set (a tests CSV, or a folder "
+                             "of YAMLs with --labels), flown --runs times, or on a training table (training.csv) "
+                             "without flying")
     parser.add_argument("--labels", metavar="FILE", help="with --fit: labels of a YAML folder "
                                                          "(default <folder>/labels.csv)")
     parser.add_argument("--l2", type=float, default=None, metavar="X",
