@@ -30,6 +30,8 @@ COMMANDS = {
     "train": ("surrealist_gym.cli.train", "train an RL policy (--algorithm ppo or sac) across generated problems"),
     "surrogate": ("surrealist_gym.cli.surrogate", "train or evaluate a surrogate model on evaluation stores"),
     "fidelity": ("surrealist_gym.cli.fidelity", "fly a labelled set of tests and report how far our UAV agrees"),
+    "predict": ("surrealist_gym.cli.predict", "predict PX4 SITL's verdict on tests from our simulator's flights of "
+                                              "them"),
     "evaluate": ("surrealist_gym.cli.competition.evaluate",
                  "re-fly a suite of tests N times: failure odds, points, diversity"),
     "compete": ("surrealist_gym.cli.competition.compete",

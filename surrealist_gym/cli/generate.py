@@ -124,7 +124,17 @@ def _write_suite(out, suite, options) -> None:
     expected = [test_score([r.points for r in rs if r.flown], [r.duration for r in rs if r.flown],
                            len(m.test.obstacles)) for m, rs in zip(members, runs)]
     order = sorted(range(len(members)), key=lambda i: (-expected[i], i))  # the best first, then as found
+    verdicts = None
+    if getattr(options, "px4_verdict", False) and members:  # PX4's verdict first (docs/predict.md)
+        from ..fidelity.verdict import rank_by_verdict
+        order, verdicts = rank_by_verdict([m.test for m in members], runs, expected)
     paths = export_suite(suite, folder, order, expected)
+    if verdicts is not None:
+        from ..fidelity.verdict import write_ranking
+        table = write_ranking(folder / "px4-verdict.csv", [paths[order.index(i)] for i in range(len(members))],
+                              verdicts, expected, order)
+        print(f"ranked by the model of PX4's verdict (P(PX4 < 1.5 m) x expected test score): the first, "
+              f"{paths[0].name}, P {verdicts[order[0]].p_unsafe:.2f}; all in {table}")
     plot_suite(suite, folder / "suite.png", order)
     spread = diversity(members)
     print(f"suite: {len(suite)} distinct failures (apart by >= {suite.min_flight_m:g} m in flight and >= "

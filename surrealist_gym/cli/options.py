@@ -156,8 +156,8 @@ WORKERS_HELP = "local worker processes (default: all cores, at most 8)"
 WORKERS_ONE_HELP = "local worker processes flying the runs of a test (default 1: in this process)"
 #: The commands that fly simulations: each takes ``--workers N`` and ``--dask-scheduler ADDRESS``, and
 #: ``--random-seed N`` for the noise (docs/cli.md; tests/surrealist_gym/cli/test_vocabulary.py).
-FLYING_COMMANDS = ("simulate", "calibrate", "replicate", "generate", "compare", "train", "fidelity", "evaluate",
-                   "compete", "leaderboard")
+FLYING_COMMANDS = ("simulate", "calibrate", "replicate", "generate", "compare", "train", "fidelity", "predict",
+                   "evaluate", "compete", "leaderboard")
 
 
 _UAV_HELP = ("UAV profile: px4-v1.12-sitl-iris (PX4 SITL + PX4-Avoidance, as Aerialist flies), px4-vision-case0, "
@@ -346,6 +346,9 @@ class GenerateOptions(SearchOptions):
     confirm: int = _opt(5, "with --case-study: re-fly each failure of the suite this many times with fresh noise and "
                            "report its failure probability (default {default}; 0: do not)", type=int)
     buffer: float = _opt(0.0, BUFFER_HELP, type=float, metavar="M")
+    px4_verdict: bool = _opt(False, "with --case-study: rank the suite by the model of PX4 SITL's verdict: P(PX4 < "
+                                    "1.5 m) x the expected test score, from the --confirm re-runs (docs/predict.md)",
+                             action="store_true")
 
     def check(self, where=lambda name: "--" + name.replace("_", "-")) -> "GenerateOptions":
         """The common checks, then generate's own (--confirm, --case-study and what goes with it); returns self."""
@@ -373,6 +376,7 @@ class GenerateOptions(SearchOptions):
         return [("--obstacles", case_study, "applies only with --case-study (the boxes of a competition test; a "
                                             "seed test brings its obstacles)"),
                 ("--confirm", case_study, "applies only with --case-study (the re-runs of its suite's failures)"),
+                ("--px4-verdict", case_study, "applies only with --case-study (it ranks the suite's failures)"),
                 ("--all-mutators", not case_study,
                  "not with --case-study: the competition's layout mutators change every box already"),
                 *SearchOptions.inapplicable(args, CASE_STUDY_DEFAULTS["agent"] if case_study else None)]

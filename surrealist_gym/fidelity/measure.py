@@ -36,7 +36,7 @@ from ..trajectory import airborne_time  # noqa: F401 - the airborne time of the 
 from .labels import InvalidLabels, Label, LabelledSet, load_labelled_set
 
 __all__ = ["DISTANCE_NAME", "FidelityReport", "InvalidLabels", "Label", "LabelledSet", "RegionStats", "TestRow",
-           "airborne_time", "build_report", "fly_labelled_set", "format_figure", "load_labelled_set",
+           "airborne_time", "build_report", "fly_labelled_set", "fly_tests", "format_figure", "load_labelled_set",
            "measure_fidelity", "plot_report", "region_stats", "write_report"]
 
 DISTANCE_NAME = "2-D competition distance"
@@ -53,24 +53,31 @@ STATUS_ORDER = tuple(s.value for s in (RunStatus.SUCCESS, RunStatus.TIMEOUT, Run
 def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,
                      buffer: float = 0.0, progress: Callable[[int, int], None] | None = None, executor=None,
                      store=None) -> list[tuple[RunRecord, ...]]:
-    """Fly every test of ``lset`` (:func:`~surrealist_gym.executors.fly_many`) with ``config`` (default
+    """Fly every test of ``lset``: :func:`fly_tests` on its tests."""
+    return fly_tests(list(lset.tests), runs, seed, config, workers, buffer, progress, executor, store)
+
+
+def fly_tests(tests: Sequence, runs: int = 1, seed: int = 0, config=None, workers: int | None = None,
+              buffer: float = 0.0, progress: Callable[[int, int], None] | None = None, executor=None,
+              store=None, command: str = "fidelity") -> list[tuple[RunRecord, ...]]:
+    """Fly every test (:func:`~surrealist_gym.executors.fly_many`) with ``config`` (default
     :class:`~surrealist_gym.sim.config.SimConfig`), the competition distance's polyline buffered by ``buffer`` [m].
 
     ``executor``: a Dask scheduler's address, a ``distributed.Client`` or an executor (default ``workers`` local
-    processes, all cores and at most 8; 1: this process). Returns one tuple of run records per test, in the set's
+    processes, all cores and at most 8; 1: this process). Returns one tuple of run records per test, in their
     order; ``progress`` is called with (tests done, tests) as tests finish. A run whose simulation raises is retried
     once; if it raises again, it ends in ``error`` with the exception as message. ``store``: an SQLite file
     (:class:`~surrealist_gym.store.EvaluationStore`) that holds the runs of this measurement: those it holds are read
     back, not flown, and each chunk flown is written to it as it completes (a store of another measurement is a
-    one-line error).
+    one-line error; ``command`` names the measurement in it).
     """
     from ..executors import default_workers, executor_for, fly_many
     from ..sim import SimConfig
 
     config = replace(config or SimConfig(), competition_buffer_m=buffer)
-    db, have = None, [{} for _ in lset.tests]
+    db, have = None, [{} for _ in tests]
     if store is not None:
-        db = _open_store(store, lset, runs, seed, config)
+        db = _open_store(store, tests, runs, seed, config, command)
         for row in db:
             have[row.info["test"]].update(
                 (r["index"], RunRecord.from_dict(r, t)) for r, t in zip(row.runs, row.info["trajectories"]))
@@ -79,21 +86,21 @@ def fly_labelled_set(lset: LabelledSet, runs: int = 1, seed: int = 0, config=Non
     def done(i: int, records: list) -> None:  # runs arrive chunk by chunk: a test is done when all its runs are
         nonlocal finished
         if db is not None:
-            _store_runs(db, i, lset.tests[i], records)
+            _store_runs(db, i, tests[i], records)
         held[i] += len(records)
         finished += held[i] == runs
         if progress and held[i] == runs:
-            progress(finished, len(lset))
+            progress(finished, len(tests))
 
     try:
         with executor_for(executor, workers or default_workers()) as flying:
-            return fly_many(list(lset.tests), runs, seed, config, flying, have=have, done=done)
+            return fly_many(list(tests), runs, seed, config, flying, have=have, done=done)
     finally:
         if db is not None:
             db.close()
 
 
-def _open_store(store, lset: LabelledSet, runs: int, seed: int, config):
+def _open_store(store, tests, runs: int, seed: int, config, command: str):
     """The measurement's store, claimed for its identity (the tests, runs, seed and simulator settings)."""
     import hashlib
 
@@ -104,7 +111,7 @@ def _open_store(store, lset: LabelledSet, runs: int, seed: int, config):
 
     db = EvaluationStore(store)
     try:
-        db.claim({"command": "fidelity", "tests": [digest(t.key()) for t in lset.tests], "runs": int(runs),
+        db.claim({"command": command, "tests": [digest(t.key()) for t in tests], "runs": int(runs),
                   "seed": int(seed), "sim": digest(repr(config))})
     except BaseException:
         db.close()

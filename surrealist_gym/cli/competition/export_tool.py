@@ -40,6 +40,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--agent", default=default.agent, choices=AGENTS,
                         help="the tool's search in the simulator: suite (default: distinct failures), or cmaes, "
                              "random, greedy, to compare searches under the competition's rules")
+    parser.add_argument("--px4-verdict", action="store_true",
+                        help="the tool's search ranks its failures by the model of PX4 SITL's verdict (P(PX4 < 1.5 m) "
+                             "x expected test score) before spending the real budget (generate --px4-verdict; default "
+                             "off)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -48,14 +52,16 @@ def run(args: argparse.Namespace) -> int:
     from ..options import check_writable
 
     settings = ToolSettings(sim_budget_factor=args.sim_budget_factor, obstacles=args.obstacles, confirm=args.confirm,
-                            buffer=args.buffer, seed=args.random_seed, workers=args.workers, agent=args.agent).check()
+                            buffer=args.buffer, seed=args.random_seed, workers=args.workers, agent=args.agent,
+                            px4_verdict=args.px4_verdict).check()
     check_writable(args.dir, "DIR")
     folder = write_tool(args.dir, settings)
     print(f"tool written to {folder}/: cli.py, testcase.py, Dockerfile, requirements.txt, README.md, {SETTINGS_FILE}, "
           f"case_studies/, the surrealist-gym source it installs")
     print(f"search: {settings.sim_budget_factor} x BUDGET simulator evaluations, {settings.obstacles} boxes, "
           f"{settings.confirm} re-runs per failure, buffer {settings.buffer:g} m, seed {settings.seed}, "
-          f"{settings.workers} worker(s), agent {settings.agent}")
+          f"{settings.workers} worker(s), agent {settings.agent}"
+          + (", ranked by the model of PX4's verdict" if settings.px4_verdict else ""))
     print(f"run it on our simulator: surrealist compete {folder} mission2 10; in the competition: "
           f"python3 cli.py generate case_studies/mission2.yaml 100 (README.md)")
     return 0

@@ -54,6 +54,7 @@ class ToolSettings:
     seed: int = 0  # generate --random-seed: the search's choices and the simulator's noise
     workers: int = 1  # simulator processes (the competition gives a tool 1.5 vCPU)
     agent: str = "suite"  # generate --agent: the search (suite, the default; cmaes, random, greedy to compare)
+    px4_verdict: bool = False  # generate --px4-verdict: rank the failures by the model of PX4's verdict first
 
     def check(self) -> "ToolSettings":
         """Check every setting (one-line errors naming export-tool's flag); returns self."""
@@ -68,6 +69,8 @@ class ToolSettings:
         check_buffer(self.buffer)
         if self.agent not in AGENTS:
             raise SurrealistError(f"--agent: expected one of {', '.join(AGENTS)}, got {self.agent!r}")
+        if not isinstance(self.px4_verdict, bool):
+            raise SurrealistError(f"--px4-verdict: expected true or false, got {self.px4_verdict!r}")
         if self.obstacles > 3:
             raise SurrealistError(f"--obstacles: the competition allows 1 to 3 boxes, got {self.obstacles}")
         return self

@@ -120,6 +120,8 @@ def test_out_is_always_a_folder_and_one_file_has_a_name_of_its_own():
     assert "--out" not in train and train["--policy"].metavar == "FILE.zip"
     assert "--out" not in calibrate and calibrate["--profile"].metavar == "FILE.yaml"
     assert _options(_commands()["inspect"])["--out"].metavar == "DIR"
+    predict = _options(_commands()["predict"])  # its table goes in --out DIR; the model is a file of its own
+    assert predict["--out"].metavar == "DIR" and predict["--model"].metavar == "FILE.json"
 
 
 def test_every_command_that_flies_takes_workers_and_a_dask_scheduler_and_tells_the_workers_default():
@@ -259,7 +261,7 @@ def test_every_command_that_writes_a_folder_defaults_to_one_pattern():
     from surrealist_gym.cli.options import default_out
 
     assert re.fullmatch(r"results/simulate-\d{8}-\d{6}", default_out("simulate").as_posix())
-    for command in ("simulate", "replicate", "generate", "compare", "fidelity", "evaluate", "compete"):
+    for command in ("simulate", "replicate", "generate", "compare", "fidelity", "predict", "evaluate", "compete"):
         assert "--out DIR" in _help(command), command
         assert f"(default results/{command}-YYYYmmdd-HHMMSS)" in _help(command), command
     assert "(default results/train-YYYYmmdd-HHMMSS/policy.zip)" in _help("train")

@@ -45,7 +45,7 @@ def test_the_tool_folder_follows_the_submission_rules(tmp_path, capsys):
         assert (tool / "case_studies" / f"{name}.yaml").is_file() and (tool / "case_studies" / f"{name}.plan").is_file()
     settings = json.loads((tool / SETTINGS_FILE).read_text())
     assert settings == {"sim_budget_factor": 7, "obstacles": 2, "confirm": 5, "buffer": 0.125, "seed": 0, "workers": 1,
-                        "agent": "suite"}
+                        "agent": "suite", "px4_verdict": False}
     docker = (tool / "Dockerfile").read_text()
     assert "\nFROM skhatiri/aerialist:latest\n" in docker
     assert "ENV SURREALIST_PYTHON /opt/surrealist/bin/python" in docker

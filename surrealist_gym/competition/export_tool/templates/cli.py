@@ -95,6 +95,8 @@ def search(case_study, budget, settings, out):
                "--confirm", str(settings["confirm"]), "--buffer", str(settings["buffer"]),
                "--random-seed", str(settings["seed"]), "--workers", str(settings["workers"]),
                "--agent", settings.get("agent", "suite"), "--out", str(out)]
+    if settings.get("px4_verdict"):  # rank the failures by the model of PX4's verdict (suite/suite.csv's order)
+        command.append("--px4-verdict")
     # surrealist-gym has its own dependencies (numpy 2, shapely 2): nothing on this process's PYTHONPATH is passed on
     env = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
     logger.info("searching in surrealist-gym's simulator: %s", " ".join(command))
