@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import threading
+from enum import Enum
 from pathlib import Path
 
 import gymnasium as gym
@@ -25,7 +26,13 @@ import numpy as np
 from surrealist_gym.errors import SurrealistError, regular_file
 
 from .base import Agent, SearchResult
-from .rl import Algorithm
+
+
+class Algorithm(str, Enum):
+    """The stable-baselines3 algorithm (both fit the env's continuous action box)."""
+
+    PPO = "ppo"
+    SAC = "sac"
 
 
 def load_policy(path, algorithm: Algorithm | str = "ppo"):

@@ -28,6 +28,8 @@ import numpy as np
 
 from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
 
+from .policy import Algorithm, load_policy
+
 
 class Problem(str, Enum):
     """The family of procedurally generated training problems."""
@@ -36,13 +38,6 @@ class Problem(str, Enum):
     GENERATE = "generate"
     CASE_STUDY = "case-study"
     MISSIONS = "missions"
-
-
-class Algorithm(str, Enum):
-    """The stable-baselines3 algorithm (both fit the env's continuous action box)."""
-
-    PPO = "ppo"
-    SAC = "sac"
 
 
 def _sb3(algorithm: Algorithm | str):
@@ -281,8 +276,6 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     model = cls("MlpPolicy", env, seed=seed, device="cpu", verbose=0, **hyper)
     if init is not None:
         try:
-            from .policy import load_policy
-
             model.policy.load_state_dict(load_policy(init, algorithm).state_dict())
         except RuntimeError as err:
             raise SurrealistError(f"{init}: its weights do not fit this problem's policy "
