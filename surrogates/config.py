@@ -65,11 +65,16 @@ class RaceConfig:
         drop_ties: also drop a candidate whose first runs score exactly as the incumbent's (told just below the
             best): with common random numbers the mutation left those flights unchanged. None: on when the env flies
             common noise and no real improvement in the model's training stores tied its incumbent.
+        against: what the first runs race against: ``paired`` (the incumbent's same first runs, a paired comparison
+            under common random numbers) or ``fitness`` (the incumbent's fitness over all its runs, the figure a
+            candidate must beat; under each test's own noise its first runs share nothing with the candidate's).
+            None: ``paired`` when the env flies common noise, else ``fitness``.
     """
 
     stages: tuple[int, ...] = ()
     margin: float | None = None
     drop_ties: bool | None = None
+    against: str | None = None
 
     def __post_init__(self):
         stages = self.stages
@@ -78,6 +83,8 @@ class RaceConfig:
         if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
             raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
                              f"runs, got {self.stages!r}")
+        if self.against not in (None, "paired", "fitness"):
+            raise ValueError(f"prescreen race_against: expected paired or fitness, got {self.against!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,9 +139,9 @@ class PrescreenConfig:
     @classmethod
     def of(cls, **settings) -> "PrescreenConfig":
         """A config from settings named without their part: ``rule``, ``margin``, ``threshold``, ``pessimism``,
-        ``max_skips`` (screen); ``first_runs``, ``race_margin``, ``drop_ties`` (race); ``kind``, ``min_points``,
+        ``max_skips`` (screen); ``first_runs``, ``race_margin``, ``drop_ties``, ``race_against`` (race); ``kind``, ``min_points``,
         ``retrain_every``, ``lowfi`` (online); ``miss_rate``, ``skips``, ``verify_stop``."""
-        renamed = {"first_runs": "stages", "race_margin": "margin"}
+        renamed = {"first_runs": "stages", "race_margin": "margin", "race_against": "against"}
         parts = {"screen": ScreenConfig, "race": RaceConfig, "online": OnlineConfig}
         values: dict[str, dict] = {name: {} for name in parts}
         top = {}
