@@ -139,8 +139,8 @@ class PrescreenConfig:
     @classmethod
     def of(cls, **settings) -> "PrescreenConfig":
         """A config from settings named without their part: ``rule``, ``margin``, ``threshold``, ``pessimism``,
-        ``max_skips`` (screen); ``first_runs``, ``race_margin``, ``drop_ties``, ``race_against`` (race); ``kind``, ``min_points``,
-        ``retrain_every``, ``lowfi`` (online); ``miss_rate``, ``skips``, ``verify_stop``."""
+        ``max_skips`` (screen); ``first_runs``, ``race_margin``, ``drop_ties``, ``race_against`` (race); ``kind``,
+        ``min_points``, ``retrain_every``, ``lowfi`` (online); ``miss_rate``, ``skips``, ``verify_stop``."""
         renamed = {"first_runs": "stages", "race_margin": "margin", "race_against": "against"}
         parts = {"screen": ScreenConfig, "race": RaceConfig, "online": OnlineConfig}
         values: dict[str, dict] = {name: {} for name in parts}
