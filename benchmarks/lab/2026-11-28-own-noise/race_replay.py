@@ -18,7 +18,21 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from bench_surrogates import _featurizer  # noqa: E402
 
-from surrogates.dataset import load_dataset  # noqa: E402
+from surrogates.dataset import _open, load_dataset  # noqa: E402
+
+
+def per_run_means(stores, runs):
+    """RQ2: the mean per-run fitness -(sum_dist + 2 min_dist) of each evaluation's first k runs, k = 1..runs-1."""
+    rows = []
+    for path in stores:
+        store = _open(path)
+        for ev in store:
+            terms = (ev.info or {}).get("terms") or {}
+            f = -(np.asarray(terms.get("sum_dist", [np.nan] * runs)) + 2 * np.asarray(terms.get("min_dist",
+                                                                                                [np.nan] * runs)))
+            rows.append([float(np.mean(f[:k])) for k in range(1, runs)])
+        store.close()
+    return np.asarray(rows)
 
 
 def rows_of(data, group):
@@ -47,6 +61,8 @@ def main():
     parser.add_argument("--reps", default="0-9")
     parser.add_argument("--miss-rate", type=float, default=0.02)
     parser.add_argument("--stages", default="1,2,3,4")
+    parser.add_argument("--proxy", default="first", choices=["first", "mean"],
+                        help="first: the fitness of the first k runs; mean (RQ2): their mean per-run fitness")
     args = parser.parse_args()
     a, b = map(int, args.reps.split("-"))
     paper = Path("results/paper")
@@ -54,6 +70,9 @@ def main():
     stores = [s for s in stores if s.is_file()]
     data = load_dataset(stores, _featurizer(args.problem, False))
     runs = data.first_runs.shape[1] + 1
+    if args.proxy == "mean":
+        data = type(data)(**{**{f: getattr(data, f) for f in data.__dataclass_fields__},
+                             "first_runs": per_run_means(stores, runs)})
     stages = [int(k) for k in args.stages.split(",") if int(k) < runs]
     groups = np.unique(data.groups)
     for rule in ("paired", "full"):
