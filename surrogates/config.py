@@ -163,7 +163,8 @@ MEASURED_PRESCREEN = FrozenDict({
     (True, "generate"): FrozenDict(first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET, verify_stop=True),
     (True, "replicate"): FrozenDict(rule="none", first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET,
                                     verify_stop=True),
-    (False, "replicate"): FrozenDict(first_runs=(1,)),
+    (False, "replicate"): FrozenDict(rule="none", first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET,
+                                     verify_stop=True),
     (False, "generate"): FrozenDict(first_runs=(3,)),
 })
 

@@ -169,7 +169,9 @@ def test_racing_drops_candidates_whose_first_runs_fall_short():
 
 def test_racing_in_stages_drops_a_candidate_at_the_first_stage_it_falls_behind():
     env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline")
-    config = PrescreenConfig.of(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False)
+    # against the incumbent's same first runs: against its fitness, a riskiest-run score that passes stage 1 at a
+    # zero margin passes stage 2 too (the riskiest of two runs scores at least the first's)
+    config = PrescreenConfig.of(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False, race_against="paired")
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
     assert agent.prescreener.race_margins == {1: 0.0, 2: 0.0}

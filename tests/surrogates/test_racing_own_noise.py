@@ -106,3 +106,11 @@ def test_a_search_raced_against_the_fitness_drops_only_what_falls_short_of_the_b
     raced = [s for s in agent.prescreener.skipped if s["rule"] == "race"]
     assert raced and all(s["race_against"] == "fitness" and s["race_shortfall"] > 0 for s in raced)
     assert env.unwrapped.evaluator.simulations == 3 * result.evaluations + sum(s["first_runs"] for s in raced)
+
+
+def test_surrogate_alone_races_a_replication_with_its_own_noise_against_the_fitness_in_stages():
+    from surrogates.config import SkipAccounting, measured_prescreen
+
+    config = PrescreenConfig.of(**measured_prescreen(False, "replicate", runs=5))
+    assert (config.screen.rule, config.race.stages, config.skips, config.verify_stop, config.race.against) == (
+        "none", (1, 2, 3, 4), SkipAccounting.BUDGET, True, None)  # None: against the fitness under own noise
