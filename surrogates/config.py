@@ -165,7 +165,7 @@ MEASURED_PRESCREEN = FrozenDict({
                                     verify_stop=True),
     (False, "replicate"): FrozenDict(rule="none", first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET,
                                      verify_stop=True),
-    (False, "generate"): FrozenDict(first_runs=(3,)),
+    (False, "generate"): FrozenDict(first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET, verify_stop=True),
 })
 
 
@@ -176,8 +176,8 @@ def measured_prescreen(common_noise: bool | None, problem: str, runs: int) -> Fr
     measured (a model whose noise mode is unknown: None).
 
     Example:
-        >>> dict(measured_prescreen(False, "generate", runs=10))
-        {'first_runs': (3,)}
+        >>> measured_prescreen(False, "generate", runs=10)["first_runs"]
+        (1, 2, 3, 4)
         >>> PrescreenConfig.of(**measured_prescreen(True, "replicate", runs=3)).race.stages
         (1, 2)
     """
