@@ -57,7 +57,7 @@ class RaceConfig:
     """Racing: a candidate that passes the screen flies its runs in stages (:mod:`surrogates.racing`).
 
     Attributes:
-        stages: the run counts after which the candidate is compared with the incumbent's same first runs
+        stages: the run counts after which the candidate is compared with the incumbent (``against``)
             (increasing, each below the env's runs, e.g. ``(1, 2, 3, 4)``; empty: racing off); it is dropped at the
             first stage it falls behind, and later stages fly only the runs not flown yet.
         margin: the shortfall that drops a candidate (fitness units, every stage); None calibrates one per stage

@@ -34,8 +34,9 @@ def is_tie(incumbent: float, candidate: float) -> bool:
 
 
 def race_verdict(incumbent: float, candidate: float, margin: float | None, drop_ties: bool) -> str | None:
-    """Racing's rule on the fitness of the same first runs: ``"tie"`` (scored exactly as the incumbent's, with
-    ``drop_ties``), ``"behind"`` (short of it by more than ``margin``) or None (fly on)."""
+    """Racing's rule on the fitness of the candidate's first runs against the incumbent's (its same first runs, or
+    its fitness): ``"tie"`` (scored exactly as the incumbent's, with ``drop_ties``), ``"behind"`` (short of it by
+    more than ``margin``) or None (fly on)."""
     if drop_ties and is_tie(incumbent, candidate):
         return "tie"
     return "behind" if margin is not None and incumbent - candidate > margin else None
