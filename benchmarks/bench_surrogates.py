@@ -83,6 +83,7 @@ def _label(args) -> str:
     rule = f"{args.rule}{args.threshold:g}" if args.rule in ("ei", "pi") else f"{args.rule}-miss{args.miss_rate:g}"
     parts = [args.mode, "lowfi" * args.lowfi, f"also-{args.also}" if args.also else "", rule, "counted",
              f"race{'-'.join(map(str, args.first_runs))}" if args.first_runs else "",
+             f"vs-{args.race_against}" if args.race_against else "",
              "spend" * args.skips_spend_budget, "verify" * args.verify_stop,
              f"train{args.from_rep}" if args.from_rep > 10 else ""]  # models trained on repetitions 0..FROM_REP-1
     return "-".join(part for part in parts if part)
@@ -93,6 +94,7 @@ def prescreened(args, rep: int, featurizer: Featurizer) -> SearchMetrics:
     paper, training = _paper(args), max(args.from_rep, 10)
     config = PrescreenConfig.of(rule=args.rule, threshold=args.threshold, miss_rate=args.miss_rate, min_points=10,
                                 retrain_every=10, lowfi=args.lowfi, first_runs=args.first_runs,
+                                race_against=args.race_against,
                                 skips=SkipAccounting.BUDGET if args.skips_spend_budget else SkipAccounting.EVALUATION,
                                 verify_stop=args.verify_stop)
 
@@ -121,7 +123,7 @@ def simulations_to_reach(search: SearchMetrics, level: float) -> tuple[int, bool
 
 def search(args) -> None:
     reps = range(args.from_rep, args.from_rep + args.repetitions)
-    greedy = [run_one(args.problem, rep, _paper(args), 2, args.common_noise) for rep in reps]
+    greedy = [run_one(args.problem, rep, _paper(args), 1, args.common_noise) for rep in reps]
     target = float(np.mean([g.best_fitness for g in greedy]))  # the common level: greedy alone's mean final fitness
     featurizer = _featurizer(args.problem, args.lowfi)
     rows = []
@@ -231,6 +233,9 @@ def main() -> None:
     parser.add_argument("--first-runs", type=lambda text: tuple(race_stages(text)), default=(),
                         help="racing: fly this many runs of a candidate first, the rest only if they do not fall "
                              "short; K1,K2,... races in stages")
+    parser.add_argument("--race-against", choices=["paired", "fitness"], default=None,
+                        help="racing: the incumbent's same first runs (paired) or its fitness over all runs (fitness); "
+                             "default: paired under --common-noise, else fitness")
     parser.add_argument("--folds", type=int, default=10, help="accuracy: held-out repetitions, one per fold")
     parser.add_argument("--lowfi", action="store_true", help="multi-fidelity features (a low-fidelity flight)")
     parser.add_argument("--also", default=None, choices=PROBLEMS[:2],

@@ -57,7 +57,7 @@ class RaceConfig:
     """Racing: a candidate that passes the screen flies its runs in stages (:mod:`surrogates.racing`).
 
     Attributes:
-        stages: the run counts after which the candidate is compared with the incumbent's same first runs
+        stages: the run counts after which the candidate is compared with the incumbent (``against``)
             (increasing, each below the env's runs, e.g. ``(1, 2, 3, 4)``; empty: racing off); it is dropped at the
             first stage it falls behind, and later stages fly only the runs not flown yet.
         margin: the shortfall that drops a candidate (fitness units, every stage); None calibrates one per stage
@@ -65,11 +65,16 @@ class RaceConfig:
         drop_ties: also drop a candidate whose first runs score exactly as the incumbent's (told just below the
             best): with common random numbers the mutation left those flights unchanged. None: on when the env flies
             common noise and no real improvement in the model's training stores tied its incumbent.
+        against: what the first runs race against: ``paired`` (the incumbent's same first runs, a paired comparison
+            under common random numbers) or ``fitness`` (the incumbent's fitness over all its runs, the figure a
+            candidate must beat; under each test's own noise its first runs share nothing with the candidate's).
+            None: ``paired`` when the env flies common noise, else ``fitness``.
     """
 
     stages: tuple[int, ...] = ()
     margin: float | None = None
     drop_ties: bool | None = None
+    against: str | None = None
 
     def __post_init__(self):
         stages = self.stages
@@ -78,6 +83,8 @@ class RaceConfig:
         if any(k < 1 for k in stages) or any(b <= a for a, b in zip(stages, stages[1:])):
             raise ValueError(f"prescreen first_runs: expected 0 (off), a number of runs or increasing numbers of "
                              f"runs, got {self.stages!r}")
+        if self.against not in (None, "paired", "fitness"):
+            raise ValueError(f"prescreen race_against: expected paired or fitness, got {self.against!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,9 +139,9 @@ class PrescreenConfig:
     @classmethod
     def of(cls, **settings) -> "PrescreenConfig":
         """A config from settings named without their part: ``rule``, ``margin``, ``threshold``, ``pessimism``,
-        ``max_skips`` (screen); ``first_runs``, ``race_margin``, ``drop_ties`` (race); ``kind``, ``min_points``,
-        ``retrain_every``, ``lowfi`` (online); ``miss_rate``, ``skips``, ``verify_stop``."""
-        renamed = {"first_runs": "stages", "race_margin": "margin"}
+        ``max_skips`` (screen); ``first_runs``, ``race_margin``, ``drop_ties``, ``race_against`` (race); ``kind``,
+        ``min_points``, ``retrain_every``, ``lowfi`` (online); ``miss_rate``, ``skips``, ``verify_stop``."""
+        renamed = {"first_runs": "stages", "race_margin": "margin", "race_against": "against"}
         parts = {"screen": ScreenConfig, "race": RaceConfig, "online": OnlineConfig}
         values: dict[str, dict] = {name: {} for name in parts}
         top = {}
@@ -156,8 +163,9 @@ MEASURED_PRESCREEN = FrozenDict({
     (True, "generate"): FrozenDict(first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET, verify_stop=True),
     (True, "replicate"): FrozenDict(rule="none", first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET,
                                     verify_stop=True),
-    (False, "replicate"): FrozenDict(first_runs=(1,)),
-    (False, "generate"): FrozenDict(first_runs=(3,)),
+    (False, "replicate"): FrozenDict(rule="none", first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET,
+                                     verify_stop=True),
+    (False, "generate"): FrozenDict(first_runs=(1, 2, 3, 4), skips=SkipAccounting.BUDGET, verify_stop=True),
 })
 
 
@@ -168,8 +176,8 @@ def measured_prescreen(common_noise: bool | None, problem: str, runs: int) -> Fr
     measured (a model whose noise mode is unknown: None).
 
     Example:
-        >>> dict(measured_prescreen(False, "generate", runs=10))
-        {'first_runs': (3,)}
+        >>> measured_prescreen(False, "generate", runs=10)["first_runs"]
+        (1, 2, 3, 4)
         >>> PrescreenConfig.of(**measured_prescreen(True, "replicate", runs=3)).race.stages
         (1, 2)
     """

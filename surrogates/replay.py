@@ -28,17 +28,23 @@ def replayed_improvements(values, fitness, groups, known=None):
                 best, incumbent = real, value
 
 
-def improvement_shortfalls(proxy, fitness, groups) -> list[float]:
+def improvement_shortfalls(proxy, fitness, groups, against_fitness: bool = False) -> list[float]:
     """For every real improvement of past searches (:func:`replayed_improvements`), the incumbent's proxy minus its
-    own. Rows whose proxy is unknown (NaN) are skipped."""
-    proxy = np.asarray(proxy)
-    return [float(theirs - ours) for theirs, ours in replayed_improvements(proxy, fitness, groups, np.isfinite(proxy))]
+    own, or (``against_fitness``) the incumbent's real fitness minus the improvement's proxy. Rows whose proxy is
+    unknown (NaN) are skipped."""
+    proxy, fitness = np.asarray(proxy), np.asarray(fitness)
+    known = np.isfinite(proxy)
+    if against_fitness:
+        pairs = replayed_improvements(np.stack([fitness, proxy], axis=1), fitness, groups, known)
+        return [float(theirs[0] - ours[1]) for theirs, ours in pairs]
+    return [float(theirs - ours) for theirs, ours in replayed_improvements(proxy, fitness, groups, known)]
 
 
-def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02) -> float | None:
+def replay_margin(proxy, fitness, groups, miss_rate: float = 0.02, against_fitness: bool = False) -> float | None:
     """The shortfall in a cheap proxy of the fitness that only ``miss_rate`` of the real improvements of past
-    searches exceeded (:func:`improvement_shortfalls`). None with fewer than ``MIN_IMPROVEMENTS`` improvements."""
-    shortfalls = improvement_shortfalls(proxy, fitness, groups)
+    searches exceeded (:func:`improvement_shortfalls`; ``against_fitness``: measured from the incumbent's real
+    fitness). None with fewer than ``MIN_IMPROVEMENTS`` improvements."""
+    shortfalls = improvement_shortfalls(proxy, fitness, groups, against_fitness)
     if len(shortfalls) < MIN_IMPROVEMENTS:
         return None
     return float(np.quantile(shortfalls, 1.0 - miss_rate))

@@ -194,10 +194,11 @@ def run_search(env, options: SearchOptions, out: Path, problem: str) -> int:
         raced = prescreener.dropped
         ties = sum(bool(s.get("tie")) for s in prescreener.skipped)
         margin = "/".join("not calibrated" if m is None else f"{m:.2f}" for m in prescreener.race_margins.values())
+        against = "fitness" if prescreener.calibration.race.against == "fitness" else "same first runs"
         print(f"pre-screening ({prescreener.rule}): {len(prescreener.skipped) - raced} candidates skipped without a "
               f"simulation"
               + (f", {raced} dropped after their first {'/'.join(map(str, stages))} runs ({ties} of them tied the "
-                 f"best; racing margin {margin})" if stages else "") + " (skipped.json)")
+                 f"best; racing margin {margin} below the best's {against})" if stages else "") + " (skipped.json)")
     print(f"{problem}: seed fitness {summary['seed_fitness']:.2f} -> best {summary['best_fitness']:.2f} "
           f"after {summary['evaluations_to_best']} of {summary['evaluations']} evaluations "
           f"({summary['simulations']} simulations, {summary['wall_seconds']:.1f} s)")

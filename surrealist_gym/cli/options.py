@@ -192,8 +192,9 @@ class SearchOptions:
                                  metavar="MODEL|online")
     first_runs: tuple[int, ...] = _opt((), "racing (with a surrogate; default online): fly K runs of a candidate "
                                            "first and the rest only if they do not fall clearly short of the best "
-                                           "test's first K runs; K1,K2,... compares again after each "
-                                           "(e.g. 1,2,3,4)", type=race_stages, metavar="K[,K2...]")
+                                           "test's fitness (with --common-noise: of its first K runs); K1,K2,... "
+                                           "compares again after each (e.g. 1,2,3,4)", type=race_stages,
+                                 metavar="K[,K2...]")
     screen: str = _opt("auto", "pre-screening rule (with a surrogate): auto (default: lowfi with a --lowfi model, "
                                "else ei), lowfi, ei, pi, or none (skip nothing: race only, with --first-runs)",
                        choices=SCREEN_RULES)

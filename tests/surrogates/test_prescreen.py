@@ -169,7 +169,9 @@ def test_racing_drops_candidates_whose_first_runs_fall_short():
 
 def test_racing_in_stages_drops_a_candidate_at_the_first_stage_it_falls_behind():
     env = gym.make("Surrealist-Generate-v0", budget=6, runs=3, executor="inline")
-    config = PrescreenConfig.of(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False)
+    # against the incumbent's same first runs: against its fitness, a riskiest-run score that passes stage 1 at a
+    # zero margin passes stage 2 too (the riskiest of two runs scores at least the first's)
+    config = PrescreenConfig.of(rule="ei", first_runs=(1, 2), race_margin=0.0, lowfi=False, race_against="paired")
     agent = Prescreened(AdaptiveGreedy("paper"), "online", config, seed=0)
     result = agent.run(env, seed=0)
     assert agent.prescreener.race_margins == {1: 0.0, 2: 0.0}
@@ -355,8 +357,9 @@ def test_ties_are_raced_only_where_no_tie_improved_in_the_training_stores():
 
 
 def test_surrogate_alone_runs_the_measured_settings_for_its_noise_mode(model, tmp_path, capsys):
-    """`--surrogate MODEL` without expert flags: an own-noise model races a generation on its first 3 runs (the
-    setting measured for it); the settings are recorded in run.json. An expert flag keeps the user's settings."""
+    """`--surrogate MODEL` without expert flags: an own-noise model races a generation in stages below its 4 runs,
+    the skips spending the greedy's budget and the stop verified (the setting measured for it); the settings are
+    recorded in run.json. An expert flag keeps the user's settings."""
     from surrealist_gym.cli import main
 
     folder = model.save(tmp_path / "m")
@@ -364,7 +367,8 @@ def test_surrogate_alone_runs_the_measured_settings_for_its_noise_mode(model, tm
     assert main(["generate", "--budget", "2", "--runs", "4", "--workers", "1", "--surrogate", str(folder),
                  "--out", str(out)]) == 0
     options = json.loads((out / "run.json").read_text())
-    assert options["first_runs"] == [3] and "pre-screening as measured" in capsys.readouterr().err
+    assert options["first_runs"] == [1, 2, 3] and options["skips_spend_budget"] and options["verify_stop"]
+    assert "pre-screening as measured" in capsys.readouterr().err
     out2 = tmp_path / "gen2"
     assert main(["generate", "--budget", "2", "--runs", "4", "--workers", "1", "--surrogate", str(folder),
                  "--first-runs", "1", "--out", str(out2)]) == 0
@@ -402,7 +406,8 @@ def test_a_search_in_the_measured_shape_keeps_its_figures(model):
 
 
 def test_the_measured_settings_live_with_the_surrogates():
-    assert dict(measured_prescreen(False, "generate", runs=10)) == {"first_runs": (3,)}
+    own = dict(measured_prescreen(False, "generate", runs=10))
+    assert own == {"first_runs": (1, 2, 3, 4), "skips": SkipAccounting.BUDGET, "verify_stop": True}
     settings = measured_prescreen(True, "replicate", runs=3)  # racing stages at or above the runs are left out
     config = PrescreenConfig.of(**settings)
     assert (config.screen.rule, config.race.stages, config.skips, config.verify_stop) == (
