@@ -26,6 +26,7 @@ from typing import Callable
 import gymnasium as gym
 import numpy as np
 
+from surrealist_gym.envs.drawn import DrawnProblems
 from surrealist_gym.errors import DependencyNotInstalled, SurrealistError
 
 from .policy import Algorithm, load_policy
@@ -82,14 +83,12 @@ class ProblemConfig:
                              f"{self.runs}, {self.spread}")
 
 
-class ProceduralEnv(gym.Env):
+class ProceduralEnv(DrawnProblems):
     """A Surrealist env whose problem is drawn anew at every reset (for training RL policies).
 
     Spaces are those of the envs it draws (one action value per mutator of the seed's first obstacle), so a policy
     trained here runs on ``Surrealist-Replicate-v0`` (6 mutators) or ``Surrealist-Generate-v0`` (2 mutators).
     """
-
-    metadata = {"render_modes": []}
 
     def __init__(self, config: ProblemConfig | None = None, sim_config=None, executor="inline", **overrides):
         from surrealist_gym import data_path
@@ -110,7 +109,6 @@ class ProceduralEnv(gym.Env):
         n = len(self.mutators)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(n,), dtype=np.float32)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(n + 3,), dtype=np.float32)
-        self.inner = None
 
     def _mutated(self, action: np.ndarray):
         """The seed mutated by an action in [-1, 1] (raises InvalidTestCase)."""
@@ -118,7 +116,7 @@ class ProceduralEnv(gym.Env):
 
         return apply_action(self.seed_test, self.mutators, action)
 
-    def _draw(self, seed: int):
+    def _problem(self, seed: int):
         """A new inner env: a problem drawn from ``self.np_random`` (a few tries until the draw is valid)."""
         from surrealist_gym.envs.generate import GenerateEnv
         from surrealist_gym.envs.replicate import ReplicateEnv
@@ -147,24 +145,11 @@ class ProceduralEnv(gym.Env):
         raise SurrealistError(f"ProceduralEnv: no valid {cfg.problem.value} problem in 20 draws "
                               f"(spread {cfg.spread}); lower the spread")
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Close the current problem, draw a new one from ``self.np_random`` and reset it; its (observation, info)."""
-        super().reset(seed=seed)
-        if self.inner is not None:
-            self.inner.close()
-        self.inner = self._draw(int(self.np_random.integers(0, 2**31 - 1)))  # the problem's noise seed too
+    def _draw(self):
+        """A new problem, and its noise seed, drawn from ``self.np_random``."""
+        env = self._problem(int(self.np_random.integers(0, 2**31 - 1)))
         self.np_random.integers(0, 2**31 - 1)  # a draw kept so that a seed still draws the problems it drew
-        return self.inner.reset()
-
-    def step(self, action):
-        """One step of the current problem's env."""
-        return self.inner.step(action)
-
-    def close(self):
-        """Close the current problem's env, if any."""
-        if self.inner is not None:
-            self.inner.close()
-            self.inner = None
+        return env
 
 
 def training_env(config: ProblemConfig, sim_config=None, seed: int = 0, executor="inline") -> gym.Env:

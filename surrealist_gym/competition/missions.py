@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import math
 
-import gymnasium as gym
 import numpy as np
 
+from ..envs.drawn import DrawnProblems
 from ..mission import Command, Mission, MissionItem
 from ..testcase import TestCase, Wind
 from .mission_frame import ACTION_SPACE, OBSERVATION_SPACE, MissionFrameEnv
@@ -83,7 +83,7 @@ def random_case_study(rng: np.random.Generator, base: TestCase | None = None) ->
                    obstacles=(), timeout=DRAWN_TIMEOUT_S)
 
 
-class MissionCaseStudies(gym.Env):
+class MissionCaseStudies(DrawnProblems):
     """A case-study env (:class:`~surrealist_gym.competition.case_study_env.CaseStudyEnv`) in its mission's frame
     (:class:`~surrealist_gym.competition.mission_frame.MissionFrameEnv`) whose case study and number of boxes are drawn
     anew at every reset (:func:`random_case_study`), for training one policy on every mission.
@@ -96,37 +96,19 @@ class MissionCaseStudies(gym.Env):
         **env_options: options of the case-study env (``sim_config``, ``uav``, ``executor``, ...).
     """
 
-    metadata = {"render_modes": []}
-
     def __init__(self, budget: int = 15, runs: int = 1, random_seed: int = 0, boxes=None, **env_options):
         self.budget, self.runs, self.env_options = int(budget), int(runs), env_options
         self.boxes = tuple(boxes) if boxes is not None else tuple(range(1, RULES.max_obstacles + 1))
         self._base = load_case_study("mission1")
-        self._seed = int(random_seed)
+        self.random_seed = int(random_seed)
         self.action_space, self.observation_space = ACTION_SPACE, OBSERVATION_SPACE
-        self.inner = None
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Draw a case study and a number of boxes, and start an episode on them."""
+    def _draw(self):
+        """A drawn case study and number of boxes, in its mission's frame."""
         from .case_study_env import CaseStudyEnv
 
-        super().reset(seed=self._seed if seed is None and self.inner is None else seed)
-        if self.inner is not None:
-            self.inner.close()
         case_study = random_case_study(self.np_random, self._base)
         boxes = int(self.np_random.choice(self.boxes))
         noise = int(self.np_random.integers(0, 2**31 - 1))
-        env = CaseStudyEnv(case_study, obstacles=boxes, runs=self.runs, budget=self.budget, random_seed=noise,
-                           **self.env_options)
-        self.inner = MissionFrameEnv(env)
-        return self.inner.reset()
-
-    def step(self, action):
-        """One step of the drawn case study, in its mission's frame."""
-        return self.inner.step(action)
-
-    def close(self):
-        """Close the drawn case study's env, if any."""
-        if self.inner is not None:
-            self.inner.close()
-            self.inner = None
+        return MissionFrameEnv(CaseStudyEnv(case_study, obstacles=boxes, runs=self.runs, budget=self.budget,
+                                            random_seed=noise, **self.env_options))
