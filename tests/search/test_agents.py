@@ -10,6 +10,7 @@ from search import CMAES, Agent, PPOAgent, RandomSearch, make_agent, register_ag
 from search.policy import load_policy
 from search.registry import agent_label
 from surrealist_gym.errors import SurrealistError, UnknownAgent
+from tests.search.conftest import tiny_policy
 
 BUDGET = 5
 
@@ -20,13 +21,7 @@ def _env(budget=BUDGET):
 
 @pytest.fixture(scope="module")
 def policy(tmp_path_factory):
-    pytest.importorskip("stable_baselines3")
-    from search.rl import train_policy
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return train_policy(16, tmp_path_factory.mktemp("rl") / "ppo.zip", problem="generate", budget=3,
-                            n_steps=8, batch_size=8, n_epochs=1)
+    return tiny_policy(tmp_path_factory.mktemp("rl"), "generate")
 
 
 @pytest.fixture(params=["greedy", "greedy-paper", "random", "cmaes", "ppo", "ppo-sample"])

@@ -1,6 +1,5 @@
 """A policy trained on drawn case studies searches any case study, with any number of boxes, in its env's own action."""
 import json
-import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -11,17 +10,12 @@ from search import make_agent
 from search.policy import PRETRAINED, pretrained_policy
 from surrealist_gym.competition.case_study_env import CaseStudyEnv
 from surrealist_gym.errors import SurrealistError
+from tests.search.conftest import tiny_policy
 
 
 @pytest.fixture(scope="module")
 def mission_policy(tmp_path_factory):
-    pytest.importorskip("stable_baselines3")
-    from search.rl import train_policy
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return train_policy(16, tmp_path_factory.mktemp("missions") / "ppo.zip", problem="missions", budget=3,
-                            n_steps=8, batch_size=8, n_epochs=1)
+    return tiny_policy(tmp_path_factory.mktemp("missions"), "missions")
 
 
 def test_a_missions_policy_records_its_frame(mission_policy):
