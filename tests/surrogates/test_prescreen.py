@@ -1,7 +1,6 @@
 """Pre-screening between the greedy's ask and tell on a tiny Generate env: real simulations only, skips logged,
 seeded."""
 import json
-import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -20,13 +19,6 @@ from surrogates.racing import race_margin, tie_improvements
 from surrogates.replay import replay_margin
 
 BUDGET = 4
-
-
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        yield
 
 
 def _env():

@@ -1,6 +1,5 @@
 """Racing under each test's own noise: a candidate's first runs against the incumbent's fitness over all its runs
 (``against="fitness"``), on the RQ2 mission with real simulations, seeded."""
-import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -16,13 +15,6 @@ from surrogates.racing import Race, Racing, race_margin
 from surrogates.replay import improvement_shortfalls
 
 RUNS = 4
-
-
-@pytest.fixture(autouse=True)
-def _quiet():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        yield
 
 
 @pytest.fixture(scope="module")
