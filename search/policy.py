@@ -23,7 +23,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from surrealist_gym.errors import SurrealistError, regular_file
+from surrealist_gym.errors import DependencyNotInstalled, SurrealistError, regular_file
 
 from .base import Agent, SearchResult
 
@@ -44,7 +44,12 @@ def load_policy(path, algorithm: Algorithm | str = "ppo"):
     import pickle
     import zipfile
 
-    import torch
+    try:
+        import stable_baselines3  # noqa: F401 - the policy classes below are its
+        import torch
+    except ImportError as err:
+        raise DependencyNotInstalled(f"{path}: a policy needs torch and stable-baselines3: pip install torch==2.13.0 "
+                                     f"&& pip install 'surrealist-gym[rl]'") from err
 
     algorithm = Algorithm(algorithm)
     regular_file(path, "policy file")
