@@ -166,8 +166,7 @@ def frame_random(seed: int):
         name = "random-frame"
 
         def _setup(self, info):
-            inner = self._env.unwrapped
-            self.frame = MissionFrame(inner.case_study, len(inner.seed_test.obstacles), inner.rules)
+            self.frame = MissionFrame.of(self._env)
 
         def _ask(self):
             return [self.frame.env_action(self.rng.uniform(-1.0, 1.0, FRAME_ACTION_SIZE))]

@@ -137,8 +137,7 @@ class PPOAgent(Agent):
         self._explore = False
 
     def _ask(self) -> list[np.ndarray]:
-        obs = self._obs if self._frame is None else self._frame.observation(
-            max(self._env.budget_left, 0) / self._env.budget)
+        obs = self._obs if self._frame is None else self._frame.observe(self._env)
         if not (self._explore or self.sample):
             action, _ = self.model.predict(obs, deterministic=True)
         else:  # sample with torch's global generator, seeded from this agent's: reproducible beside other threads
@@ -188,4 +187,4 @@ class PPOAgent(Agent):
             raise SurrealistError(f"policy {where}: it places boxes only (x, y, l, w, h, r of each); this env also "
                                   f"mutates {env.action_space.shape[0] - FIELDS_PER_BOX * boxes} other properties "
                                   f"(wind?)")
-        return MissionFrame(inner.case_study, boxes, inner.rules)
+        return MissionFrame.of(env)

@@ -174,8 +174,7 @@ def _predict(args, verdict, tests, runs: int, out, uav) -> int:
               f"{r['our_failure_share']:>14.2f}")
     if any(r["our_distance_m"] is None for r in rows):
         print("ours '-': every run of ours timed out, which the model reads as far from the boxes; the labelled "
-              "flights hold few such tests (12 PX4 flew, 3 under 1.5 m), so take its P there as unknown "
-              "(docs/predict.md)")
+              "flights hold few such tests, so take its P there as unknown (docs/predict.md)")
     print(f"predictions: {table}")
     return 0
 

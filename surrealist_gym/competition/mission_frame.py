@@ -65,7 +65,8 @@ class MissionFrame:
         self.rules, self.boxes = rules, int(boxes)
         points = [(0.0, 0.0)] + [(x, y) for x, y, _ in test.mission.waypoints]
         self.waypoints = tuple(points[1:MAX_WAYPOINTS + 1])
-        path = LineString(_distinct(points)) if len(_distinct(points)) > 1 else None
+        distinct = _distinct(points)
+        path = LineString(distinct) if len(distinct) > 1 else None
         area = box(rules.x[0], rules.y[0], rules.x[1], rules.y[1])
         inside = path.intersection(area) if path is not None else LineString()
         pieces = list(inside.geoms) if isinstance(inside, MultiLineString) else [inside]
@@ -78,6 +79,12 @@ class MissionFrame:
         self.path_share = float(self._ends[-1] / path.length) if path is not None and path.length > 0 else 0.0
         self.wind = test.wind
         self._mission_obs = self._mission_observation()
+
+    @classmethod
+    def of(cls, env) -> "MissionFrame":
+        """The frame of a case-study env (any layer of it): its case study, its number of boxes and its rules."""
+        inner = env.unwrapped
+        return cls(inner.case_study, len(inner.seed_test.obstacles), inner.rules)
 
     # --- observation --------------------------------------------------------------------------------------------
     def _mission_observation(self) -> np.ndarray:
@@ -93,6 +100,10 @@ class MissionFrame:
             top = self.wind.velocity_max or self.wind.velocity_mean
             wind = np.array([self.wind.velocity_mean / _WIND_SCALE, top / _WIND_SCALE, dx / norm, dy / norm])
         return np.concatenate([slots.reshape(-1), [self.path_share], count, wind])
+
+    def observe(self, env) -> np.ndarray:
+        """The observation as ``env`` stands (the share of its budget left)."""
+        return self.observation(max(env.budget_left, 0) / env.budget)
 
     def observation(self, budget_share: float = 1.0) -> np.ndarray:
         """The observation: the mission, the boxes, the wind and the share of the budget left."""
@@ -142,23 +153,18 @@ class MissionFrameEnv(gym.Wrapper):
 
     def __init__(self, env):
         super().__init__(env)
-        inner = env.unwrapped
-        self.frame = MissionFrame(inner.case_study, len(inner.seed_test.obstacles), inner.rules)
+        self.frame = MissionFrame.of(env)
         self.action_space, self.observation_space = ACTION_SPACE, OBSERVATION_SPACE
-
-    def _observation(self) -> np.ndarray:
-        inner = self.env.unwrapped
-        return self.frame.observation(max(inner.budget_left, 0) / inner.budget)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Reset the case-study env; the frame's observation, and its info."""
         _, info = self.env.reset(seed=seed, options=options)
-        return self._observation(), info
+        return self.frame.observe(self.env.unwrapped), info
 
     def step(self, action):
         """Step the case-study env with the layout a frame action stands for."""
         _, reward, terminated, truncated, info = self.env.step(self.frame.env_action(action))
-        return self._observation(), reward, terminated, truncated, info
+        return self.frame.observe(self.env.unwrapped), reward, terminated, truncated, info
 
 
 def _scale(value: float, bounds: tuple[float, float]) -> float:
