@@ -125,7 +125,7 @@ def _write_suite(out, suite, options) -> None:
                            len(m.test.obstacles)) for m, rs in zip(members, runs)]
     order = sorted(range(len(members)), key=lambda i: (-expected[i], i))  # the best first, then as found
     verdicts = None
-    if options.px4_verdict and members:  # PX4's verdict first (docs/predict.md)
+    if getattr(options, "px4_verdict", False) and members:  # PX4's verdict first (docs/predict.md)
         from ..fidelity.verdict import rank_by_verdict
         order, verdicts = rank_by_verdict([m.test for m in members], runs, expected)
     paths = export_suite(suite, folder, order, expected)
