@@ -28,8 +28,12 @@ def _evaluations(folder: Path) -> list[dict]:
 
 @pytest.fixture(scope="module")
 def uninterrupted(tmp_path_factory) -> list[dict]:
+    """The search flown undisturbed, in its own process as the faulted ones are (a pool forked from the test
+    process would inherit the threads earlier tests left in it: torch's, Dask's)."""
     out = tmp_path_factory.mktemp("uninterrupted") / "search"
-    assert main([*SEARCH, "--out", str(out)]) == 0
+    done = subprocess.run([sys.executable, "-m", "surrealist_gym.cli", *SEARCH, "--out", str(out)],
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
     return _evaluations(out)
 
 
@@ -73,7 +77,11 @@ def test_a_fresh_search_whose_workers_die_keeps_its_folder_and_resumes(tmp_path,
     out = tmp_path / "workers-die"
     proc = _start(out)
     _wait_for_stored(proc, out, 2)
+    deadline = time.time() + 180
     while proc.poll() is None:  # every pool the search starts loses its worker: it fails twice and stops
+        if time.time() > deadline:
+            proc.kill()
+            pytest.fail(f"the search did not stop after its workers died: {proc.communicate()[1][-2000:]}")
         for pid in _children(proc.pid):
             try:
                 os.kill(pid, signal.SIGKILL)
