@@ -23,6 +23,8 @@ per simulation.
 and searches with that policy: zero-shot, on a case study it never trained on, with ``--obstacles`` boxes. The agent
 ``random-frame`` is random search in the mission's frame (uniform frame actions,
 :class:`~surrealist_gym.competition.mission_frame.MissionFrame`): what the frame gives without any learning.
+``--mission drawn`` (or ``drawn-calm``, the same without wind) searches, on each seed, a case study drawn as the
+policy's training draws them but never drawn there.
 
 Everything is kept in ``--out``: the policy, trained in parts of ``--part`` steps (``ppo-STEPS-partKofN.zip``, each
 with its record ``.json``; ``ppo-STEPS.zip`` when one part), each search's evaluations (``searches/AGENT-seedN.sqlite``)
@@ -39,6 +41,8 @@ Usage::
     python benchmarks/bench_rl.py ... --hyper gamma=0.95 --out results/rl-discounted   # another SB3 setting
     python benchmarks/bench_rl.py --policy pretrained --mission mission1 --obstacles 2 --seeds 5 --first-seed 300 \
         --agents ppo-sample,random,random-frame --budget 50 --out results/rl-pretrained/mission1-2   # zero-shot
+    python benchmarks/bench_rl.py --policy pretrained --mission drawn-calm --obstacles 2 --seeds 5 --first-seed 300 \
+        --agents ppo-sample,random-frame,random --budget 30 --out results/rl-pretrained/drawn-calm-2  # unseen draws
 """
 from __future__ import annotations
 
@@ -56,8 +60,20 @@ sys.path.insert(0, str(ROOT))
 CASE_STUDIES = ROOT.parent / "shared" / "data" / "competition" / "case_studies"
 
 
-def case_study(name: str) -> str:
-    """A case study's YAML: the shared data's when it holds it, else the name (looked up by the rules)."""
+DRAWN = {"drawn": True, "drawn-calm": False}  #: drawn case studies, with their drawn wind / without wind
+DRAWN_SEED = 8700  #: search on seed N flies the case study drawn on seed DRAWN_SEED + N (300-304: 9000-9004)
+
+
+def case_study(name: str, seed: int = 0):
+    """A case study's YAML: the shared data's when it holds it, else the name (looked up by the rules); for
+    ``drawn``/``drawn-calm``, the case study drawn (:func:`random_case_study`) on ``DRAWN_SEED + seed``, which the
+    training of the shipped policy never drew (its draws come from its envs' own seeded generators)."""
+    if name in DRAWN:
+        from dataclasses import replace
+
+        from surrealist_gym.competition.missions import random_case_study
+        drawn = random_case_study(np.random.default_rng(DRAWN_SEED + seed))
+        return drawn if DRAWN[name] else replace(drawn, wind=None)
     path = CASE_STUDIES / f"{name}.yaml"
     return str(path) if path.is_file() else name
 
@@ -189,7 +205,7 @@ def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     if cached.is_file():
         return json.loads(cached.read_text())
     stem.parent.mkdir(parents=True, exist_ok=True)
-    env = RecordSuite(CaseStudyEnv(case_study(args.mission), obstacles=args.obstacles, budget=args.budget, runs=1,
+    env = RecordSuite(CaseStudyEnv(case_study(args.mission, seed), obstacles=args.obstacles, budget=args.budget, runs=1,
                                    random_seed=seed, executor="inline", store=stem.with_suffix(".sqlite")))
     counts = TrainingRecord()  # counts a search's steps as it counts a training's
     start = time.perf_counter()
@@ -242,7 +258,8 @@ def summarise(records: list[dict], agents: list[str]) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--mission", default="mission2", help="case study (default mission2)")
+    parser.add_argument("--mission", default="mission2", help="case study (default mission2), or drawn / "
+                        "drawn-calm: one drawn per seed")
     parser.add_argument("--obstacles", type=int, default=3, help="boxes per test (default 3)")
     parser.add_argument("--policy", default=None, metavar="FILE.zip|pretrained",
                         help="search with this policy instead of training one (pretrained: the shipped policy for "
