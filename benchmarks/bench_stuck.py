@@ -48,23 +48,21 @@ def fly(tests, config, workers: int) -> tuple[list, float]:
 def compare(full, stopped) -> dict:
     """The stopped pass against the full one, run by run."""
     ended = [(f, s) for f, s in zip(full, stopped) if s.status == "stuck"]
-    changed_status = [f for f, s in ended if f.status != "timeout"]
-    closer = [f for f, s in ended if f.status == "timeout" and _closer(f.distance, s.distance)]
-    timeouts = sum(f.status == "timeout" for f in full)
-    moved = [s.distance - f.distance for f, s in ended if f.status == "timeout" and math.isfinite(f.distance)
-             and math.isfinite(s.distance)]
-    return {"ended": len(ended), "of_timeouts": sum(f.status == "timeout" for f, _ in ended), "timeouts": timeouts,
-            "changed_status": len(changed_status), "changed_distance": len(closer),
-            "largest_change_m": max(moved, default=0.0),
-            "closest_changed_m": min((f.distance for f, s in ended if f.status == "timeout" and _closer(f.distance,
-                                                                                                        s.distance)),
-                                     default=math.inf),
+    finished = {f.status for f, _ in ended if f.status != "timeout"}  # what the check cut short
+    timed_out = [(f, s) for f, s in ended if f.status == "timeout"]
+    closer = [(f, s) for f, s in timed_out if _closer(f.distance, s.distance)]
+    return {"ended": len(ended), "of_timeouts": len(timed_out), "timeouts": sum(f.status == "timeout" for f in full),
+            "changed_status": len(ended) - len(timed_out), "changed_distance": len(closer),
+            "largest_change_m": max((s.distance - f.distance for f, s in closer if math.isfinite(s.distance)),
+                                    default=0.0),
+            "closest_changed_m": min((f.distance for f, _ in closer), default=math.inf),
             "sim_saved_s": sum(f.duration - s.duration for f, s in ended),
             "sim_full_s": sum(f.duration for f in full),
-            "changed": sorted({f.status for f in changed_status})}
+            "changed": sorted(finished)}
 
 
 def _closer(full: float, stopped: float) -> bool:
+    """Whether the full flight came more than TOLERANCE_M closer than the stopped run did."""
     if not math.isfinite(full):
         return False
     return not math.isfinite(stopped) or stopped - full > TOLERANCE_M

@@ -20,7 +20,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT))
-TESTS = ROOT.parent / "shared" / "data" / "competition" / "rilast-mission1" / "tests.csv"
+sys.path.insert(0, str(ROOT / "benchmarks"))
 STEP_S = 0.5  # the trajectory's sampling
 
 
@@ -28,12 +28,12 @@ def full_flights(cache: Path) -> list[tuple]:
     """(status, duration, t, xyz, obstacles) of each test's full flight, flown once and cached."""
     if cache.is_file():
         return pickle.loads(cache.read_bytes())
+    from bench_stuck import DATA, fly  # the full pass of bench_stuck.py
     from surrealist_gym.fidelity.labels import load_labelled_set
-    from surrealist_gym.fidelity.measure import fly_tests
     from surrealist_gym.sim.uav import decide_uav
 
-    tests = list(load_labelled_set(TESTS).tests)
-    runs = [o[0] for o in fly_tests(tests, 1, 0, decide_uav(uav="px4-v1.12-sitl-iris").config, 2)]
+    tests = list(load_labelled_set(DATA).tests)
+    runs, _ = fly(tests, decide_uav(uav="px4-v1.12-sitl-iris").config, 2)
     flights = [(r.status, r.duration, np.asarray(r.trajectory.t), np.asarray(r.trajectory.xyz), test.obstacles)
                for r, test in zip(runs, tests)]
     cache.parent.mkdir(parents=True, exist_ok=True)
