@@ -281,6 +281,9 @@ def main(argv=None) -> int:
     parser.add_argument("--budget", type=int, default=20, help="evaluations per search (default 20; the study: 100)")
     parser.add_argument("--out", type=Path, default=Path("results/bench-rl"), help="results folder (resumable)")
     args = parser.parse_args(argv)
+    from surrealist_gym.competition.rules import RULES
+    if not 1 <= args.obstacles <= RULES.max_obstacles:
+        parser.error(f"--obstacles: expected 1 to {RULES.max_obstacles} (the rules), got {args.obstacles}")
     args.hyper = dict(args.hyper)
     if args.hyper:
         import inspect
