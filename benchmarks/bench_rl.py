@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 import warnings
@@ -145,7 +146,7 @@ def train(args, out: Path) -> Path:
     if parts > min(args.first_seed):
         raise SystemExit(f"--steps {args.steps} in parts of {args.part}: part seeds would reach the held-out seeds "
                          f"from --first-seed {min(args.first_seed)}; raise --part or --first-seed")
-    previous, total = None, 0.0
+    previous, total, simulated = None, 0.0, 0.0
     for k in range(parts):
         steps = min(args.part, args.steps - k * args.part)
         policy = out / (f"ppo-{args.steps}.zip" if parts == 1 else f"ppo-{args.steps}-part{k + 1}of{parts}.zip")
@@ -158,6 +159,7 @@ def train(args, out: Path) -> Path:
             saved = json.loads(record.read_text())
             if {key: saved.get(key) for key in settings} == settings:
                 previous, total = policy, total + saved["wall_seconds"]
+                simulated += saved["record"].get("simulated_s", math.nan)
                 print(f"policy part {k + 1}/{parts}: {policy} (read back)")
                 continue
         train_policy(steps, policy, problem="case-study", case_study=settings["case_study"],
@@ -167,10 +169,28 @@ def train(args, out: Path) -> Path:
         print(file=sys.stderr)
         saved = json.loads(record.read_text())
         previous, total = policy, total + saved["wall_seconds"]
+        simulated += saved["record"]["simulated_s"]
         print(f"policy part {k + 1}/{parts}: {policy} ({saved['wall_seconds']:.0f} s; "
               f"{saved['record']['soft_failures']} soft failures in {saved['record']['simulations']} simulations)")
     print(f"policy: {previous} (trained for {args.steps} steps in {total:.0f} s)")
+    print(training_speed(args.steps, total, simulated))
     return previous
+
+
+def training_speed(steps: int, wall: float, simulated: float, bare_s: float = 100.0) -> str:
+    """Training's throughput: steps a second, and the simulated time flown a second of wall time (real time x)
+    against the bare PyBullet loop's (``bench_sim.plain_pybullet``, measured now over ``bare_s`` simulated seconds at
+    the profile's physics rate; its speed does not depend on how long it runs)."""
+    from bench_sim import plain_pybullet
+
+    from surrealist_gym.sim.profiles import load_profile
+
+    if not math.isfinite(simulated):
+        return f"training: {steps} steps in {wall:.0f} s ({steps / wall:.2f} steps/s); simulated time not recorded"
+    bare = bare_s / plain_pybullet(bare_s, load_profile("px4-v1.12-sitl-iris").sim_config().physics_hz)
+    return (f"training: {steps} steps in {wall:.0f} s ({steps / wall:.2f} steps/s), {simulated:.0f} s simulated: "
+            f"{simulated / wall:.0f}x real time; the bare PyBullet loop {bare:.0f}x in this run: "
+            f"{simulated / wall / bare:.2f} of its speed")
 
 
 def frame_random(seed: int):

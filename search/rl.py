@@ -171,11 +171,13 @@ def training_env(config: ProblemConfig, sim_config=None, seed: int = 0, executor
 class TrainingRecord:
     """What a training run met, step by step (every env of a vector env): episodes, evaluations flown, actions
     refused (``info["invalid"]``) or answered from the memo, and the soft failures among the runs flown (a collision,
-    or a competition distance below 1.5 m; case-study problems, whose distance is the competition's)."""
+    or a competition distance below 1.5 m; case-study problems, whose distance is the competition's), and the
+    simulated time of those runs [s]."""
 
     def __init__(self):
         self.steps = self.episodes = self.flown = self.refused = self.memo = 0
         self.simulations = self.soft_failures = 0
+        self.simulated_s = 0.0
 
     def add(self, info: dict, done: bool) -> None:
         """Count one env step from its info (and whether its episode ended)."""
@@ -192,11 +194,13 @@ class TrainingRecord:
             statuses, distances = info.get("statuses", ()), info.get("competition_distances", ())
             self.simulations += len(statuses)
             self.soft_failures += sum(run_points(s, d) > 0 for s, d in zip(statuses, distances))
+            self.simulated_s += float(sum(info.get("durations", ())))
 
     def to_json(self) -> dict:
         """The counts, and the soft failures per simulation (None before any flight)."""
         out = dict(vars(self))
         out["soft_failures_per_simulation"] = self.soft_failures / self.simulations if self.simulations else None
+        out["simulated_s"] = round(self.simulated_s, 1)
         return out
 
 

@@ -372,7 +372,7 @@ class SurrealistEnv(gym.Env):
                 "simulations": self._simulations,
                 "best_fitness": None if self._best is None else self._best.fitness}
         if evaluation is None:
-            info.update(fitness=self._penalty(), memo=False, statuses=(), min_distances=(), terms={})
+            info.update(fitness=self._penalty(), memo=False, statuses=(), min_distances=(), durations=(), terms={})
             return info
         runs = evaluation.runs
         info.update(fitness=evaluation.fitness, memo=memo,
@@ -380,6 +380,7 @@ class SurrealistEnv(gym.Env):
                     min_distances=tuple(r.min_distance for r in runs),
                     min_distances_2d=tuple(r.min_distance_2d for r in runs),
                     competition_distances=tuple(r.competition_distance for r in runs),
+                    durations=tuple(r.duration for r in runs),
                     terms=copy.deepcopy(evaluation.terms),
                     trajectory=None if evaluation.trajectory is None else Trajectory.from_array(evaluation.trajectory))
         return info

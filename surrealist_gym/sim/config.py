@@ -144,6 +144,10 @@ class SimConfig:
         stuck_window_s / stuck_distance_m: early stopping, off by default (None): the run ends as STUCK when
             its distance to the current goal has not shrunk by stuck_distance_m [m] during the last
             stuck_window_s [s] of flight. PX4 keeps flying such flights (and often finishes them).
+        tree_reuse_m / tree_reuse_cycles: the compiled loop's PX4-Avoidance planner keeps its last look-ahead tree
+            for up to tree_reuse_cycles cycles in a row while the vehicle stays within tree_reuse_m [m] of where
+            it was built, toward the same goal (a hovering vehicle's tree is then built every few cycles); 0
+            (off): a tree every cycle, as PX4-Avoidance and the PyBullet loop do.
         noise: noise configuration.
         common_noise: common random numbers: run ``i`` of every test draws the same noise (from the base seed and
             ``i`` alone), so two tests are compared under the same wind and sensor errors and their fitness
@@ -181,6 +185,8 @@ class SimConfig:
     timeout_s: float | None = None
     stuck_window_s: float | None = None
     stuck_distance_m: float = 0.5
+    tree_reuse_m: float = 0.0
+    tree_reuse_cycles: int = 4
     noise: NoiseConfig = NoiseConfig()
     common_noise: bool = False
     avoidance_model: AvoidanceModel = AvoidanceModel.SIMPLE
@@ -204,6 +210,11 @@ class SimConfig:
         if not 0.0 < self.obstacle_collision_scale <= 1.0:
             raise ValueError(f"SimConfig.obstacle_collision_scale must be in (0, 1], got "
                              f"{self.obstacle_collision_scale!r}")
+        if not (isinstance(self.tree_reuse_m, (int, float)) and 0 <= self.tree_reuse_m < math.inf):
+            raise ValueError(f"SimConfig.tree_reuse_m must be a finite number >= 0, got {self.tree_reuse_m!r}")
+        if isinstance(self.tree_reuse_cycles, bool) or not isinstance(self.tree_reuse_cycles, int) \
+                or self.tree_reuse_cycles < 0:
+            raise ValueError(f"SimConfig.tree_reuse_cycles must be an int >= 0, got {self.tree_reuse_cycles!r}")
         if self.physics_hz < 200:
             raise ValueError(f"SimConfig.physics_hz must be >= 200 Hz, got {self.physics_hz:g}")
         if not 0 < self.control_hz <= self.physics_hz or _not_divisor(self.physics_hz, self.control_hz):

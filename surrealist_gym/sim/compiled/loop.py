@@ -329,7 +329,8 @@ def fly_kernel(world, runs: list, cfg, sensor, timeout: float, mission, params) 
         cloud, age, path = np.empty((0, 3)), np.empty(0), np.empty((MAX_NODES, 3))
         pstate = px4_cycle.initial_state()
         if kind == PX4_PLANNER:
-            settings, pconsts = planner._settings, px4_cycle.constants(planner)
+            settings, pconsts = planner._settings, px4_cycle.constants(planner, float(cfg.tree_reuse_m),
+                                                                          cfg.tree_reuse_cycles)
         else:
             settings, pconsts = kernel_settings(Px4AvoidanceConfig()), None  # None: its branch is not compiled
         # the simple planner's (placeholders for the others)

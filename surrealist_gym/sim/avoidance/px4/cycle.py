@@ -26,11 +26,13 @@ from .cloud import process_cloud
 from .settings import MAX_NODES
 from .tree import build_tree
 
-# state vector
+# state vector; BUILT_AT, BUILT_GOAL: where the last tree was built and toward what; REUSED: cycles since
 T_PREV, PATH_T, SPEED, SP, SP_V, YAW, YAW_RATE, YAW_AT_GOAL, PATH_LEN = 0, 1, 2, 3, 6, 9, 10, 11, 12
-STATE_SIZE = 13
+BUILT_AT, BUILT_GOAL, REUSED = 13, 16, 19
+STATE_SIZE = 20
 # constants vector
 C_CRUISE, C_LINE_BAND, C_HEADING_OFFSET, C_SMOOTH_XY, C_SMOOTH_Z, C_SPEED_TAU = 0, 1, 2, 3, 4, 5
+C_REUSE_M, C_REUSE_MAX = 6, 7
 # the output's state code
 DIRECT, TRY_PATH = 0, 1
 _TWO_PI = 2.0 * math.pi
@@ -41,15 +43,17 @@ def initial_state() -> np.ndarray:
     s = np.zeros(STATE_SIZE)
     s[T_PREV] = s[YAW] = s[YAW_AT_GOAL] = math.nan
     s[SP:SP + 3] = math.nan
+    s[BUILT_AT:BUILT_AT + 6] = math.nan
     return s
 
 
-def constants(planner) -> np.ndarray:
+def constants(planner, reuse_m: float = 0.0, reuse_max: int = 0) -> np.ndarray:
     """The float constants of a :class:`~surrealist_gym.sim.avoidance.px4.local_planner.Px4LocalPlanner` (its config,
-    cruise speed after the sensor limit, the line band and the heading offset), as the kernel reads them."""
+    cruise speed after the sensor limit, the line band and the heading offset), as the kernel reads them, and the
+    tree's reuse while hovering (:func:`cycle`; 0: a tree every cycle, as the class)."""
     c = planner.config
     return np.array([planner.cruise, planner._line_band, planner._heading_offset, c.smoothing_speed_xy,
-                     c.smoothing_speed_z, c.speed_filter_tau_s], dtype=np.float64)
+                     c.smoothing_speed_z, c.speed_filter_tau_s, reuse_m, reuse_max], dtype=np.float64)
 
 
 @njit(cache=True)
@@ -82,6 +86,17 @@ def closest_on_line(px, py, ax, ay, bx, by, near):  # pragma: no cover - compile
 
 
 @njit(cache=True)
+def _reuses(state, consts, px, py, pz, gx, gy, gz):  # pragma: no cover - compiled
+    """Whether this cycle keeps the last tree's path (:func:`cycle`)."""
+    if consts[C_REUSE_M] <= 0.0 or state[PATH_LEN] < 2 or state[REUSED] >= consts[C_REUSE_MAX]:
+        return False
+    if gx != state[BUILT_GOAL] or gy != state[BUILT_GOAL + 1] or gz != state[BUILT_GOAL + 2]:
+        return False
+    dx, dy, dz = px - state[BUILT_AT], py - state[BUILT_AT + 1], pz - state[BUILT_AT + 2]
+    return dx * dx + dy * dy + dz * dz < consts[C_REUSE_M] * consts[C_REUSE_M]
+
+
+@njit(cache=True)
 def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw, goal, prev_goal, hits,
           pitch, work=None):  # pragma: no cover - compiled
     """One planner cycle (Px4LocalPlanner.update): updates ``path`` and ``state`` in place and returns
@@ -89,7 +104,12 @@ def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw,
     setpoint, the yaw setpoint [rad], DIRECT or TRY_PATH, the adapted speed, whether a tree was built this cycle
     (its path is then ``path[:state[PATH_LEN]]``) and the number of points in the cloud. ``work``: the tree's
     buffers (:func:`~surrealist_gym.sim.avoidance.px4.tree.tree_work`), reused across cycles; allocated per build
-    when None."""
+    when None.
+
+    With ``consts[C_REUSE_M]`` > 0 (the compiled loop's ``SimConfig.tree_reuse_m``), a cycle whose vehicle is within
+    that distance of where the last tree was built, toward the same goal, keeps that tree's path as if built now, up
+    to ``consts[C_REUSE_MAX]`` cycles in a row: a hovering vehicle builds a tree every few cycles instead of every
+    one. The class always builds."""
     t_prev = state[T_PREV]
     dt = 0.1 if math.isnan(t_prev) else min(max(t - t_prev, 1e-3), 1.0)
     state[T_PREV] = t
@@ -104,7 +124,13 @@ def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw,
     found, cx, cy = closest_on_line(px, py, prev_goal[0], prev_goal[1], gx, gy, consts[C_LINE_BAND])
     cpt = (cx, cy, gz) if found else (gx, gy, gz)
     built = False
-    if n > 0:
+    if n > 0 and _reuses(state, consts, px, py, pz, gx, gy, gz):
+        state[PATH_T] = t
+        state[REUSED] += 1.0
+    elif n > 0:
+        state[BUILT_AT], state[BUILT_AT + 1], state[BUILT_AT + 2] = px, py, pz
+        state[BUILT_GOAL], state[BUILT_GOAL + 1], state[BUILT_GOAL + 2] = gx, gy, gz
+        state[REUSED] = 0.0
         tree = np.empty((MAX_NODES, 3))
         k = build_tree(cloud, (px, py, pz), (vx, vy, vz), (gx, gy, gz), cpt, settings, tree, work)
         if k > 0:

@@ -79,3 +79,45 @@ def test_point_on_path_and_line_projection():
     assert kc.closest_on_line(1.0, 5.0, 0.0, 0.0, 10.0, 0.0, 2.0) == (True, 1.0, 0.0)
     assert not kc.closest_on_line(1.0, 1.0, 0.0, 0.0, 10.0, 0.0, 2.0)[0]  # within the band
     assert not kc.closest_on_line(1.0, 5.0, 0.0, 0.0, 0.0, 0.0, 2.0)[0]  # no line
+
+
+def test_a_hovering_planner_keeps_its_tree_within_the_reuse_radius(monkeypatch):
+    """``SimConfig.tree_reuse_m``'s rule on a flight's recorded cycles: at a cycle with a tree, the next cycle from
+    the same position toward the same goal keeps that path (no build; its time is now), up to the cycle limit in a row;
+    a position beyond the radius, another goal, or the limit reached builds again, and the path built equals the one
+    a planner without reuse builds there."""
+    planner, calls = _recorded_cycles(_rilast("random_run3_194"), monkeypatch)
+    settings = planner._settings
+    fresh = kc.constants(planner)
+    reuse = kc.constants(planner, 0.2, 2)
+    i = next(i for i, (args, out) in enumerate(calls)  # a tree built from a scan that saw a box within 12 m
+             if out.path.shape[0] > 0 and args[6].shape[0] > 0
+             and np.linalg.norm(args[6] - np.array(args[1]), axis=1).min() < 12.0)
+    t, position, velocity, yaw, goal, prev_goal, hits, pitch = calls[i][0]
+
+    def run(consts, steps):
+        """The recorded cycles up to ``i`` (a tree every cycle), then ``steps`` (dt, position, goal) with
+        ``consts``."""
+        cloud, age, path, state = np.empty((0, 3)), np.empty(0), np.empty((MAX_NODES, 3)), kc.initial_state()
+        for args, _ in calls[:i + 1]:
+            cloud, age, *_ = kc.cycle(cloud, age, path, state, settings, fresh, *args)
+        built = []
+        for dt, pos, g in steps:
+            cloud, age, *_, b, _ = kc.cycle(cloud, age, path, state, settings, consts, t + dt, pos, velocity, yaw,
+                                            g, prev_goal, hits, pitch)
+            built.append(b)
+        return built, path[:int(state[kc.PATH_LEN])].copy(), state
+
+    near = (position[0] + 0.1, position[1], position[2])
+    far = (position[0] + 0.3, position[1], position[2])
+    other = (goal[0] + 1.0, goal[1], goal[2])
+    built, kept, state = run(reuse, [(0.1, near, goal), (0.2, near, goal), (0.3, near, goal)])
+    assert built == [False, False, True]  # two kept, then the limit
+    assert state[kc.PATH_T] == t + 0.3
+    built, kept, state = run(reuse, [(0.1, near, goal)])
+    assert built == [False] and state[kc.PATH_T] == t + 0.1 and np.array_equal(kept[0], position)
+    assert run(reuse, [(0.1, far, goal)])[0] == [True]
+    assert run(reuse, [(0.1, near, other)])[0] == [True]
+    built, path, _ = run(reuse, [(0.1, far, goal)])
+    assert np.array_equal(path, run(fresh, [(0.1, far, goal)])[1])
+    assert run(fresh, [(0.1, near, goal)])[0] == [True]  # without reuse: a tree every cycle
