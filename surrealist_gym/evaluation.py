@@ -279,9 +279,19 @@ def search_identity(objective, runs: int, seed: int, sim_config) -> dict:
 
 def named_physics(sim_configs) -> dict:
     """The physics of a store's flights, for its identity: named only when not PyBullet, as stores before the
-    compiled physics were flown on PyBullet and named none (they resume on PyBullet only)."""
+    compiled physics were flown on PyBullet and named none (they resume on PyBullet only); and the tree's reuse
+    while hovering (``SimConfig.tree_reuse_m``), named only where it acts (``SimConfig.reuses_trees``), so stores
+    whose flights it does not change resume as before."""
     names = sorted({c.physics.value for c in sim_configs})
-    return {} if names == ["pybullet"] else {"physics": names[0] if len(names) == 1 else names}
+    named = {} if names == ["pybullet"] else {"physics": names[0] if len(names) == 1 else names}
+    return named | named_tree_reuse(sim_configs)
+
+
+def named_tree_reuse(sim_configs) -> dict:
+    """The tree's reuse while hovering of a store's flights, for its identity (out of ``SimConfig``'s repr): named
+    only where it acts (``SimConfig.reuses_trees``), so stores whose flights it does not change resume as before."""
+    reuse = sorted({f"{c.tree_reuse_m:g} m, {c.tree_reuse_cycles} cycles" for c in sim_configs if c.reuses_trees})
+    return {"tree_reuse": reuse[0] if len(reuse) == 1 else reuse} if reuse else {}
 
 
 def flown_with_common_noise(stored: StoredEvaluation) -> bool:

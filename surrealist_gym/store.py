@@ -122,6 +122,12 @@ class EvaluationStore:
                     raise SurrealistError(f"{self.path}: holds the evaluations of a search flown on another physics "
                                           f"({there} there, {here} here); set $SURREALIST_PHYSICS={there} to resume "
                                           f"it, or use another results folder")
+                if key == "tree_reuse":  # named only where it acts (evaluation.named_tree_reuse)
+                    there = str(held.get(key) or "none").split(" m")[0].replace("none", "0")
+                    raise SurrealistError(f"{self.path}: holds the evaluations of a search flown with another reuse "
+                                          f"of the planner's tree ({held.get(key) or 'none'} there, "
+                                          f"{identity.get(key) or 'none'} here); set $SURREALIST_TREE_REUSE={there} "
+                                          f"to resume it, or use another results folder")
                 raise SurrealistError(f"{self.path}: holds the evaluations of another search ({key}: "
                                       f"{_short(held.get(key))} there, {_short(identity.get(key))} here); use "
                                       f"--resume with that search's options, or another results folder")

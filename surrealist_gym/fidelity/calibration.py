@@ -224,6 +224,7 @@ def _runs_store(store, tests, runs: int, seed: int, config) -> tuple:
     the runs it holds by test key ({key: {index: RunRecord}})."""
     import hashlib
 
+    from ..evaluation import named_tree_reuse
     from ..outcomes import RunRecord
     from ..store import EvaluationStore
 
@@ -233,7 +234,7 @@ def _runs_store(store, tests, runs: int, seed: int, config) -> tuple:
     db = EvaluationStore(store)
     try:
         db.claim({"command": "calibrate", "tests": [digest(t.key()) for t in tests], "runs": int(runs),
-                  "seed": int(seed), "sim": digest(repr(config))})
+                  "seed": int(seed), "sim": digest(repr(config))} | named_tree_reuse([config]))
         held: dict[str, dict] = {}
         for row in db:
             held.setdefault(row.test_key, {}).update(

@@ -104,6 +104,7 @@ def _open_store(store, tests, runs: int, seed: int, config, command: str):
     """The measurement's store, claimed for its identity (the tests, runs, seed and simulator settings)."""
     import hashlib
 
+    from ..evaluation import named_tree_reuse
     from ..store import EvaluationStore
 
     def digest(value: str) -> str:
@@ -112,7 +113,7 @@ def _open_store(store, tests, runs: int, seed: int, config, command: str):
     db = EvaluationStore(store)
     try:
         db.claim({"command": command, "tests": [digest(t.key()) for t in tests], "runs": int(runs),
-                  "seed": int(seed), "sim": digest(repr(config))})
+                  "seed": int(seed), "sim": digest(repr(config))} | named_tree_reuse([config]))
     except BaseException:
         db.close()
         raise

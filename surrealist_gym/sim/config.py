@@ -88,6 +88,25 @@ def default_physics() -> Physics:
         raise SurrealistError(f"${PHYSICS_ENV}: {value!r} is not a physics (compiled or pybullet)") from None
 
 
+TREE_REUSE_ENV = "SURREALIST_TREE_REUSE"
+TREE_REUSE_M = 0.2  #: SimConfig.tree_reuse_m's default [m] (docs/compiled-loop.md, section 3)
+
+
+def default_tree_reuse() -> float:
+    """The ``tree_reuse_m`` of a :class:`SimConfig` that names none: ``$SURREALIST_TREE_REUSE`` (metres, 0: a tree
+    every cycle), else :data:`TREE_REUSE_M`."""
+    value = os.environ.get(TREE_REUSE_ENV)
+    if not value:
+        return TREE_REUSE_M
+    try:
+        metres = float(value)
+    except ValueError:
+        metres = math.nan
+    if not 0 <= metres < math.inf:
+        raise SurrealistError(f"${TREE_REUSE_ENV}: {value!r} is not a distance (metres >= 0; 0: a tree every cycle)")
+    return metres
+
+
 @dataclass(frozen=True, slots=True)
 class NoiseConfig:
     """Sources of run-to-run variation; all drawn from the run's seed.
@@ -146,8 +165,10 @@ class SimConfig:
             stuck_window_s [s] of flight. PX4 keeps flying such flights (and often finishes them).
         tree_reuse_m / tree_reuse_cycles: the compiled loop's PX4-Avoidance planner keeps its last look-ahead tree
             for up to tree_reuse_cycles cycles in a row while the vehicle stays within tree_reuse_m [m] of where
-            it was built, toward the same goal (a hovering vehicle's tree is then built every few cycles); 0
-            (off): a tree every cycle, as PX4-Avoidance and the PyBullet loop do.
+            it was built, toward the same goal: a hovering vehicle builds a tree about once a second instead of
+            ten times. Default 0.2 m (``$SURREALIST_TREE_REUSE`` sets another) and 9 cycles, chosen on rilast's
+            fidelity figures and speed (docs/compiled-loop.md, section 3); tree_reuse_m 0: a tree every cycle, as
+            PX4-Avoidance and the PyBullet loop do.
         noise: noise configuration.
         common_noise: common random numbers: run ``i`` of every test draws the same noise (from the base seed and
             ``i`` alone), so two tests are compared under the same wind and sensor errors and their fitness
@@ -185,8 +206,8 @@ class SimConfig:
     timeout_s: float | None = None
     stuck_window_s: float | None = None
     stuck_distance_m: float = 0.5
-    tree_reuse_m: float = 0.0
-    tree_reuse_cycles: int = 4
+    tree_reuse_m: float = field(default_factory=default_tree_reuse, repr=False)  # stores' identities name it
+    tree_reuse_cycles: int = field(default=9, repr=False)
     noise: NoiseConfig = NoiseConfig()
     common_noise: bool = False
     avoidance_model: AvoidanceModel = AvoidanceModel.SIMPLE
@@ -228,6 +249,13 @@ class SimConfig:
             raise ValueError(f"SimConfig.planner_hz must divide outer_hz, got {self.planner_hz:g}")
         if abs(self.outer_hz / self.log_hz - round(self.outer_hz / self.log_hz)) > 1e-9:
             raise ValueError(f"SimConfig.log_hz must divide outer_hz, got {self.log_hz:g}")
+
+    @property
+    def reuses_trees(self) -> bool:
+        """Whether runs on this config keep PX4-Avoidance's tree while hovering (``tree_reuse_m``): the compiled loop
+        flying that planner, with the reuse on."""
+        return (self.physics is Physics.COMPILED and self.avoidance_model is AvoidanceModel.PX4
+                and self.tree_reuse_m > 0 and self.tree_reuse_cycles > 0)
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> "SimConfig":

@@ -20,7 +20,7 @@ from tests.surrealist_gym.sim.vehicle.test_compiled_physics import rilast_case, 
 
 
 def _fly_both(test, runs, config, monkeypatch):
-    config = dataclasses.replace(config, physics=Physics.COMPILED)
+    config = dataclasses.replace(config, physics=Physics.COMPILED, tree_reuse_m=0.0)  # the reference builds every cycle
     new = simulate(test, runs=runs, seed=0, config=config)
     calls = []
 

@@ -23,7 +23,7 @@ from surrealist_gym.errors import SurrealistError
 from surrealist_gym.evaluation import search_identity
 from surrealist_gym.mission import Command
 from surrealist_gym.sim import NoiseConfig, Physics, RunStatus, SimConfig, simulate
-from surrealist_gym.sim.config import PHYSICS_ENV
+from surrealist_gym.sim.config import PHYSICS_ENV, TREE_REUSE_ENV
 from surrealist_gym.sim.uav import decide_uav
 from surrealist_gym.store import EvaluationStore
 from tests.conftest import CASE_STUDIES, EXPERIMENTS, SHARED_DATA
@@ -33,7 +33,9 @@ RILAST = SHARED_DATA / "competition" / "rilast-mission1" / "tests.csv"
 
 def _both(test, runs, config):
     a = simulate(test, runs=runs, seed=0, config=dataclasses.replace(config, physics=Physics.PYBULLET))
-    b = simulate(test, runs=runs, seed=0, config=dataclasses.replace(config, physics=Physics.COMPILED))
+    # the PyBullet loop, the reference, builds PX4-Avoidance's tree every cycle: so does the compiled one here
+    b = simulate(test, runs=runs, seed=0, config=dataclasses.replace(config, physics=Physics.COMPILED,
+                                                                     tree_reuse_m=0.0))
     return a, b
 
 
@@ -68,6 +70,42 @@ def test_physics_is_a_checked_choice(monkeypatch, tmp_path, capsys):
         SimConfig()
     assert cli_main(["simulate", str(EXPERIMENTS / "rq1-seed1.yaml")]) == 2
     assert capsys.readouterr().err == "error: $SURREALIST_PHYSICS: 'bullet' is not a physics (compiled or pybullet)\n"
+
+
+def test_the_tree_reuse_is_named_in_a_store_identity_where_it_acts(monkeypatch, tmp_path):
+    """``SimConfig.tree_reuse_m`` is out of the repr; a store's identity names it only for the compiled loop flying
+    PX4-Avoidance, so a store flown without it is refused by a search with it, and the simple planner's stores
+    resume whatever it is. A bad value is refused."""
+    monkeypatch.delenv(PHYSICS_ENV, raising=False)
+    monkeypatch.delenv(TREE_REUSE_ENV, raising=False)
+    sitl = decide_uav(uav="px4-v1.12-sitl-iris").config
+    on = dataclasses.replace(sitl, tree_reuse_m=0.2, tree_reuse_cycles=9)
+    off = dataclasses.replace(sitl, tree_reuse_m=0.0)
+    assert repr(on) == repr(off) and on.reuses_trees and not off.reuses_trees
+    assert search_identity(object(), 5, 0, on)["tree_reuse"] == "0.2 m, 9 cycles"
+    assert "tree_reuse" not in search_identity(object(), 5, 0, off)
+    simple = dataclasses.replace(SimConfig(), tree_reuse_m=0.2)
+    assert "tree_reuse" not in search_identity(object(), 5, 0, simple)
+    assert "tree_reuse" not in search_identity(object(), 5, 0, dataclasses.replace(on, physics="pybullet"))
+    with EvaluationStore(tmp_path / "evaluations.sqlite") as store:
+        store.claim(search_identity(object(), 5, 0, off))
+        refused = r"another reuse of the planner's tree \(none there, 0.2 m, 9 cycles here\); set " \
+                  r"\$SURREALIST_TREE_REUSE=0 to resume"
+        with pytest.raises(SurrealistError, match=refused):
+            store.claim(search_identity(object(), 5, 0, on))
+        monkeypatch.setenv(TREE_REUSE_ENV, "0")  # what the message says resumes it
+        store.claim(search_identity(object(), 5, 0, dataclasses.replace(sitl, tree_reuse_m=SimConfig().tree_reuse_m)))
+    monkeypatch.setenv(TREE_REUSE_ENV, "0.5")
+    assert SimConfig().tree_reuse_m == 0.5
+    monkeypatch.setenv(TREE_REUSE_ENV, "near")
+    with pytest.raises(SurrealistError, match=r"\$SURREALIST_TREE_REUSE: 'near' is not a distance"):
+        SimConfig()
+    monkeypatch.delenv(TREE_REUSE_ENV)
+    assert SimConfig().tree_reuse_m == 0.2
+    for bad in ({"tree_reuse_m": -0.1}, {"tree_reuse_m": math.inf}, {"tree_reuse_cycles": 1.5},
+                {"tree_reuse_cycles": -1}):
+        with pytest.raises(ValueError, match="SimConfig.tree_reuse"):
+            SimConfig(**bad)
 
 
 def test_takeoff_and_box_collision_agree():
