@@ -26,7 +26,8 @@ from .cloud import process_cloud
 from .settings import MAX_NODES
 from .tree import build_tree
 
-# state vector; BUILT_AT, BUILT_GOAL: where the last tree was built and toward what; REUSED: cycles since
+# state vector; BUILT_AT, BUILT_GOAL: where the last tree was built and toward what; REUSED: the cycles since
+# that kept its path
 T_PREV, PATH_T, SPEED, SP, SP_V, YAW, YAW_RATE, YAW_AT_GOAL, PATH_LEN = 0, 1, 2, 3, 6, 9, 10, 11, 12
 BUILT_AT, BUILT_GOAL, REUSED = 13, 16, 19
 STATE_SIZE = 20
