@@ -279,9 +279,8 @@ def search_identity(objective, runs: int, seed: int, sim_config) -> dict:
 
 def named_physics(sim_configs) -> dict:
     """The physics of a store's flights, for its identity: named only when not PyBullet, as stores before the
-    compiled physics were flown on PyBullet and named none (they resume on PyBullet only); and the tree's reuse
-    while hovering (``SimConfig.tree_reuse_m``), named only where it acts (``SimConfig.reuses_trees``), so stores
-    whose flights it does not change resume as before."""
+    compiled physics were flown on PyBullet and named none (they resume on PyBullet only); with
+    :func:`named_tree_reuse`."""
     names = sorted({c.physics.value for c in sim_configs})
     named = {} if names == ["pybullet"] else {"physics": names[0] if len(names) == 1 else names}
     return named | named_tree_reuse(sim_configs)

@@ -222,19 +222,11 @@ def _fit(flights, base, real, goals, settings, values, fly, grid, passes, progre
 def _runs_store(store, tests, runs: int, seed: int, config) -> tuple:
     """The calibration's store, claimed for its identity (the logs' missions, runs, seed, simulator settings), and
     the runs it holds by test key ({key: {index: RunRecord}})."""
-    import hashlib
-
-    from ..evaluation import named_tree_reuse
     from ..outcomes import RunRecord
-    from ..store import EvaluationStore
+    from .measure import open_store
 
-    def digest(value: str) -> str:
-        return hashlib.sha1(value.encode()).hexdigest()[:16]
-
-    db = EvaluationStore(store)
+    db = open_store(store, tests, runs, seed, config, "calibrate")
     try:
-        db.claim({"command": "calibrate", "tests": [digest(t.key()) for t in tests], "runs": int(runs),
-                  "seed": int(seed), "sim": digest(repr(config))} | named_tree_reuse([config]))
         held: dict[str, dict] = {}
         for row in db:
             held.setdefault(row.test_key, {}).update(

@@ -77,7 +77,7 @@ def fly_tests(tests: Sequence, runs: int = 1, seed: int = 0, config=None, worker
     config = replace(config or SimConfig(), competition_buffer_m=buffer)
     db, have = None, [{} for _ in tests]
     if store is not None:
-        db = _open_store(store, tests, runs, seed, config, command)
+        db = open_store(store, tests, runs, seed, config, command)
         for row in db:
             have[row.info["test"]].update(
                 (r["index"], RunRecord.from_dict(r, t)) for r, t in zip(row.runs, row.info["trajectories"]))
@@ -100,8 +100,9 @@ def fly_tests(tests: Sequence, runs: int = 1, seed: int = 0, config=None, worker
             db.close()
 
 
-def _open_store(store, tests, runs: int, seed: int, config, command: str):
-    """The measurement's store, claimed for its identity (the tests, runs, seed and simulator settings)."""
+def open_store(store, tests, runs: int, seed: int, config, command: str):
+    """The measurement's store (``command``: ``fidelity``, ``calibrate``, ...), claimed for its identity (the tests,
+    runs, seed and simulator settings)."""
     import hashlib
 
     from ..evaluation import named_tree_reuse

@@ -125,10 +125,10 @@ def cycle(cloud, age, path, state, settings, consts, t, position, velocity, yaw,
     found, cx, cy = closest_on_line(px, py, prev_goal[0], prev_goal[1], gx, gy, consts[C_LINE_BAND])
     cpt = (cx, cy, gz) if found else (gx, gy, gz)
     built = False
-    if n > 0 and _reuses(state, consts, px, py, pz, gx, gy, gz):
+    if n > 0 and _reuses(state, consts, px, py, pz, gx, gy, gz):  # the last tree's path, as if built now
         state[PATH_T] = t
         state[REUSED] += 1.0
-    elif n > 0:
+    elif n > 0:  # a new tree
         state[BUILT_AT], state[BUILT_AT + 1], state[BUILT_AT + 2] = px, py, pz
         state[BUILT_GOAL], state[BUILT_GOAL + 1], state[BUILT_GOAL + 2] = gx, gy, gz
         state[REUSED] = 0.0
