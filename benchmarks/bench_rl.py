@@ -288,7 +288,7 @@ def main(argv=None) -> int:
     parser.add_argument("--sample-only", action="store_true", help="part 1 only: no training, no flight")
     parser.add_argument("--steps", type=int, default=256, help="PPO training steps (default 256; the study: 50000)")
     parser.add_argument("--episode-budget", type=int, default=15, help="evaluations per training episode (15)")
-    parser.add_argument("--envs", type=int, default=1, help="training envs in SubprocVecEnv (default 1)")
+    parser.add_argument("--envs", type=int, default=1, help="training envs stepped together, on threads (default 1)")
     parser.add_argument("--hyper", type=hyper_setting, action="append", default=[], metavar="KEY=VALUE",
                         help="a setting of SB3's PPO (repeatable), e.g. gamma=0.95; a part is read back only when it "
                              "was trained with the same")

@@ -100,7 +100,8 @@ def rilast_tests(ids=None) -> list:
 def sitl_speed(repeat: int, batch_tests: int = 10, batch_runs: int = 5, workers: int = 2) -> None:
     """Competition tests on the PX4 SITL Iris profile (PX4-Avoidance model, look-ahead tree), on each physics: one
     run of a rilast test with 1, 2 and 3 boxes against the bare PyBullet loop over the same simulated time, and a
-    batch of ``batch_tests`` tests x ``batch_runs`` runs on a local pool of ``workers`` processes (aggregate)."""
+    batch of ``batch_tests`` tests x ``batch_runs`` runs on a local pool of ``workers`` processes and on as many threads
+    of this process (aggregate)."""
     import dataclasses
 
     from surrealist_gym.executors import executor_for, fly_many
@@ -121,16 +122,18 @@ def sitl_speed(repeat: int, batch_tests: int = 10, batch_runs: int = 5, workers:
                   f"{one * 1e3:.0f} ms -> {run.duration / one:.0f}x real time; the bare PyBullet loop "
                   f"{run.duration / base:.0f}x in this run: {base / one:.2f}x its speed")
         tests = rilast_tests()[:batch_tests]
-        with executor_for("process", workers) as pool:
-            fly_many(tests[:workers], 1, 0, cfg, pool)  # warm-up: the workers' imports and numba caches
-            t0 = time.perf_counter()
-            records = fly_many(tests, batch_runs, 0, cfg, pool)
-            wall = time.perf_counter() - t0
-        simulated = sum(r.duration for rs in records for r in rs)
-        print(f"{physics.value}: batch of {len(tests)} tests x {batch_runs} runs on {workers} workers: "
-              f"{simulated:.0f} s simulated in {wall:.1f} s -> {simulated / wall:.0f}x real time (aggregate), "
-              f"{simulated / wall / np.median(bare):.2f}x the bare PyBullet loop ({np.median(bare):.0f}x, the median "
-              f"above)")
+        for where in ("process", "threads"):
+            with executor_for(where, workers) as pool:
+                fly_many(tests[:workers], 1, 0, cfg, pool)  # warm-up: the workers' imports and numba caches
+                t0 = time.perf_counter()
+                records = fly_many(tests, batch_runs, 0, cfg, pool)
+                wall = time.perf_counter() - t0
+            simulated = sum(r.duration for rs in records for r in rs)
+            on = f"{workers} worker processes" if where == "process" else f"{workers} threads of this process"
+            print(f"{physics.value}: batch of {len(tests)} tests x {batch_runs} runs on {on}: "
+                  f"{simulated:.0f} s simulated in {wall:.1f} s -> {simulated / wall:.0f}x real time (aggregate), "
+                  f"{simulated / wall / np.median(bare):.2f}x the bare PyBullet loop ({np.median(bare):.0f}x, the "
+                  f"median above)")
 
 
 def _stats(traj) -> dict:

@@ -10,8 +10,8 @@ seed with its first obstacle moved at random. A case-study problem is ``Surreali
 box is the rules' box, so every action is a layout within the rules (overlapping or walled-off ones are refused with a
 penalty). A missions problem draws a new case study, wind and number of boxes at every reset and acts in the
 mission's frame (:class:`~surrealist_gym.competition.missions.MissionCaseStudies`). Episodes are short searches
-(``budget`` evaluations of ``runs`` simulations); ``envs`` > 1 steps that many envs in SB3's ``SubprocVecEnv``, whose
-workers fly their runs inline.
+(``budget`` evaluations of ``runs`` simulations); ``envs`` > 1 steps that many envs at once, each on a thread of this
+process (:class:`~search.thread_vec_env.ThreadVecEnv`), flying its runs inline there.
 
 Example:
     >>> train_policy(steps=256, out="ppo.zip", problem="replicate")            # doctest: +SKIP
@@ -154,8 +154,8 @@ class ProceduralEnv(DrawnProblems):
 
 def training_env(config: ProblemConfig, sim_config=None, seed: int = 0, executor="inline") -> gym.Env:
     """The env a policy trains on: :class:`ProceduralEnv` for the paper's problems, ``Surrealist-CaseStudy-v1`` (made
-    through Gymnasium's registry, whose noise seed is ``seed``) for a case study. Picklable by reference, so
-    ``functools.partial(training_env, ...)`` is what SB3's ``SubprocVecEnv`` starts in each worker."""
+    through Gymnasium's registry, whose noise seed is ``seed``) for a case study. ``functools.partial(training_env, ...)``
+    is what a vector env makes each of its envs with (picklable by reference, so SB3's ``SubprocVecEnv`` takes it too)."""
     if config.problem is Problem.MISSIONS:
         from surrealist_gym.competition.missions import MissionCaseStudies
 
@@ -221,12 +221,13 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
         budget, runs, spread, seed_test, case_study, obstacles: the :class:`ProblemConfig` of the training problems.
         seed: seeds the problems, the policy's initialisation and its sampling; env i of ``envs`` gets ``seed + i``.
         progress: called with the number of steps done, after each step.
-        envs: envs stepped together; more than 1 runs them in SB3's ``SubprocVecEnv`` (one process each).
+        envs: envs stepped together; more than 1 steps each on a thread of this process
+            (:class:`~search.thread_vec_env.ThreadVecEnv`): they fly in parallel, as in SB3's ``SubprocVecEnv``.
         init: a policy file of :func:`train_policy` whose weights the new policy starts from (its optimiser starts
             afresh): training in parts, each saved, resumes after the last part saved.
         executor, workers: where the runs of one env fly (:func:`~surrealist_gym.executors.make_executor`: "inline",
             the default, "process" with ``workers`` local processes, or a Dask scheduler's address), one executor for
-            the whole training; with ``envs`` above 1 each env's process flies its runs inline.
+            the whole training; with ``envs`` above 1 each env flies its runs inline, on its thread.
         **hyper: keyword arguments of the SB3 algorithm, over :func:`algorithm_settings`' defaults.
 
     Returns:
@@ -247,11 +248,12 @@ def train_policy(steps: int, out, problem: Problem | str = Problem.REPLICATE, al
     config = ProblemConfig(problem, budget, runs, spread, seed_test, case_study, obstacles)
     pool = None
     if envs > 1:
-        from stable_baselines3.common.vec_env import SubprocVecEnv
+        from search.thread_vec_env import ThreadVecEnv
 
         if executor not in (None, "inline"):
-            raise ValueError(f"executor={executor!r}: with envs={envs} each env's process flies its runs inline")
-        env = SubprocVecEnv([functools.partial(training_env, config, sim_config, seed + i, None) for i in range(envs)])
+            raise ValueError(f"executor={executor!r}: with envs={envs} each env flies its runs inline, on its thread")
+        env = ThreadVecEnv([functools.partial(training_env, config, sim_config, seed + i, "inline")
+                            for i in range(envs)])
         env.seed(seed)
     else:
         if executor not in (None, "inline"):  # one pool or client for every problem drawn (each env closes its own)

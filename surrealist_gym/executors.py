@@ -1,5 +1,6 @@
-"""Where simulations run: in this process, on a local process pool (default), or on a Dask cluster; and the one way
-to fly many tests on any of them (:func:`fly_many`).
+"""Where simulations run: in this process (on one thread or several), on a local process pool (default), or on a Dask
+cluster (whose workers' threads fly in parallel: the compiled loop releases the GIL); and the one way to fly many
+tests on any of them (:func:`fly_many`).
 
 Every executor answers ``submit(task, test, indices, seed, config) -> future`` (``task`` a module-level function
 such as :func:`fly`, run where the executor runs it; the future's ``done()`` and ``result()`` answer) and, built on
@@ -21,7 +22,7 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -160,6 +161,37 @@ class InlineExecutor(_Executor):
         return _Done(task, test, list(indices), seed, config)
 
 
+class ThreadExecutor(_Executor):
+    """Simulate in this process on ``workers`` threads (default :func:`default_workers`), the runs of a test split
+    evenly over them. The compiled loop releases the GIL while it flies (``fly_span`` is ``nogil``), so the threads
+    fly in parallel, as a local pool's processes do, without starting processes or pickling tests; results are those
+    of :class:`InlineExecutor`, run for run. PyBullet's physics (``$SURREALIST_PHYSICS=pybullet``) holds the GIL: its
+    runs take turns. A thread cannot be stopped: ``abandon`` cancels what has not started and lets the chunks in
+    flight end."""
+
+    def __init__(self, workers: int | None = None):
+        self.workers = workers or default_workers()
+        self._pool: ThreadPoolExecutor | None = None
+
+    def submit(self, task, test, indices, seed, config):
+        """Submit the runs to this process's threads; a future."""
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="fly")
+        return self._pool.submit(task, test, list(indices), seed, config)
+
+    def abandon(self) -> None:
+        """Cancel the chunks not started; those in flight end on their own, unwaited."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
+    def close(self) -> None:
+        """Wait for the chunks in flight, cancelling what has not started."""
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+            self._pool = None
+
+
 #: Local worker processes when none are asked for: all cores, but no more than this (each worker holds a simulator and
 #: its compiled loop; ``--workers`` asks for more).
 DEFAULT_MAX_WORKERS = 8
@@ -257,7 +289,9 @@ class DaskExecutor(_Executor):
         except (OSError, TimeoutError, ValueError) as err:
             raise SurrealistError(f"--dask-scheduler {scheduler}: cannot connect ({one_line(err)})") from None
         self._own = not isinstance(scheduler, Client)
-        self.workers = max(1, len(self.client.scheduler_info().get("workers", {})))
+        # every worker thread flies a chunk at once (the compiled loop releases the GIL): chunks are split over them
+        self.workers = max(1, sum(int(w.get("nthreads", 1))
+                                  for w in self.client.scheduler_info().get("workers", {}).values()))
         self.patience = patience
 
     def submit(self, task, test, indices, seed, config):
@@ -272,11 +306,14 @@ class DaskExecutor(_Executor):
 
 
 def make_executor(spec=None, workers: int | None = None):
-    """An executor from a spec: None/"process" (local pool), "inline", a Dask address or Client, or an executor."""
+    """An executor from a spec: None/"process" (local pool), "inline", "threads" (this process's threads), a Dask
+    address or Client, or an executor."""
     if spec is None or spec == "process":
         return LocalPoolExecutor(workers)
     if spec == "inline":
         return InlineExecutor()
+    if spec == "threads":
+        return ThreadExecutor(workers)
     if isinstance(spec, str) or type(spec).__module__.startswith("distributed"):
         return DaskExecutor(spec)
     return spec  # an executor object: submit, run(test, indices, seed, config) and close()

@@ -26,8 +26,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--obstacles", type=int, default=3, metavar="N",
                         help="boxes per test of --problem case-study, 1 to 3 (default 3)")
     parser.add_argument("--envs", type=int, default=1,
-                        help="envs stepped together, each in a process of its own (SB3's SubprocVecEnv; its runs fly "
-                             "inline there); default 1")
+                        help="envs stepped together, each on a thread of its own (they fly in parallel: the compiled "
+                             "loop releases the GIL); default 1")
     add_workers_argument(parser, "local worker processes flying the runs of an evaluation (default 1: in the "
                                  "training process; not with --envs above 1)", default=1)
     add_dask_argument(parser, "fly the runs on a Dask cluster (tcp://host:port; not with --envs above 1)")
@@ -83,7 +83,7 @@ def run(args) -> int:
     check_at_least(args, steps=1, episode_budget=2, runs=1, threads=1, random_seed=0, envs=1, obstacles=1, workers=1)
     refuse_workers_with_dask(args)
     refuse_inapplicable(args, [(("--workers", "--dask-scheduler"), args.envs == 1,
-                                "not with --envs above 1: each env's process flies its runs inline")])
+                                "not with --envs above 1: each env flies its runs inline, on its thread")])
     if args.obstacles > 3:
         raise SurrealistError(f"--obstacles: the competition allows 1 to 3 boxes, got {args.obstacles}")
     if case_study:  # the case study is read before anything is trained or flown

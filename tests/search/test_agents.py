@@ -212,3 +212,24 @@ def test_interrupted_training_saves_the_policy_so_far_and_trains_on_from_it(tmp_
     after = load_policy(more).state_dict()  # no learning: the weights it started from
     assert all((saved[k] == after[k]).all() for k in saved)
     assert "interrupted_after_steps" not in json.loads(more.with_suffix(".json").read_text())
+
+
+def test_training_on_envs_stepped_together_counts_every_env_and_repeats_with_its_seed(tmp_path):
+    """``envs=2``: two case-study envs step on threads of this process; each step of each env is counted, and the
+    same seed trains the same weights."""
+    pytest.importorskip("stable_baselines3")
+    import json
+
+    from search.rl import train_policy
+
+    weights = []
+    for name in ("a.zip", "b.zip"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            path = train_policy(8, tmp_path / name, problem="case-study", case_study="mission2", obstacles=1,
+                                budget=2, envs=2, seed=4, n_steps=4, batch_size=8, n_epochs=1)
+        record = json.loads(path.with_suffix(".json").read_text())
+        weights.append(load_policy(path).state_dict())
+    assert record["envs"] == 2
+    assert record["record"]["steps"] == 8 and record["record"]["simulations"] >= 2
+    assert all(np.array_equal(weights[0][k].numpy(), weights[1][k].numpy()) for k in weights[0])

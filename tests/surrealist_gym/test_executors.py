@@ -126,3 +126,43 @@ def test_a_lost_dask_scheduler_stops_the_search_with_one_line(test_case):
         for process in (worker, scheduler):
             process.kill()
             process.wait()
+
+
+@pytest.fixture(scope="module")
+def sitl_config():
+    from surrealist_gym.sim.profiles import load_profile
+
+    return load_profile("px4-v1.12-sitl-iris").sim_config()
+
+
+def test_threads_equal_inline_run_for_run(test_case, sitl_config):
+    """This process's threads fly the chunks of a test (PX4-Avoidance's tree and the simple planner alike) and give
+    the inline runs exactly: each run's noise is its own, whichever thread flies it."""
+    from surrealist_gym.executors import ThreadExecutor
+    from surrealist_gym.sim.compiled.loop import fly_span
+
+    assert fly_span.targetoptions.get("nogil") is True  # else the threads would take turns
+    for config in (sitl_config, SimConfig()):
+        executor = make_executor("threads", 2)
+        assert isinstance(executor, ThreadExecutor) and executor.workers == 2
+        try:
+            threaded = executor.run(test_case, [0, 1, 2, 3], 5, config)
+        finally:
+            executor.close()
+        inline = InlineExecutor().run(test_case, [0, 1, 2, 3], 5, config)
+        assert _summary(threaded) == _summary(inline)
+        assert [r.duration for r in threaded] == [r.duration for r in inline]
+
+
+def test_a_dask_worker_flies_on_its_threads_as_inline(test_case, sitl_config):
+    """One Dask worker with two threads (``dask worker --nthreads 2``) flies two chunks at once; the runs are the
+    inline ones."""
+    distributed = pytest.importorskip("distributed")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=True,
+                                      dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+            executor = make_executor(client)
+            assert executor.workers == 2  # one worker, two threads: the runs split in two chunks
+            remote = executor.run(test_case, [0, 1], 5, sitl_config)
+    assert _summary(remote) == _summary(InlineExecutor().run(test_case, [0, 1], 5, sitl_config))

@@ -103,7 +103,7 @@ L_SENSOR_AT = 23    # next unused range-noise value
 L_SIZE = 24
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def fly_span(ls, s, rest, kp, ks, pp, ps, noise, k_first, true, log,
              dt, outer_div, outer_dt, log_div, max_steps, rest_z, stuck_on, stuck_w, stuck_d,
              n_sub, body, half, scene, threshold,

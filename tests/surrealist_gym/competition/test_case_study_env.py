@@ -143,6 +143,39 @@ def test_sb3_subproc_vec_env_flies_inline_in_its_workers():
         venv.close()
 
 
+def test_the_thread_vec_env_steps_as_sb3s_dummy_vec_env():
+    """Envs stepped on threads (their flights in parallel) give, step for step, what SB3's one-after-the-other
+    DummyVecEnv gives for the same envs and actions: observations, rewards, ends, the resets' observations."""
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from search.thread_vec_env import ThreadVecEnv
+
+    def make(seed):
+        return functools.partial(gym.make, "surrealist_gym:Surrealist-CaseStudy-v1", case_study=MISSION2,
+                                 obstacles=1, budget=2, random_seed=seed, executor="inline")
+
+    stepped = []
+    for cls in (ThreadVecEnv, DummyVecEnv):
+        venv = cls([make(0), make(1)])
+        actions = np.random.default_rng(3).uniform(-1, 1, (3, 2, *venv.action_space.shape)).astype(np.float32)
+        try:
+            venv.seed(7)
+            got = [venv.reset()]
+            for action in actions:
+                obs, reward, done, infos = venv.step(action)
+                got.append((obs, reward, done, [i.get("terminal_observation") for i in infos]))
+            stepped.append(got)
+        finally:
+            venv.close()
+    threads, dummy = stepped
+    assert any(d.any() for _, _, d, _ in threads[1:])  # budget 2: an episode ends and its env is reset
+    assert np.array_equal(threads[0], dummy[0])
+    for (o1, r1, d1, t1), (o2, r2, d2, t2) in zip(threads[1:], dummy[1:]):
+        assert np.array_equal(o1, o2) and np.array_equal(r1, r2) and np.array_equal(d1, d2)
+        assert all((a is None and b is None) or np.array_equal(a, b) for a, b in zip(t1, t2))
+
+
 def test_a_daemonic_process_refuses_worker_processes_in_one_line(monkeypatch):
     import multiprocessing
 
