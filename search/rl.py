@@ -154,8 +154,9 @@ class ProceduralEnv(DrawnProblems):
 
 def training_env(config: ProblemConfig, sim_config=None, seed: int = 0, executor="inline") -> gym.Env:
     """The env a policy trains on: :class:`ProceduralEnv` for the paper's problems, ``Surrealist-CaseStudy-v1`` (made
-    through Gymnasium's registry, whose noise seed is ``seed``) for a case study. ``functools.partial(training_env, ...)``
-    is what a vector env makes each of its envs with (picklable by reference, so SB3's ``SubprocVecEnv`` takes it too)."""
+    through Gymnasium's registry, whose noise seed is ``seed``) for a case study.
+    ``functools.partial(training_env, ...)`` is what a vector env makes each of its envs with (picklable by reference,
+    so SB3's ``SubprocVecEnv`` takes it too)."""
     if config.problem is Problem.MISSIONS:
         from surrealist_gym.competition.missions import MissionCaseStudies
 
