@@ -1,10 +1,13 @@
-"""Evaluation throughput on a 2-worker Dask LocalCluster against the local process pool with the same workers.
+"""Evaluation throughput on a Dask LocalCluster and on threads of one process, against the local process pool with
+the same number of workers.
 
     python benchmarks/bench_dask.py [--workers 2] [--tests 6] [--runs 4]
 
-Both executors simulate the same tests (the case0 seed-1 box moved to ``--tests`` places, ``--runs`` runs each,
+Every executor simulates the same tests (the case0 seed-1 box moved to ``--tests`` places, ``--runs`` runs each,
 split over the workers as an evaluation does) after a warm-up evaluation (worker start-up, imports and numba
-compilation excluded). Prints simulations per second of each and the ratio Dask / pool, measured in one run.
+compilation excluded): the local process pool; a Dask LocalCluster of ``--workers`` processes with one thread each,
+and of one process with ``--workers`` threads; ``--workers`` threads of this process. Prints simulations per second of
+each and its ratio to the pool, measured in one run.
 """
 from __future__ import annotations
 
@@ -43,22 +46,29 @@ def main() -> None:
     warnings.simplefilter("ignore")
     import distributed
 
-    from surrealist_gym.executors import DaskExecutor, LocalPoolExecutor
+    from surrealist_gym.executors import DaskExecutor, LocalPoolExecutor, ThreadExecutor
 
     tests = _tests(args.tests)
+    rates = {}
     pool = LocalPoolExecutor(workers=args.workers)
     try:
-        pool_rate = throughput(pool, tests, args.runs)
+        rates["local process pool"] = throughput(pool, tests, args.runs)
     finally:
         pool.close()
-    with distributed.LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-        dask_rate = throughput(DaskExecutor(client), tests, args.runs)
+    for processes, threads in ((args.workers, 1), (1, args.workers)):
+        with distributed.LocalCluster(n_workers=processes, threads_per_worker=threads, processes=True,
+                                      dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+            rates[f"Dask LocalCluster, {processes} x {threads} thread(s)"] = throughput(DaskExecutor(client), tests,
+                                                                                          args.runs)
+    threads = ThreadExecutor(args.workers)
+    try:
+        rates[f"{args.workers} threads of this process"] = throughput(threads, tests, args.runs)
+    finally:
+        threads.close()
     print(f"{args.tests} tests x {args.runs} runs on {args.workers} workers")
-    print(f"local process pool: {pool_rate:.2f} simulations/s")
-    print(f"Dask LocalCluster:  {dask_rate:.2f} simulations/s")
-    print(f"ratio Dask / pool:  {dask_rate / pool_rate:.2f}")
-
+    base = rates["local process pool"]
+    for name, rate in rates.items():
+        print(f"{name + ':':42s} {rate:6.2f} simulations/s, {rate / base:.2f}x the pool")
 
 if __name__ == "__main__":
     main()

@@ -57,8 +57,8 @@ class EnvSetup:
         executor: where the runs fly (:mod:`surrealist_gym.executors`); None: a pool of ``workers`` local
             processes (all cores, at most 8, when ``workers`` is None too), except in a daemonic process (a worker of
             Gymnasium's async vector env or SB3's ``SubprocVecEnv``), which may not start processes of its own: there
-            the runs fly in that process (``"inline"``).
-        workers: local processes when no executor is given.
+            the runs fly in that process (``"inline"``). ``"threads"``: ``workers`` threads of this process.
+        workers: local processes when no executor is given; threads with ``executor="threads"``.
         store: an :class:`~surrealist_gym.store.EvaluationStore` or its SQLite path, None for none.
     """
 
@@ -89,6 +89,9 @@ def _executor_for(setup: EnvSetup):
     if executor is None and setup.workers is not None:
         from ..executors import LocalPoolExecutor
         return LocalPoolExecutor(setup.workers)
+    if executor == "threads":
+        from ..executors import ThreadExecutor
+        return ThreadExecutor(setup.workers)
     return executor
 
 

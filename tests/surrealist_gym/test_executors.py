@@ -166,3 +166,17 @@ def test_a_dask_worker_flies_on_its_threads_as_inline(test_case, sitl_config):
             assert executor.workers == 2  # one worker, two threads: the runs split in two chunks
             remote = executor.run(test_case, [0, 1], 5, sitl_config)
     assert _summary(remote) == _summary(InlineExecutor().run(test_case, [0, 1], 5, sitl_config))
+
+
+def test_an_env_given_threads_flies_its_runs_on_that_many_threads(test_case):
+    from surrealist_gym.envs.generate import GenerateEnv
+    from surrealist_gym.executors import ThreadExecutor
+
+    env = GenerateEnv(seed_test=test_case, runs=2, budget=2, executor="threads", workers=2)
+    try:
+        executor = env.unwrapped.evaluator.executor
+        assert isinstance(executor, ThreadExecutor) and executor.workers == 2
+        _, info = env.reset(seed=0)
+        assert info["fitness"] is not None
+    finally:
+        env.close()
