@@ -30,15 +30,22 @@ def test_pool_equals_inline(test_case):
     assert _summary(inline) == _summary(pooled) and len(inline) == 3
 
 
-def test_dask_local_cluster_equals_inline(test_case):
+@pytest.mark.parametrize("processes, threads, uav", [(2, 1, None), (1, 2, "px4-v1.12-sitl-iris")])
+def test_dask_local_cluster_equals_inline(test_case, processes, threads, uav):
+    """Two worker processes, or one with two threads (``dask worker --nthreads 2``: the executor splits the runs over
+    every worker thread, which fly at once, PX4-Avoidance's tree too): the runs are the inline ones."""
+    from surrealist_gym.sim.profiles import load_profile
+
     distributed = pytest.importorskip("distributed")
+    config = SimConfig() if uav is None else load_profile(uav).sim_config()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+        with distributed.LocalCluster(n_workers=processes, threads_per_worker=threads, processes=True,
                                       dashboard_address=None) as cluster, distributed.Client(cluster) as client:
             executor = make_executor(client)
-            remote = executor.run(test_case, [0, 1], 5, SimConfig())
-    assert _summary(remote) == _summary(InlineExecutor().run(test_case, [0, 1], 5, SimConfig()))
+            assert executor.workers == processes * threads
+            remote = executor.run(test_case, [0, 1], 5, config)
+    assert _summary(remote) == _summary(InlineExecutor().run(test_case, [0, 1], 5, config))
 
 
 def test_a_failing_simulation_is_retried_then_recorded(test_case):
@@ -152,20 +159,6 @@ def test_threads_equal_inline_run_for_run(test_case, sitl_config):
         inline = InlineExecutor().run(test_case, [0, 1, 2, 3], 5, config)
         assert _summary(threaded) == _summary(inline)
         assert [r.duration for r in threaded] == [r.duration for r in inline]
-
-
-def test_a_dask_worker_flies_on_its_threads_as_inline(test_case, sitl_config):
-    """One Dask worker with two threads (``dask worker --nthreads 2``) flies two chunks at once; the runs are the
-    inline ones."""
-    distributed = pytest.importorskip("distributed")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=True,
-                                      dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-            executor = make_executor(client)
-            assert executor.workers == 2  # one worker, two threads: the runs split in two chunks
-            remote = executor.run(test_case, [0, 1], 5, sitl_config)
-    assert _summary(remote) == _summary(InlineExecutor().run(test_case, [0, 1], 5, sitl_config))
 
 
 def test_an_env_given_threads_flies_its_runs_on_that_many_threads(test_case):
