@@ -142,11 +142,13 @@ GENERATED_TESTS = "generated_tests"  # where the competition's tools write their
 def tool_folders(base) -> list:
     """The folders a competition test in ``base`` may name ``case_studies/...`` from: the folder above ``base`` (a
     tool's ``generated_tests/``), and the tool's folder when ``base`` lies deeper in its ``generated_tests/`` (tools
-    write ``generated_tests/<time stamp>/``, and Aerialist resolves from the tool's folder, its working folder)."""
+    write ``generated_tests/<time stamp>/``, AmbieGen ``generated_tests-01/<time stamp>/``, and Aerialist resolves
+    from the tool's folder, its working folder)."""
     from pathlib import Path
 
     base = Path(base)
-    return [base.parent] + [p.parent for p in base.parents if p.name == GENERATED_TESTS and p.parent != base.parent]
+    return [base.parent] + [p.parent for p in base.parents
+                            if p.name.startswith(GENERATED_TESTS) and p.parent != base.parent]
 
 
 def _a_tools_case_study(path, base) -> bool:

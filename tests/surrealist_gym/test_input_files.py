@@ -149,6 +149,9 @@ def test_the_competition_layout_from_the_tools_folder_only(tmp_path, monkeypatch
     # tools write into generated_tests/<time stamp>/ (CAMBA, the reference generator): still the tool's folder
     test = sg.load_test(_yaml(tmp_path / "tool" / "generated_tests" / "28-11-19-56-47", body))
     assert test.mission_file == str(tmp_path / "tool" / "case_studies" / "mission1.plan")
+    # AmbieGen's folder is generated_tests-01/<time stamp>/
+    test = sg.load_test(_yaml(tmp_path / "tool" / "generated_tests-01" / "29-11-10-28-27", body))
+    assert test.mission_file == str(tmp_path / "tool" / "case_studies" / "mission1.plan")
     _refused(_yaml(tmp_path / "tool" / "a" / "b", body), "mission_file", "not found")
 
 
