@@ -217,7 +217,7 @@ def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     """One search on a held-out noise seed, cached in ``out/searches/AGENT-seedN.json`` (its store beside it)."""
     from search.registry import POLICY_PREFIXES, make_agent
     from search.rl import TrainingRecord
-    from surrealist_gym.competition.case_study_env import CaseStudyEnv
+    from surrealist_gym.competition.case_study_env import flyable_case_study
     from surrealist_gym.competition.suite_env import RecordSuite
 
     stem = out / "searches" / f"{agent}-seed{seed}"
@@ -225,8 +225,10 @@ def one_search(agent: str, seed: int, policy: Path, args, out: Path) -> dict:
     if cached.is_file():
         return json.loads(cached.read_text())
     stem.parent.mkdir(parents=True, exist_ok=True)
-    env = RecordSuite(CaseStudyEnv(case_study(args.mission, seed), obstacles=args.obstacles, budget=args.budget, runs=1,
-                                   random_seed=seed, executor="inline", store=stem.with_suffix(".sqlite")))
+    # the env the policy trained on: the registered one, whose actions are made flyable (FlyableActions)
+    env = RecordSuite(flyable_case_study(case_study=case_study(args.mission, seed), obstacles=args.obstacles,
+                                         budget=args.budget, runs=1, random_seed=seed, executor="inline",
+                                         store=stem.with_suffix(".sqlite")))
     counts = TrainingRecord()  # counts a search's steps as it counts a training's
     start = time.perf_counter()
     name = f"{agent}:{policy}" if agent in POLICY_PREFIXES else agent
