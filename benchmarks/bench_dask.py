@@ -46,29 +46,24 @@ def main() -> None:
     warnings.simplefilter("ignore")
     import distributed
 
-    from surrealist_gym.executors import DaskExecutor, LocalPoolExecutor, ThreadExecutor
+    from surrealist_gym.executors import DaskExecutor, executor_for
 
     tests = _tests(args.tests)
     rates = {}
-    pool = LocalPoolExecutor(workers=args.workers)
-    try:
+    with executor_for("process", args.workers) as pool:
         rates["local process pool"] = throughput(pool, tests, args.runs)
-    finally:
-        pool.close()
     for processes, threads in ((args.workers, 1), (1, args.workers)):
         with distributed.LocalCluster(n_workers=processes, threads_per_worker=threads, processes=True,
                                       dashboard_address=None) as cluster, distributed.Client(cluster) as client:
             rates[f"Dask LocalCluster, {processes} x {threads} thread(s)"] = throughput(DaskExecutor(client), tests,
                                                                                           args.runs)
-    threads = ThreadExecutor(args.workers)
-    try:
-        rates[f"{args.workers} threads of this process"] = throughput(threads, tests, args.runs)
-    finally:
-        threads.close()
+    with executor_for("threads", args.workers) as pool:
+        rates[f"{args.workers} threads of this process"] = throughput(pool, tests, args.runs)
     print(f"{args.tests} tests x {args.runs} runs on {args.workers} workers")
     base = rates["local process pool"]
     for name, rate in rates.items():
         print(f"{name + ':':42s} {rate:6.2f} simulations/s, {rate / base:.2f}x the pool")
+
 
 if __name__ == "__main__":
     main()

@@ -22,8 +22,7 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
+from concurrent.futures import BrokenExecutor, ProcessPoolExecutor, ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
@@ -161,37 +160,6 @@ class InlineExecutor(_Executor):
         return _Done(task, test, list(indices), seed, config)
 
 
-class ThreadExecutor(_Executor):
-    """Simulate in this process on ``workers`` threads (default :func:`default_workers`), the runs of a test split
-    evenly over them. The compiled loop releases the GIL while it flies (``fly_span`` is ``nogil``), so the threads
-    fly in parallel, as a local pool's processes do, without starting processes or pickling tests; results are those
-    of :class:`InlineExecutor`, run for run. PyBullet's physics (``$SURREALIST_PHYSICS=pybullet``) holds the GIL: its
-    runs take turns. A thread cannot be stopped: ``abandon`` cancels what has not started and lets the chunks in
-    flight end."""
-
-    def __init__(self, workers: int | None = None):
-        self.workers = workers or default_workers()
-        self._pool: ThreadPoolExecutor | None = None
-
-    def submit(self, task, test, indices, seed, config):
-        """Submit the runs to this process's threads; a future."""
-        if self._pool is None:
-            self._pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="fly")
-        return self._pool.submit(task, test, list(indices), seed, config)
-
-    def abandon(self) -> None:
-        """Cancel the chunks not started; those in flight end on their own, unwaited."""
-        if self._pool is not None:
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = None
-
-    def close(self) -> None:
-        """Wait for the chunks in flight, cancelling what has not started."""
-        if self._pool is not None:
-            self._pool.shutdown(cancel_futures=True)
-            self._pool = None
-
-
 #: Local worker processes when none are asked for: all cores, but no more than this (each worker holds a simulator and
 #: its compiled loop; ``--workers`` asks for more).
 DEFAULT_MAX_WORKERS = 8
@@ -208,16 +176,19 @@ class LocalPoolExecutor(_Executor):
 
     def __init__(self, workers: int | None = None):
         self.workers = workers or default_workers()
-        self._pool: ProcessPoolExecutor | None = None
+        self._pool = None
+
+    def _new_pool(self):
+        return ProcessPoolExecutor(max_workers=self.workers, initializer=_die_with_parent)
 
     def submit(self, task, test, indices, seed, config):
         """Submit the runs to the pool (a new pool, once, if the pool is broken); a future."""
         for attempt in (1, 2):
             if self._pool is None:
-                self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=_die_with_parent)
+                self._pool = self._new_pool()
             try:
                 return self._pool.submit(task, test, list(indices), seed, config)
-            except BrokenProcessPool:
+            except BrokenExecutor:
                 if attempt == 2:
                     raise
                 self._pool.shutdown(wait=False, cancel_futures=True)
@@ -237,6 +208,17 @@ class LocalPoolExecutor(_Executor):
         if self._pool is not None:
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
+
+
+class ThreadExecutor(LocalPoolExecutor):
+    """The pool as threads of this process (default :func:`default_workers`). The compiled loop releases the GIL
+    while it flies (``fly_span`` is ``nogil``), so the threads fly in parallel, as the processes do, without starting
+    processes or pickling tests; results are those of :class:`InlineExecutor`, run for run. PyBullet's physics
+    (``$SURREALIST_PHYSICS=pybullet``) holds the GIL: its runs take turns. A thread cannot be stopped: ``abandon``
+    cancels what has not started and leaves the chunks in flight to end unwaited."""
+
+    def _new_pool(self):
+        return ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="fly")
 
 
 LOST_SCHEDULER_S = 25.0  # a chunk is given up on after its client has been cut off from the scheduler this long

@@ -57,8 +57,8 @@ class EnvSetup:
         executor: where the runs fly (:mod:`surrealist_gym.executors`); None: a pool of ``workers`` local
             processes (all cores, at most 8, when ``workers`` is None too), except in a daemonic process (a worker of
             Gymnasium's async vector env or SB3's ``SubprocVecEnv``), which may not start processes of its own: there
-            the runs fly in that process (``"inline"``). ``"threads"``: ``workers`` threads of this process.
-        workers: local processes when no executor is given; threads with ``executor="threads"``.
+            the runs fly in that process (``"inline"``). ``"threads"``: threads of this process.
+        workers: how many local processes (no executor given) or threads (``"threads"``).
         store: an :class:`~surrealist_gym.store.EvaluationStore` or its SQLite path, None for none.
     """
 
@@ -86,12 +86,9 @@ def _executor_for(setup: EnvSetup):
             raise ValueError(f"workers={setup.workers}, executor={executor!r}: a daemonic process (a vector env's "
                              f"worker) cannot start worker processes; leave both unset to fly its runs inline")
         return "inline"
-    if executor is None and setup.workers is not None:
-        from ..executors import LocalPoolExecutor
-        return LocalPoolExecutor(setup.workers)
-    if executor == "threads":
-        from ..executors import ThreadExecutor
-        return ThreadExecutor(setup.workers)
+    if executor in (None, "threads") and setup.workers is not None:
+        from ..executors import make_executor
+        return make_executor(executor, setup.workers)
     return executor
 
 
