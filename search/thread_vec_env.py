@@ -47,6 +47,6 @@ class ThreadVecEnv(DummyVecEnv):
         return self._obs_from_buf(), np.copy(self.buf_rews), np.copy(self.buf_dones), deepcopy(self.buf_infos)
 
     def close(self) -> None:
-        """Close the envs, then the threads."""
+        """Let the steps in flight end (Ctrl-C stops the waiting, not the threads), then close the envs."""
+        self._pool.shutdown(cancel_futures=True)
         super().close()
-        self._pool.shutdown()
