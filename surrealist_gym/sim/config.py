@@ -89,7 +89,7 @@ def default_physics() -> Physics:
 
 
 TREE_REUSE_ENV = "SURREALIST_TREE_REUSE"
-TREE_REUSE_M = 0.2  #: SimConfig.tree_reuse_m's default [m] (docs/compiled-loop.md, section 3)
+TREE_REUSE_M = 0.0  #: SimConfig.tree_reuse_m's default [m]: a tree every cycle (docs/compiled-loop.md, section 3)
 
 
 def default_tree_reuse() -> float:
@@ -166,9 +166,10 @@ class SimConfig:
         tree_reuse_m / tree_reuse_cycles: the compiled loop's PX4-Avoidance planner keeps its last look-ahead tree
             for up to tree_reuse_cycles cycles in a row while the vehicle stays within tree_reuse_m [m] of where
             it was built, toward the same goal: a hovering vehicle builds a tree about once a second instead of
-            ten times. Default 0.2 m (``$SURREALIST_TREE_REUSE`` sets another) and 9 cycles, chosen on rilast's
-            fidelity figures and speed (docs/compiled-loop.md, section 3); tree_reuse_m 0: a tree every cycle, as
-            PX4-Avoidance and the PyBullet loop do.
+            ten times. Default 0 (``$SURREALIST_TREE_REUSE`` sets another): a tree every cycle, as PX4-Avoidance
+            and the PyBullet loop do. 0.2 m with 9 cycles is five times faster on stuck hovers, but it moves the
+            replication of PX4-Avoidance flights beyond its seed-to-seed spread, so it is a speed setting, off
+            unless asked for (docs/compiled-loop.md, section 3).
         noise: noise configuration.
         common_noise: common random numbers: run ``i`` of every test draws the same noise (from the base seed and
             ``i`` alone), so two tests are compared under the same wind and sensor errors and their fitness

@@ -95,13 +95,20 @@ def test_the_tree_reuse_is_named_in_a_store_identity_where_it_acts(monkeypatch, 
             store.claim(search_identity(object(), 5, 0, on))
         monkeypatch.setenv(TREE_REUSE_ENV, "0")  # what the message says resumes it
         store.claim(search_identity(object(), 5, 0, dataclasses.replace(sitl, tree_reuse_m=SimConfig().tree_reuse_m)))
+    with EvaluationStore(tmp_path / "reused.sqlite") as store:  # and a store flown with it, by default
+        store.claim(search_identity(object(), 5, 0, on))
+        monkeypatch.delenv(TREE_REUSE_ENV)
+        default = dataclasses.replace(sitl, tree_reuse_m=SimConfig().tree_reuse_m)
+        resumed_with = r"\(0.2 m, 9 cycles there, none here\); set \$SURREALIST_TREE_REUSE=0.2"
+        with pytest.raises(SurrealistError, match=resumed_with):
+            store.claim(search_identity(object(), 5, 0, default))
     monkeypatch.setenv(TREE_REUSE_ENV, "0.5")
     assert SimConfig().tree_reuse_m == 0.5
     monkeypatch.setenv(TREE_REUSE_ENV, "near")
     with pytest.raises(SurrealistError, match=r"\$SURREALIST_TREE_REUSE: 'near' is not a distance"):
         SimConfig()
     monkeypatch.delenv(TREE_REUSE_ENV)
-    assert SimConfig().tree_reuse_m == 0.2
+    assert SimConfig().tree_reuse_m == 0.0 and not decide_uav(uav="px4-v1.12-sitl-iris").config.reuses_trees
     for bad in ({"tree_reuse_m": -0.1}, {"tree_reuse_m": math.inf}, {"tree_reuse_cycles": 1.5},
                 {"tree_reuse_cycles": -1}):
         with pytest.raises(ValueError, match="SimConfig.tree_reuse"):
