@@ -40,7 +40,7 @@ from typing import Callable, Sequence
 from ..errors import SurrealistError
 from ..sim.uav import DEFAULT_UAV
 from .reports.tables import rounded
-from .scoring import Edition, SuiteScore, edition, standings
+from .scoring import EDITIONS, Edition, SuiteScore, edition, standings
 
 __all__ = ["BOARD_FILE", "Board", "BoardRow", "Cell", "Tool", "cell_folder", "name_tools", "plan", "run_cell",
            "rank", "score_cell", "set_aside", "start"]
@@ -138,17 +138,20 @@ class Board:
     def settings(self) -> dict:
         """What makes a cell's figures (``leaderboard.json``): a board into the same folder must have the same; its
         tools, case studies and repetitions may grow."""
+        chosen = {key: getattr(self.edition, key) for key in ("tests", "similar_m")
+                  if getattr(self.edition, key) != getattr(EDITIONS[self.edition.name], key)}  # set by the user
         return {"command": "leaderboard", "edition": self.edition.name, "budget": self.budget, "runs": self.runs,
-                "random_seed": self.seed, "uav": self.uav,
+                "random_seed": self.seed, "uav": self.uav, **chosen,
                 "tools": {t.name: str(t.folder) for t in self.tools}}
 
 
 def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: int | None = None,
          repetitions: int = 3, runs: int | None = None, seed: int = 0, uav: str = DEFAULT_UAV,
-         out) -> Board:
+         tests: int | None = None, similar_m: float | None = None, out) -> Board:
     """Check every input before anything runs (one-line SurrealistError): the edition, the numbers, each tool on each
     case study (:func:`~surrealist_gym.competition.compete.prepare`), and the folder: new, or holding this very board
-    (then the run resumes)."""
+    (then the run resumes). ``tests`` and ``similar_m`` set what the edition leaves open (how many tests it
+    evaluates; how close two averaged flights are alike [m]); None: the edition's."""
     from ..aerialist import load_test
     from .compete import prepare
     from .rules import case_study_path
@@ -157,10 +160,18 @@ def plan(tools: Sequence, case_studies: Sequence[str], edition_name, *, budget: 
     ed = edition(edition_name, "--edition")
     budget = ed.budget if budget is None else budget
     runs = ed.runs if runs is None else runs
+    tests = ed.tests if tests is None else tests
     for flag, value, least in (("--budget", budget, 1), ("--repetitions", repetitions, 1), ("--runs", runs, 1),
-                               ("--random-seed", seed, 0)):
+                               ("--random-seed", seed, 0), ("--tests", tests, 1)):
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise SurrealistError(f"{flag}: expected a whole number >= {least}, got {value!r}")
+    if similar_m is not None:
+        if ed.similarity != "flights":
+            raise SurrealistError(f"--similar-m: the {ed.name} edition judged tests alike by the ground their boxes "
+                                  f"cover, not by their flights")
+        if isinstance(similar_m, bool) or not isinstance(similar_m, (int, float)) or not 0 <= similar_m < math.inf:
+            raise SurrealistError(f"--similar-m: expected metres >= 0, got {similar_m!r}")
+    ed = replace(ed, tests=tests, similar_m=ed.similar_m if similar_m is None else float(similar_m))
     if not tools:
         raise SurrealistError("TOOL_DIR: give at least one competition tool's folder")
     out = Path(out).absolute()

@@ -1,8 +1,11 @@
-"""The UAV Testing Competition (SBFT 2024, ICST/SBFT 2025): its case studies, its rules on obstacles and its points.
+"""The UAV Testing Competition (SBFT 2024, ICST/SBFT 2025, 2026): its case studies, its rules on obstacles and its
+points.
 
 Sources: the competition's README and case studies (skhatiri/UAV-Testing-Competition, ``snippets/case_studies``) as
-summarised in ``shared/PX4-AVOIDANCE.md`` section 1: at most 3 boxes standing on the ground (z = 0), x in [-40, 30],
-y in [10, 40], l and w in [2, 20], h in [10, 25] (taller than the 10 m flight), r in [0, 90] degrees, no overlap; a
+summarised in ``shared/PX4-AVOIDANCE.md`` section 1 and ``shared/COMPETITION.md`` section 2: from 2025, at most 3
+boxes standing on the ground (z = 0), x in [-40, 30], y in [10, 40], l and w in [2, 20], h in [10, 25] (taller than
+the 10 m flight), r in [0, 90] degrees, no overlap (:data:`RULES`); 2024 bounded the count (4), the ground, overlaps
+and the area, and no size or turn (:data:`UNBOUNDED_SIZES`, the count set by its edition). A
 run is a soft failure below 1.5 m (the 2-D competition distance, :func:`~surrealist_gym.geometry.competition_distance`)
 and scores 5 points below 0.25 m, 2 below 1 m, 1 below 1.5 m.
 
@@ -12,6 +15,7 @@ Example:
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -44,6 +48,8 @@ class Rules:
 
 
 RULES = Rules()
+#: 2024's rules: the area, the ground and no overlap, any size (above 0) and turn.
+UNBOUNDED_SIZES = Rules(l=(0.0, math.inf), w=(0.0, math.inf), h=(0.0, math.inf), r=(-math.inf, math.inf))
 LAYOUT_FIELDS = ("x", "y", "l", "w", "h", "r")  # what a case-study test chooses of each box
 
 

@@ -1,22 +1,28 @@
-"""The UAV Testing Competition's scoring of a test suite, as its 2024 (SBFT) and 2025 (ICST, SBFT) editions did.
+"""The UAV Testing Competition's scoring of a test suite, as its 2024 (SBFT), 2025 (ICST, SBFT) and 2026 editions
+did.
 
 Sources: the editions' reports (skhatiri/UAV-Testing-Competition, ``reports/``). The rules on obstacles and the points
 of a run are :mod:`surrealist_gym.competition.rules`'s; this module draws the tests an edition evaluates and scores
 them.
 
 - **Drawn tests** (:func:`draw`): 2024 drew 20 tests of a suite at random (here seeded) and ran each 5 times; 2025
-  took the first 20 in the order the tool wrote them (:func:`writing_order`) and ran each 3 times.
+  took the first 20 in the order the tool wrote them (:func:`writing_order`) and ran each 3 times; 2026 checks every
+  test for compliance first and runs the first valid ones in the tool's rank order (the order it wrote them) 5 times
+  each. How many 2026 evaluates is not published: 20 here, as 2024 and 2025 did (``leaderboard --tests``).
 - **Test score** (:func:`test_score`): ``avg_point x 10 / (n_obstacles^2 x avg_time)``, avg_time the mean flight
   time in minutes (the simulated time from arming to the end of the run, the span of the run's ULog).
 - **2024**: a suite of more than 20 tests earns half the mean test score for each test beyond the 20
   (:func:`rest_score`); tests whose averaged flights are almost identical are penalised (:func:`similar_flights`:
   the mean x-y distance along DTW's path between the DBA averages of their runs below :data:`SIMILAR_FLIGHT_M`),
   ``sim_pen = 1 - n_similar / n_evaluated``; ``suite_score = (sum test_score + rest_score) x sim_pen``.
+- **2026**: 2024's test scores and similarity penalty on the 5 runs' averaged flights, without a rest score:
+  ``suite_score = sum test_score x sim_pen``; tools ranked by it, once with the case study's wind and once without.
 - **2025**: tests whose boxes cover the same ground (:func:`area_similarity` 1) are duplicates and count once
   (:func:`duplicates`); ``failure = sum test_score``; ``diversity = 1 - mean pairwise area similarity``
   (:func:`area_diversity`).
-- **Ranks** per case study (:func:`standings`): R_F by the failure score (2024: the suite score), R_D by diversity
-  (2025), ``R = 0.75 R_F + 0.25 R_D``; 1 is the best, equal values share the best of their ranks (1, 2, 2, 4).
+- **Ranks** per case study (:func:`standings`): R_F by the failure score (2024 and 2026: the suite score), R_D by
+  diversity (2025), ``R = 0.75 R_F + 0.25 R_D``; 1 is the best, equal values share the best of their ranks (1, 2, 2,
+  4).
 
 Example:
     >>> round(test_score([5, 2, 0], [120.0, 120.0, 120.0], obstacles=2), 4)   # avg 7/3 points, 2 boxes, 2 min
@@ -43,12 +49,24 @@ __all__ = ["EDITIONS", "SIMILAR_FLIGHT_M", "Draw", "Edition", "ScoredTest", "Sta
            "writing_order"]
 
 
+#: [m] 2024: two tests are similar when the DBA averages of their runs are closer than this on average along DTW's
+#: path (x-y). Measured on CAMBA's 21 tests x 10 runs: two 5-run averages of the same test are 0.07-0.35 m apart
+#: for 19 of 21 tests (0.70 and 0.82 m for the other two), averages of two different tests of one mission 0.45 m and
+#: more (156 pairs): below 0.4 m a pair is as alike as repeats of one test are (``benchmarks/bench_similarity.py``).
+#: 2026 names the same measure ("almost zero") and no number either; this one is its default too.
+SIMILAR_FLIGHT_M = 0.4
+
+
 @dataclass(frozen=True, slots=True)
 class Edition:
-    """An edition's rules: the ``budget`` of simulations a tool had per case study, the most boxes a test may hold,
-    the ``tests`` it evaluated of a suite (``draw``: ``random`` or ``first``), ``runs`` each, and whether each suite
-    was evaluated twice, with the case study's wind and without (``wind``: 2026); whether the tools were ranked on
-    failures and diversity (``ranks_diversity``: 2025 on), or on the suite score alone (2024)."""
+    """An edition's rules: the ``budget`` of simulations a tool had per case study, the most boxes a test may hold
+    and whether their sizes were bounded (``size_bounds``: 2025 on), the ``tests`` it evaluated of a suite (``draw``:
+    ``random`` or ``first`` in writing order; ``valid_only``: the first valid ones, 2026), ``runs`` each, and whether
+    each suite was evaluated twice, with the case study's wind and without (``wind``: 2026). How alike tests were
+    judged (``similarity``: ``flights``, the DTW of their averaged runs under ``similar_m`` metres, penalised by
+    ``sim_pen``, 2024 and 2026; ``area``, the ground their boxes cover, duplicates counted once, 2025); whether tests
+    beyond the evaluated earned a rest score (``rest``: 2024); whether the tools were ranked on failures and
+    diversity (``ranks_diversity``: 2025), or on the suite score alone (2024, 2026)."""
 
     name: str
     tests: int
@@ -57,28 +75,31 @@ class Edition:
     budget: int = 100
     max_obstacles: int = 3
     wind: bool = False
-    ranks_diversity: bool = True  # R = 0.75 R_F + 0.25 R_D (2025 on); 2024 ranked the suite score alone
+    ranks_diversity: bool = True
+    similarity: str = "area"
+    rest: bool = False
+    size_bounds: bool = True
+    valid_only: bool = False
+    similar_m: float = SIMILAR_FLIGHT_M
 
     @property
     def rules(self):
-        """The competition's rules on obstacles with this edition's most boxes."""
-        from .rules import RULES
+        """The competition's rules on obstacles as this edition published them: its most boxes, and 2024 without
+        bounds on a box's size or turn (its README bounded the count, the ground, overlaps and the area only)."""
+        from .rules import RULES, UNBOUNDED_SIZES
 
-        return replace(RULES, max_obstacles=self.max_obstacles)
+        return replace(RULES if self.size_bounds else UNBOUNDED_SIZES, max_obstacles=self.max_obstacles)
 
 
-#: 2024 (SBFT): budget 200, up to 4 boxes, 20 tests drawn at random, 5 runs each; 2025 (ICST, SBFT): budget 100, up to
-#: 3 boxes, the first 20 tests, 3 runs each; 2026: the 2025 rules, each suite evaluated with and without wind
-#: (``shared/COMPETITION.md`` sections 3, 5 and 6).
-EDITIONS = {"2024": Edition("2024", 20, 5, "random", budget=200, max_obstacles=4, ranks_diversity=False),
+#: 2024 (SBFT): budget 200, up to 4 boxes of any size, 20 tests drawn at random, 5 runs each, the rest score and the
+#: similarity penalty; 2025 (ICST, SBFT): budget 100, up to 3 boxes within the size bounds, the first 20 tests, 3 runs
+#: each, duplicates and diversity; 2026: 2025's rules on boxes, the first 20 valid tests in the tool's rank order, 5
+#: runs each, 2024's similarity penalty, with and without wind (``shared/COMPETITION.md`` sections 2, 3, 5 and 6).
+EDITIONS = {"2024": Edition("2024", 20, 5, "random", budget=200, max_obstacles=4, ranks_diversity=False,
+                            similarity="flights", rest=True, size_bounds=False),
             "2025": Edition("2025", 20, 3, "first"),
-            "2026": Edition("2026", 20, 3, "first", wind=True)}
-
-#: [m] 2024: two tests are similar when the DBA averages of their runs are closer than this on average along DTW's
-#: path (x-y). Measured on CAMBA's 21 tests x 10 runs: two 5-run averages of the same test are 0.07-0.35 m apart
-#: for 19 of 21 tests (0.70 and 0.82 m for the other two), averages of two different tests of one mission 0.45 m and
-#: more (156 pairs): below 0.4 m a pair is as alike as repeats of one test are (``benchmarks/bench_similarity.py``).
-SIMILAR_FLIGHT_M = 0.4
+            "2026": Edition("2026", 20, 5, "first", wind=True, ranks_diversity=False, similarity="flights",
+                            valid_only=True)}
 _SAME_AREA = 1.0 - 1e-9  # area similarity counted as 1 (floating error of the footprints' union and intersection)
 
 
@@ -105,10 +126,14 @@ def writing_order(files: Sequence) -> list[Path]:
     return sorted(files, key=lambda f: (f.stat().st_mtime_ns, f.name))
 
 
-def draw(files: Sequence, ed: Edition, seed: int = 0) -> tuple[Path, ...]:
+def draw(files: Sequence, ed: Edition, seed: int = 0, valid: Sequence | None = None) -> tuple[Path, ...]:
     """The tests the edition evaluates, in writing order: ``random``: ``ed.tests`` of them drawn without replacement
-    by ``numpy.random.default_rng(seed)``; ``first``: the first ``ed.tests``. A smaller suite is evaluated whole."""
+    by ``numpy.random.default_rng(seed)``; ``first``: the first ``ed.tests``. A smaller suite is evaluated whole.
+    ``valid``: the files that keep the edition's rules; with ``ed.valid_only`` the draw is made among them alone."""
     ordered = writing_order(files)
+    if ed.valid_only and valid is not None:
+        kept = {Path(os.fspath(f)) for f in valid}
+        ordered = [f for f in ordered if f in kept]
     if len(ordered) <= ed.tests:
         return tuple(ordered)
     if ed.draw == "first":
@@ -151,6 +176,8 @@ def draw_folder(folder, ed: Edition, seed: int = 0) -> Draw:
     if not path.is_dir():
         raise SurrealistError(f"{os.fspath(folder)}: --competition scores folders (a tool's output), and this is "
                               + ("a file" if path.exists() else "no such folder"))
+    from .tool_output import rule_broken
+
     tests = load_tests([path], any_layout=True)
     studies: dict[str, list[str]] = {}
     for file, test in tests:
@@ -159,7 +186,8 @@ def draw_folder(folder, ed: Edition, seed: int = 0) -> Draw:
         named = "; ".join(f"{name}: {len(names)} ({names[0]}, ...)" for name, names in sorted(studies.items()))
         raise SurrealistError(f"{os.fspath(folder)}: tests of {len(studies)} case studies ({named}); a folder holds "
                               f"one case study's tests: put each in a folder of its own")
-    drawn = draw([file for file, _ in tests], ed, seed)
+    valid = [file for file, test in tests if not rule_broken(test, ed.rules)] if ed.valid_only else None
+    drawn = draw([file for file, _ in tests], ed, seed, valid)
     return Draw(str(path.absolute()), next(iter(studies)), len(tests), tuple(str(f.absolute()) for f in drawn))
 
 
@@ -209,8 +237,8 @@ def area_diversity(layouts: Sequence) -> float:
 
 
 def similar_flights(flights: Sequence, threshold_m: float = SIMILAR_FLIGHT_M) -> tuple[int | None, ...]:
-    """2024: for each test's runs (a sequence of (N, 3) trajectories; empty: not flown), the first earlier test whose
-    averaged flight is within ``threshold_m`` (mean x-y distance along DTW's path between the DBA averages,
+    """2024 and 2026: for each test's runs (a sequence of (N, 3) trajectories; empty: not flown), the first earlier
+    test whose averaged flight is within ``threshold_m`` (mean x-y distance along DTW's path between the DBA averages,
     :func:`~surrealist_gym.fitness.average_runs`, :func:`~surrealist_gym.competition.suite.trajectory_distance`), or
     None."""
     from ..fitness import average_runs
@@ -252,9 +280,10 @@ class SuiteScore:
 
     Attributes:
         folder, case_study, edition: what was scored. tests: tests in the folder. drawn: the tests evaluated.
-        failure: 2025: the sum of the test scores, duplicates once; 2024: the sum of the test scores.
-        rest: 2024's rest score (0 in 2025). sim_pen: 2024's similarity penalty (1 in 2025).
-        score: what R_F ranks: 2025 the failure score, 2024 ``(failure + rest) x sim_pen``.
+        failure: 2025: the sum of the test scores, duplicates once; 2024 and 2026: the sum of the test scores.
+        rest: 2024's rest score (0 in 2025 and 2026). sim_pen: 2024 and 2026's similarity penalty (1 in 2025).
+        score: what R_F ranks: 2025 the failure score, 2024 ``(failure + rest) x sim_pen``, 2026
+        ``failure x sim_pen``.
         diversity: ``1 - mean pairwise area similarity`` of the drawn tests, duplicates once (nan below two).
     """
 
@@ -276,8 +305,8 @@ class SuiteScore:
 
     @property
     def failing(self) -> int:
-        """Drawn tests (duplicates once in 2025) with a score above 0: the reports' ``#tests (failing)``."""
-        return sum(t.score > 0 and (not EDITIONS[self.edition].ranks_diversity or t.counted) for t in self.drawn)
+        """Drawn tests (2025: duplicates once) with a score above 0: the reports' ``#tests (failing)``."""
+        return sum(t.score > 0 and (EDITIONS[self.edition].similarity != "area" or t.counted) for t in self.drawn)
 
     @property
     def alike(self) -> int:
@@ -295,12 +324,12 @@ def score_suite(ed: Edition, d: Draw, tests: Sequence[tuple[object, Sequence, st
         scored.append(ScoredTest(file, len(test.obstacles), points, durations,
                                  test_score(points, durations, len(test.obstacles)), invalid))
     layouts = [test.obstacles for test, _, _ in tests]
-    if not ed.ranks_diversity:
+    if ed.similarity == "flights":
         same = similar_flights([[r.trajectory for r in runs if r.flown] if not invalid else []
-                                for _, runs, invalid in tests])
+                                for _, runs, invalid in tests], ed.similar_m)
         scored = [_with_same(t, s) for t, s in zip(scored, same)]
         failure = sum(t.score for t in scored)
-        rest = rest_score(d.tests, [t.score for t in scored], ed.tests)
+        rest = rest_score(d.tests, [t.score for t in scored], ed.tests) if ed.rest else 0.0
         sim_pen = 1.0 - sum(s is not None for s in same) / len(scored) if scored else 1.0
         return SuiteScore(d.folder, d.case_study, ed.name, d.tests, tuple(scored), failure, rest, sim_pen,
                           (failure + rest) * sim_pen, area_diversity(layouts))

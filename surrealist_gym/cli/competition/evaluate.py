@@ -110,9 +110,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--competition", metavar="EDITION", default=None,
                         help="score each folder (a tool's output or a compete folder, one case study) as the 2024, "
                              "2025 or 2026 edition did: its tests drawn, test scores, 2024's rest score and "
-                             "similarity penalty, 2025's duplicates and diversity, and the folders ranked per case "
-                             "study (2026 as 2025, each test with its own wind; surrealist leaderboard scores with and "
-                             "without it)")
+                             "similarity penalty, 2025's duplicates and diversity, 2026's first valid tests in rank "
+                             "order and similarity penalty, and the folders ranked per case study (2026 each test "
+                             "with its own wind; surrealist leaderboard scores with and without it)")
     add_workers_argument(parser)
     add_dask_argument(parser)
     add_random_seed_argument(parser, "base seed: run i of a test draws its noise from the test, N and i (default 0)")

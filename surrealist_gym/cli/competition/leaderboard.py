@@ -1,12 +1,14 @@
 """``surrealist leaderboard TOOL_DIR... --case-study NAME...``: the competition's leaderboard on our simulator.
 
 Every (tool, case study, repetition) cell runs through ``surrealist compete`` (the tool's own ``cli.py``, unedited),
-then each case study and repetition is scored as the ``--edition`` did: 2024 (budget 200, up to 4 boxes, 20 tests
-drawn at random, 5 runs each, the similarity penalty, ranked by suite score), 2025 (budget 100, up to 3 boxes, the
-first 20 tests, 3 runs each, duplicates, diversity, R = 0.75 R_F + 0.25 R_D) or 2026 (2025's rules, scored with and
-without the case study's wind). Writes ``leaderboard.csv`` (one row per cell), ``leaderboard.png`` and ``report.md``
-(with PX4's published figures beside ours where the tools and case studies are the reports'); every cell and every
-run is kept as it completes, and the same command resumes.
+then each case study and repetition is scored as the ``--edition`` did: 2024 (budget 200, up to 4 boxes of any size,
+20 tests drawn at random, 5 runs each, the rest score and the similarity penalty, ranked by suite score), 2025
+(budget 100, up to 3 boxes within the size bounds, the first 20 tests, 3 runs each, duplicates, diversity, R = 0.75
+R_F + 0.25 R_D) or 2026 (2025's bounds, the first 20 valid tests in the tool's rank order, 5 runs each, the
+similarity penalty, ranked by suite score, scored with and without the case study's wind). Writes
+``leaderboard.csv`` (one row per cell), ``leaderboard.png`` and ``report.md`` (with PX4's published figures beside
+ours where the tools and case studies are the reports'); every cell and every run is kept as it completes, and the
+same command resumes.
 
 Example::
 
@@ -35,9 +37,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "compete output folders given)")
     parser.add_argument("--edition", required=True, choices=list(EDITIONS),
                         help="score as this edition did; its defaults: " + "; ".join(
-                            f"{e.name}: budget {e.budget}, {e.runs} runs of {e.tests} tests drawn "
-                            f"{'at random' if e.draw == 'random' else 'first'}, up to {e.max_obstacles} boxes"
-                            + (", with and without wind" if e.wind else "") for e in EDITIONS.values()))
+                            f"{e.name}: budget {e.budget}, up to {e.max_obstacles} boxes"
+                            + (" within the size bounds" if e.size_bounds else " of any size") + f", {e.runs} runs of "
+                            + (f"{e.tests} tests drawn at random" if e.draw == "random" else f"the first {e.tests}"
+                               + (" valid tests in the tool's rank order" if e.valid_only else " tests written"))
+                            + (", the rest score" if e.rest else "")
+                            + (", the similarity penalty" if e.similarity == "flights" else ", duplicates and "
+                               "diversity") + (", with and without wind" if e.wind else "") for e in EDITIONS.values()))
+    parser.add_argument("--tests", type=int, default=None, metavar="N",
+                        help="tests evaluated of each suite (default: the edition's, 20; 2026 did not publish how "
+                             "many it evaluates, and 2024 and 2025 evaluated 20)")
+    parser.add_argument("--similar-m", type=float, default=None, metavar="M",
+                        help="2024 and 2026: two tests are alike (sim_pen) when their runs' averaged flights are "
+                             "closer than M metres on average along DTW's path (default 0.4: as alike as repeats "
+                             "of one test are here; neither edition published a number)")
     parser.add_argument("--budget", type=int, default=None,
                         help="simulations per tool and case study (default: the edition's)")
     parser.add_argument("--repetitions", type=int, default=3, help="runs of each tool on each case study (default 3)")
@@ -70,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
     out = args.out or default_out("leaderboard")
     check_writable(out, "--out")
     board = lb.plan(args.tools, args.case_studies, args.edition, budget=args.budget, repetitions=args.repetitions,
-                    runs=args.runs, seed=args.random_seed, uav=args.uav, out=out)
+                    runs=args.runs, seed=args.random_seed, uav=args.uav, tests=args.tests,
+                    similar_m=args.similar_m, out=out)
     workers = args.workers or default_workers()
     executor = None
     if args.dask_scheduler:

@@ -138,8 +138,9 @@ def scoring_lines(board: Sequence) -> list[str]:
         s = row.suite
         head = (f"{s.case_study}: {s.name}: {len(s.drawn)} of {s.tests} tests drawn, {s.failing} failing; ")
         if not ed.ranks_diversity:
-            lines.append(head + f"score {s.score:.2f} = ({s.failure:.2f} + rest {s.rest:.2f}) x sim_pen "
-                                f"{s.sim_pen:.2f} ({s.alike} flying alike); rank {row.rank}")
+            summed = f"({s.failure:.2f} + rest {s.rest:.2f})" if ed.rest else f"{s.failure:.2f}"
+            lines.append(head + f"score {s.score:.2f} = {summed} x sim_pen {s.sim_pen:.2f} ({s.alike} flying "
+                                f"alike); rank {row.rank}")
         else:
             lines.append(head + f"failure {s.failure:.2f}, diversity {fixed(s.diversity)}"
                                 + (f" ({s.alike} duplicates counted once)" if s.alike else "")
@@ -196,22 +197,28 @@ def report_text(ev: Evaluation, board: Sequence | None = None) -> str:
 
 def _scoring_section(board: Sequence, runs: int) -> list[str]:
     """The report's section on the competition's scoring: what the edition draws and computes, and the table."""
-    from ..scoring import EDITIONS, SIMILAR_FLIGHT_M
+    from ..scoring import EDITIONS
 
     ed = EDITIONS[board[0].suite.edition]
     flown = f"each flown {runs} time{'s' if runs != 1 else ''} (the edition: {ed.runs})"
     score = ("test_score = avg_point x 10 / (n_obstacles^2 x avg_time), avg_time the mean flight time in minutes "
              "(simulated, from arming to the end of the run).")
     if not ed.ranks_diversity:
-        how = [f"Scored as the 2024 edition (SBFT) did: {ed.tests} tests drawn at random from each folder (seeded by "
-               f"the base seed), {flown}. {score} A folder of more than {ed.tests} tests earns half the mean test "
-               f"score for each test beyond them (rest). Two drawn tests are similar when the DBA averages of their "
-               f"runs are less than {SIMILAR_FLIGHT_M:g} m apart on average along DTW's path (x-y); sim_pen = 1 - "
-               f"similar / evaluated, each test similar to an earlier one counted once. score = (sum test_score + "
-               f"rest) x sim_pen; rank by score per case study (1 the best, equal scores share a rank)."]
-        table = _board_table(board, ["sum test_score", "rest", "alike", "sim_pen", "score", "rank"],
-                             lambda r: [f"{r.suite.failure:.2f}", f"{r.suite.rest:.2f}", f"{r.suite.alike}",
-                                        f"{r.suite.sim_pen:.2f}", f"{r.suite.score:.2f}", f"{r.rank}"])
+        drawn = (f"{ed.tests} tests drawn at random from each folder (seeded by the base seed)" if ed.draw == "random"
+                 else f"the first {ed.tests} tests of each folder that keep the rules, in the tool's rank order (the "
+                      f"order it wrote them)")
+        rest = (f" A folder of more than {ed.tests} tests earns half the mean test score for each test beyond them "
+                f"(rest)." if ed.rest else "")
+        how = [f"Scored as the {ed.name} edition did: {drawn}, {flown}. {score}{rest} Two drawn tests are similar "
+               f"when the DBA averages of their runs are less than {ed.similar_m:g} m apart on average along DTW's "
+               f"path (x-y); sim_pen = 1 - similar / evaluated, each test similar to an earlier one counted once. "
+               f"score = {'(sum test_score + rest)' if ed.rest else 'sum test_score'} x sim_pen; rank by score per "
+               f"case study (1 the best, equal scores share a rank)."]
+        table = _board_table(board, ["sum test_score", *(["rest"] if ed.rest else []), "alike", "sim_pen", "score",
+                                     "rank"],
+                             lambda r: [f"{r.suite.failure:.2f}", *([f"{r.suite.rest:.2f}"] if ed.rest else []),
+                                        f"{r.suite.alike}", f"{r.suite.sim_pen:.2f}", f"{r.suite.score:.2f}",
+                                        f"{r.rank}"])
     else:
         how = [f"Scored as the 2025 editions (ICST, SBFT) did: the first {ed.tests} tests of each folder in the "
                f"order the tool wrote them (the natural order of their names, digits as numbers; by modification "

@@ -127,7 +127,9 @@ def report_lines(board: Board, rows: Sequence[BoardRow]) -> list[str]:
 
 
 def _px4_lines(board: Board, summaries: Sequence[Summary]) -> list[str]:
-    if not board.edition.ranks_diversity:
+    """PX4's published figures beside ours: the 2024 report's Table 1 for a 2024 board; else the 2025 reports'
+    re-runs (2026 published none)."""
+    if board.edition.name == "2024":
         agree = agreement_2024(summaries)
         if not agree["cells"]:
             return ["## Against PX4", "", "No tool and case study of the 2024 report's Table 1 is on this board "

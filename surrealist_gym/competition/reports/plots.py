@@ -151,7 +151,8 @@ def plot_leaderboard(board, path) -> None:
     year = board[0].suite.edition
     by_r = EDITIONS[year].ranks_diversity
     panels = [("failure", "failure score (sum of test scores)"), ("diversity", "diversity (1 - mean area IoU)")] \
-        if by_r else [("score", "suite score ((sum test_score + rest) x sim_pen)")]
+        if by_r else [("score", "suite score ((sum test_score + rest) x sim_pen)" if EDITIONS[year].rest
+                       else "suite score (sum test_score x sim_pen)")]
     most = max(sum(row.suite.case_study == study for row in board) for study in studies)
     fig = _figure(5.2 * len(panels), 0.9 + len(studies) * (0.9 + 0.35 * most))
     axes = np.atleast_2d(fig.subplots(len(studies), len(panels), squeeze=False))

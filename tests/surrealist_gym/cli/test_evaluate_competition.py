@@ -142,6 +142,33 @@ def test_camba_mission3_scored_as_2024_matches_a_hand_computation(camba, tmp_pat
     assert len(_rows(out / "runs.csv")) == 6  # --runs 2 overrides the edition's 5
 
 
+@pytest.mark.slow
+def test_2024_flies_a_box_narrower_than_2_m_where_2025_and_2026_refuse_it(camba, tmp_path):
+    """2024 bounded the count, the ground, overlaps and the area, not a box's size: a 1 m wide box is flown and scored.
+    2025 draws it and scores it 0 unflown; 2026 evaluates the first valid tests in rank order, so it is not drawn."""
+    folder = tmp_path / "tool"
+    folder.mkdir()
+    names = sorted(p.name for p in (camba / "mission3").glob("*.yaml"))[:2]
+    narrow = yaml.safe_load((camba / "mission3" / names[0]).read_text())
+    narrow["simulation"]["obstacles"][0]["size"]["w"] = 1.0
+    (folder / "test_0.yaml").write_text(yaml.safe_dump(narrow))
+    shutil.copy(camba / "mission3" / names[1], folder / "test_1.yaml")
+    shutil.copytree(camba / "case_studies", tmp_path / "case_studies")
+    for year, drawn, flown, invalid in (("2024", 2, 2, ""), ("2025", 2, 1, "obstacles[0]."),
+                                        ("2026", 1, 1, None)):
+        out = tmp_path / year
+        assert main(["evaluate", str(folder), "--competition", year, "--runs", "1", "--workers", "2",
+                     "--out", str(out)]) == 0
+        scores = _rows(out / "test-scores.csv")
+        assert len(scores) == drawn and len(_rows(out / "runs.csv")) == flown, year
+        first = scores[0]
+        if invalid is None:  # 2026: the narrow test is not among those evaluated
+            assert first["file"].endswith("test_1.yaml")
+        else:
+            assert first["file"].endswith("test_0.yaml") and first["invalid"].startswith(invalid), (year, first)
+            assert (" 1 is outside the competition's [2, 20]" in first["invalid"]) == (year == "2025")
+
+
 # --- resume, ranking ------------------------------------------------------------------------------------------------
 @pytest.mark.slow
 def test_the_draw_is_recorded_and_a_resume_scores_the_same_tests(camba, tmp_path, monkeypatch):

@@ -304,7 +304,7 @@ def test_problem_defaults_are_the_envs_and_each_help_states_its_own():
     assert "case-study" not in rep and "generate" not in rep.split("options:", 1)[1]
     assert ("default: the env's: Surrealist-Replicate-v0 5, Surrealist-Generate-v0 10, Surrealist-CaseStudy-v1 1"
             in _help("compare"))
-    assert "(default 5; with --competition the edition's: 2024 5, 2025 3, 2026 3)" in _help("evaluate")
+    assert "(default 5; with --competition the edition's: 2024 5, 2025 3, 2026 5)" in _help("evaluate")
 
 
 # --- an option that does not apply is refused, before any work --------------------------------------------------------

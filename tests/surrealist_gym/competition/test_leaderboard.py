@@ -9,6 +9,7 @@ import os
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from surrealist_gym.cli import main
@@ -124,11 +125,11 @@ def test_a_board_runs_each_cell_through_compete_and_scores_with_and_without_wind
     assert '"uav": "px4-v1.12-sitl-iris"' in (local_board / "uav.json").read_text()
     assert [(r["tool"], r["case_study"], r["wind"]) for r in rows] == [
         ("boxes", "mission1-wind", "with"), ("boxes", "mission1-wind", "without")]
-    assert list(rows[0])[:12] == ["tool", "case_study", "repetition", "wind", "reported_tests", "evaluated_tests",
-                                  "failing_tests", "failure_score", "diversity", "R", "rank", "simulations"]
+    assert list(rows[0])[:10] == ["tool", "case_study", "repetition", "wind", "reported_tests", "evaluated_tests",
+                                  "failing_tests", "suite_score", "rank", "simulations"]
     for row in rows:
         assert row["reported_tests"] == row["evaluated_tests"] == "3" and row["simulations"] == "3"
-        assert row["rank"] == "1" and 0 < float(row["diversity"]) <= 1
+        assert row["rank"] == "1" and float(row["suite_score"]) >= 0
     summary = local_board / "cells" / "boxes" / "mission1-wind-rep0" / "summary.json"
     assert summary.is_file()
     scores = local_board / "scores" / "boxes"
@@ -149,6 +150,42 @@ def test_a_board_runs_each_cell_through_compete_and_scores_with_and_without_wind
     report = (local_board / "report.md").read_text()
     assert "with wind" not in report or "without" in report
     assert (local_board / "leaderboard.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_2026_cell_is_its_test_scores_times_the_similarity_penalty_by_hand(local_board):
+    """2026: each test's score from the average points of its runs, its boxes and its average time; the sum times
+    sim_pen = 1 - similar / evaluated, two tests similar when their runs' averaged flights are under 0.4 m apart along
+    DTW's path."""
+    from surrealist_gym.aerialist import load_test
+    from surrealist_gym.competition.suite import trajectory_distance
+    from surrealist_gym.fitness import average_runs
+    from surrealist_gym.outcomes import run_points
+    from surrealist_gym.store import EvaluationStore
+
+    rows = {r["wind"]: r for r in _rows(local_board / "leaderboard.csv")}
+    for wind in ("with", "without"):
+        path = local_board / "scores" / "boxes" / f"mission1-wind-rep0-{wind}-wind" / "evaluations.sqlite"
+        tests: dict[int, tuple[str, list, list]] = {}  # the runs are stored in chunks: gathered per test
+        with EvaluationStore(path, readonly=True) as db:
+            for e in db:
+                file, runs, flights = tests.setdefault(e.info["test"], (e.test["file"], [], []))
+                runs += e.runs
+                flights += [np.asarray(t) for t in e.info["trajectories"]]
+        assert sorted(tests) == [0, 1, 2] and all(len(runs) == 2 for _, runs, _ in tests.values())  # --runs 2
+        total, averages = 0.0, []
+        for k in sorted(tests):
+            file, runs, flights = tests[k]
+            points = [run_points(r["status"], r["distance"]) for r in runs]
+            minutes = sum(r["duration"] for r in runs) / len(runs) / 60.0
+            boxes = len(load_test(file).obstacles)
+            total += (sum(points) / len(points)) * 10.0 / (boxes ** 2 * minutes)
+            averages.append(average_runs(flights))
+        similar = [None] * len(averages)
+        for i in range(len(averages)):
+            similar[i] = next((j for j in range(i) if similar[j] is None
+                               and trajectory_distance(averages[j], averages[i]) < 0.4), None)
+        sim_pen = 1.0 - sum(s is not None for s in similar) / len(similar)
+        assert float(rows[wind]["suite_score"]) == pytest.approx(total * sim_pen, rel=1e-5, abs=1e-6)
 
 
 def test_a_board_resumes_without_running_a_cell_again(local_board, boxes, windy, aerialist):
@@ -211,6 +248,9 @@ def _one_line(capsys) -> str:
     (["--edition", "2025", "--case-study", "mission9"], "mission9"),
     (["--edition", "2025", "--repetitions", "0"], "--repetitions: expected a whole number >= 1"),
     (["--edition", "2025", "--budget", "-1"], "--budget: expected a whole number >= 1"),
+    (["--edition", "2026", "--tests", "0"], "--tests: expected a whole number >= 1"),
+    (["--edition", "2026", "--similar-m", "-0.5"], "--similar-m: expected metres >= 0"),
+    (["--edition", "2025", "--similar-m", "0.5"], "--similar-m: the 2025 edition judged tests alike by the ground"),
 ])
 def test_bad_input_is_one_line_before_any_work(argv, expected, capsys, tmp_path, aerialist):
     out = tmp_path / "out"

@@ -3,11 +3,12 @@ boxes, duplicates, the seeded 2024 draw and 2025's writing order, test, rest and
 and the ranks of the ICST 2025 report's Table I."""
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
 
+from surrealist_gym.competition.rules import violations
 from surrealist_gym.competition.scoring import (
     EDITIONS,
     Draw,
@@ -142,6 +143,42 @@ def test_2024_suite_score_with_rest_and_similarity_penalty():
     assert s.sim_pen == pytest.approx(1 - 1 / 4)
     assert s.score == pytest.approx((sum(scores) + s.rest) * 0.75)
     assert (s.failing, s.alike) == (2, 1)
+
+
+def test_2026_suite_score_is_the_test_scores_times_the_similarity_penalty_without_rest():
+    ed = EDITIONS["2026"]
+    assert (ed.runs, ed.tests, ed.draw, ed.valid_only, ed.wind, ed.rest, ed.ranks_diversity) == (
+        5, 20, "first", True, True, False, False)
+    runs = [[_Run(5, 60.0, _line()), _Run(0, 60.0, _line())],        # 2.5 points, 1 min, 1 box: 25
+            [_Run(2, 120.0, _line(dy=0.1))],                         # flies as the first: similar; 2 / 2 min: 10
+            [_Run(1, 60.0, _line(dy=5.0))]]                          # 2 boxes: 1 x 10 / 4 = 2.5
+    tests = [(_test(A), runs[0], ""), (_test(B), runs[1], ""), (_test(A, FAR), runs[2], "")]
+    s = score_suite(ed, Draw("suite", "mission1", 40, ("a.yaml", "b.yaml", "c.yaml")), tests)
+    assert [t.score for t in s.drawn] == pytest.approx([25.0, 10.0, 2.5])
+    assert [t.same_as for t in s.drawn] == [None, 0, None]
+    assert (s.rest, s.sim_pen) == (0.0, pytest.approx(2 / 3))  # 40 tests written: no rest score in 2026
+    assert s.score == pytest.approx(37.5 * 2 / 3) and (s.failing, s.alike) == (3, 1)
+    wider = score_suite(replace(ed, similar_m=0.05), Draw("suite", "mission1", 3, ("a", "b", "c")), tests)
+    assert wider.sim_pen == 1.0 and wider.score == pytest.approx(37.5)  # 0.1 m apart: alike only above 0.1 m
+
+
+def test_2026_draws_the_first_valid_tests_in_rank_order(tmp_path):
+    files = _files(tmp_path, [f"test_{i}.yaml" for i in range(25)])
+    valid = [f for f in files if f.name not in ("test_0.yaml", "test_3.yaml")]
+    drawn = draw(files, EDITIONS["2026"], valid=valid)
+    assert [f.name for f in drawn] == [f"test_{i}.yaml" for i in (1, 2, *range(4, 22))]
+    assert draw(files, EDITIONS["2025"], valid=valid) == draw(files, EDITIONS["2025"])  # 2025 draws them all
+
+
+def test_each_edition_checks_the_rules_it_published():
+    narrow = _test(Obstacle(1.0, 30.0, 5.0, 0, 20, 0, 120))  # 1 m wide, 30 m long, 5 m tall, turned 120 degrees
+    assert violations(narrow, EDITIONS["2024"].rules) == ()
+    assert EDITIONS["2024"].rules.max_obstacles == 4
+    broken = violations(narrow, EDITIONS["2025"].rules)
+    assert [b.split(":")[0] for b in broken] == ["obstacles[0].l", "obstacles[0].w", "obstacles[0].h"]  # as l 30, w 1
+    assert violations(narrow, EDITIONS["2026"].rules) == broken
+    outside = _test(Obstacle(1.0, 1.0, 5.0, 35, 20))
+    assert [b.split(":")[0] for b in violations(outside, EDITIONS["2024"].rules)] == ["obstacles[0].x"]
 
 
 def test_2025_suite_score_counts_duplicates_once():
