@@ -12,8 +12,11 @@ names must lie in one of the server's ``roots`` (the tool's working folder, the 
 case study names), links resolved. The server writes the test as our YAML (``sim-NNNN.yaml`` in its folder: the test
 as flown), flies its ``N`` runs and writes each as a ULog (``sim-NNNN-runI.ulg``), and answers ``{"ok": True,
 "logs": [PATHS]}``; or ``{"ok": False, "error": ONE_LINE}`` for a bad request, a test that cannot be flown, a failed
-simulation or a request over the budget, which is refused unflown. That line is short and never quotes a file or an
-exception's text (a test naming ``/etc/shadow`` must not get a line of it back, nor leave one in ``flights.csv``).
+simulation or a request over the budget, which is refused unflown. Its folder is ``compete``'s record (made again
+when it is gone): the shim hands the tool copies of the ULogs in a folder of the run's own. The error line is short
+and never quotes a file or an exception's text (a test naming ``/etc/shadow`` must not get a line of it back, nor
+leave one in ``flights.csv``): a test our loader refuses is named by its YAML and the field the loader stopped at
+(:func:`cannot_fly`).
 The budget counts runs flown (one PX4 simulation each). Run ``k`` of the whole session (k = 0, 1, ... in request
 order) draws its noise from (test, seed, k), so a tool that asks for the same tests in the same order gets the same
 flights.
@@ -29,6 +32,7 @@ from __future__ import annotations
 
 import hmac
 import os
+import re
 import secrets
 import shutil
 import socket
@@ -39,6 +43,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from ...aerialist import FILE_FIELDS
 from ...errors import SurrealistError
 from .request import AGENTS, APIS, BadRequest, check
 from .shim.surrealist_compete_wire import WireError, receive, send
@@ -81,11 +86,55 @@ def default_runaway_after(budget: int) -> int:
     return max(100, 10 * budget)
 
 
+#: Where the loader says a test is wrong, at the start of its message after the file: ``field 'wind'``, ``section
+#: 'robot'``, ``unknown section 'x'`` (a field of the tool's, up to 60 characters), or a path to a field:
+#: ``obstacles[0].size``, ``robot.port``, ``commands[2]``.
+_FIELD = re.compile(r"(?:unknown section|section|field) '([^'\n]{1,60})'((?:\.\w{1,40}|\[\d{1,6}\]){0,4})"
+                    r"|([A-Za-z_]\w{0,40}(?:\.\w{1,40}|\[\d{1,6}\]){1,4})(?=[: ]|$)")
+_FILE_FIELDS = frozenset(key for keys in FILE_FIELDS.values() for key in keys)
+
+
+def cannot_fly(err: Exception, test_file: Path, written: bool, test, cwd) -> str:
+    """The one-line refusal of a test that cannot be flown. It names the file (our YAML of the test, ``test_file``,
+    which the folder keeps; ``written``: whether it was written) and the field the loader stopped at, with the file
+    that field names and the line of it where the loader gives one; of the error itself only its class, never its
+    words, which may quote a file."""
+    from .translate import aerialist_doc
+
+    kind = type(err).__name__
+    if isinstance(err, OSError):
+        where = err.filename if isinstance(err.filename, str) and err.filename else test_file
+        return f"the test cannot be flown: {where}: could not be written or read ({kind})"
+    text = str(err)
+    prefix = f"{test_file}: "
+    read = written and text.startswith(prefix)  # the loader's own line, naming our YAML first
+    match = _FIELD.match(text[len(prefix):] if read else text)
+    if match is not None and match.group(1) is None and not read:  # a path to a field only in the loader's line
+        match = None
+    file = f"{test_file}" if written else f"the test (not written as {test_file})"
+    why = f"{kind}; surrealist simulate {test_file} says why" if written else kind
+    if match is None:
+        return f"the test cannot be flown: {file}: not a test our loader reads ({why})"
+    field = match.group(1) + match.group(2) if match.group(1) is not None else match.group(3)
+    named = ""
+    if field in _FILE_FIELDS:
+        try:
+            doc = aerialist_doc(test, cwd)
+        except SurrealistError:
+            doc = {}
+        value = next((part[field] for part in (doc.get(section) for section in FILE_FIELDS)
+                      if isinstance(part, dict) and isinstance(part.get(field), str)), None)
+        line = re.search(r": line (\d{1,9}):", text)
+        if value is not None:
+            named = f" (it names {value[:300]}{f', line {line.group(1)}' if line else ''})"
+    return f"the test cannot be flown: {file}: field {field!r}{named} is not what our loader reads ({why})"
+
+
 class SimulationServer:
     """Flies the tool's tests (see the module docstring); a context manager that starts and stops the server.
 
     Args:
-        folder: where the tests and ULogs are written (created).
+        folder: where the tests and ULogs are written (created, and made again whenever it is gone).
         budget: the simulations (runs) the tool may fly; a request beyond it is refused.
         config: the simulator configuration (the UAV profile's ``sim_config()``).
         seed: base seed of the runs' noise.
@@ -260,16 +309,20 @@ class SimulationServer:
             return self._record(Flight(number, agent, api, refused=True, error=error))
         start = time.perf_counter()
         stem = self.folder / f"sim-{number:04d}"
+        written = False
         try:
             field = outside(request.test, request.cwd, self.roots)
             if field is not None:
                 return self._record(Flight(number, agent, api, error=f"the test cannot be flown: its field {field!r} "
                                                                      f"names a file outside the tool's folder"))
+            self.folder.mkdir(parents=True, exist_ok=True)  # made again if something removed it
             test_file = write_test(request.test, request.cwd, stem.with_suffix(".yaml"))
+            written = True
             test = load_test(test_file)
         except (SurrealistError, ValueError, TypeError, OSError) as err:  # its words may quote a file: not sent
-            return self._record(Flight(number, agent, api, error=f"the test cannot be flown ({type(err).__name__}: "
-                                                                 f"not a test our loader reads)"))
+            return self._record(Flight(number, agent, api, str(stem.with_suffix(".yaml")) if written else "",
+                                       error=cannot_fly(err, stem.with_suffix(".yaml"), written, request.test,
+                                                        request.cwd)))
         first = self._spent
         self._spent += runs  # a run that fails counts as flown, as a PX4 run does
         key = None
@@ -284,6 +337,8 @@ class SimulationServer:
                                            stored["distances"], stored["wall_s"], error=stored["error"]))
         results = self._executor.run(test, range(first, first + runs), self.seed, self.config)
         from ...logs.ulog_writer import write_run_ulog
+
+        self.folder.mkdir(parents=True, exist_ok=True)
 
         logs, statuses, distances, failures = [], [], [], 0
         for i, run in enumerate(results):
@@ -301,6 +356,7 @@ class SimulationServer:
             self._store.put(key, number, logs, statuses, distances, wall_s, error)
         return self._record(Flight(number, agent, api, str(test_file), tuple(logs), tuple(statuses),
                                    tuple(distances), wall_s, error=error))
+
     def _record(self, flight: Flight) -> dict:
         self._flights.append(flight)
         if self._on_flight is not None:

@@ -10,6 +10,14 @@ run as a ULog, and returns what Aerialist's agent returns: a list with one resul
 many runs, any other ``SURREALIST_COMPETE_RUNS`` (default 1). A refused or failed flight raises ``RuntimeError`` in
 the tool, as a failed PX4 run raises there.
 
+Each ``run()`` gets a folder of its own, where Aerialist master's ``DockerAgent.import_config`` puts a run: the
+test's ``agent.path``, else the agent's ``LOGS_COPY_DIR`` (``results/logs/``), then ``<id>/``, the id being the
+test's ``agent.id`` and ``-`` (if it has one) before ``file_helper.time_filename()`` (a ``-2``, ``-3`` ... is added
+when that folder exists already), relative to the tool's working folder. The shim copies each run's ULog there from
+the server's record as ``<id>_sim-NNNN-runI.ulg`` (Aerialist's ``<id>_<container>.ulg``) beside the test as flown,
+``<id>.yaml``, and the results name those copies: the tool may read, move or delete them, and the folder, without
+touching what ``surrealist compete`` keeps.
+
 Where the Aerialist in use lacks what a competition tool calls, it is added, each time with a note that the
 summary lists (see docs/compete.md): ``AerialistTest.plot`` (the 2025 snippet calls it; master moved it to
 ``Plot.plot_test``), ``Trajectory.min_distance_to_obstacles`` (2024 tools call it; 0.2.1 lacks it), a
@@ -112,11 +120,82 @@ def fly(config, agent: str) -> list:
     doc = config.to_dict()
     doc.pop("assertion", None)  # no reference flight: a competition test flies the competition's UAV
     doc.pop("agent", None)
+    plain = _plain(doc)
     reply = _ask({"op": "fly", "agent": agent, "api": type(config).__name__, "cwd": os.getcwd(),
-                  "test": _plain(doc), "runs": _runs(config), "compat": list(_notes)})
+                  "test": plain, "runs": _runs(config), "compat": list(_notes)})
     if not reply.get("ok"):
         raise RuntimeError(f"surrealist compete: {reply.get('error')}")
-    return [_result(config, agent, log) for log in reply["logs"]]
+    return [_result(config, agent, log) for log in hand_over(config, plain, reply["logs"])]
+
+
+DEFAULT_COPY_DIR = "results/logs/"  # Aerialist's LOGS_COPY_DIR default
+
+
+def run_folder(config) -> tuple:
+    """A new folder of this run's own, as Aerialist master's ``DockerAgent.import_config`` names it (see the module
+    docstring), made here; returns (the folder, ending in ``/``, and the run's id)."""
+    settings = getattr(config, "agent", None)
+    base = getattr(settings, "path", None)
+    if not isinstance(base, str) or not base:
+        base = _copy_dir()
+    if not base.endswith("/"):
+        base += "/"
+    helper = sys.modules.get("aerialist.px4.file_helper")
+    if helper is not None and callable(getattr(helper, "time_filename", None)):
+        stamp = helper.time_filename()
+    else:
+        import datetime
+
+        stamp = datetime.datetime.now().strftime("%d-%m-%H-%M-%S")
+    given = getattr(settings, "id", None)
+    name = f"{given}-{stamp}" if isinstance(given, str) and given else stamp
+    os.makedirs(base, exist_ok=True)
+    run_id, count = name, 1
+    while True:
+        try:
+            os.mkdir(base + run_id)
+            return base + run_id + "/", run_id
+        except FileExistsError:  # a run of another process in the same second
+            count += 1
+            run_id = f"{name}-{count}"
+
+
+def _copy_dir() -> str:
+    """Aerialist's ``LOGS_COPY_DIR`` (its DockerAgent's ``COPY_DIR``: the setting, else ``results/logs/``)."""
+    docker = getattr(sys.modules.get("aerialist.px4.docker_agent"), "DockerAgent", None)
+    value = getattr(docker, "COPY_DIR", None)
+    if value is None:
+        try:
+            from decouple import config as setting
+
+            value = setting("LOGS_COPY_DIR", default=DEFAULT_COPY_DIR)
+        except Exception:  # noqa: BLE001 - decouple missing or its .env unreadable: Aerialist's default
+            value = DEFAULT_COPY_DIR
+    return value if isinstance(value, str) and value else DEFAULT_COPY_DIR
+
+
+def hand_over(config, plain: dict, records: list) -> list:
+    """The run's ULogs as the tool gets them: copies of the server's records (``records``) in a folder of the run's
+    own, beside the test as flown (``<id>.yaml``); their paths, in order."""
+    import shutil
+
+    folder, run_id = run_folder(config)
+    logs = []
+    for record in records:
+        log = f"{folder}{run_id}_{os.path.basename(record)}"
+        try:
+            shutil.copyfile(record, log)
+        except OSError as err:
+            raise RuntimeError(f"surrealist compete: the log of this run could not be handed over to {log} "
+                               f"({type(err).__name__}: {err.strerror or 'no such file'})") from None
+        logs.append(log)
+    try:
+        import yaml
+    except ImportError:  # Aerialist's own import: always there where Aerialist runs
+        return logs
+    with open(f"{folder}{run_id}.yaml", "w", encoding="utf-8") as f:
+        yaml.safe_dump(plain, f, sort_keys=False)
+    return logs
 
 
 def _agent_class(base: type, name: str, module: str) -> type:
@@ -157,13 +236,12 @@ def _local_stand_in(module, err: Exception) -> None:
 
 def _unique_time_filename(module) -> None:
     original = module.time_filename
-    last = {"name": None, "count": 0}
+    given: dict = {}  # name -> how many times it was given (names of one second: a plot's, a run folder's)
 
     def time_filename(add_host=False):
         name = original(add_host)
-        last["count"] = last["count"] + 1 if name == last["name"] else 1
-        last["name"] = name
-        return name if last["count"] == 1 else f"{name}-{last['count']}"
+        given[name] = given.get(name, 0) + 1
+        return name if given[name] == 1 else f"{name}-{given[name]}"
 
     module.time_filename = time_filename
     _notes.append("file_helper.time_filename never gives one name twice in a process (names are to the second; our "
