@@ -8,20 +8,15 @@ BUDGET`` in the copy, as the competition does, in a process group of its own und
 with the shim folder first on its ``PYTHONPATH`` (``shim/``: Aerialist's agents ask the server to fly). What the
 tool wrote is read in streams, within :data:`MAX_READ_BYTES`. The output folder then holds::
 
-    tool/            the copy the tool ran in, with what it wrote (its output folder, logs/, results/); each
-                     agent.run() gets a folder of its own there, results/logs/<id>/, holding copies of its ULogs and
-                     the test, which the tool may move or delete (shim/surrealist_compete_shim.py, hand_over)
-    flights/         compete's record, never handed to the tool: every test flown, as our YAML (sim-NNNN.yaml), and
-                     one ULog per run (sim-NNNN-runI.ulg); made again if it is removed
+    tool/            the copy the tool ran in, with what it wrote; each agent.run() hands it copies of its ULogs and
+                     test in results/logs/<id>/, which it may move or delete (the shim's hand_over)
+    flights/         compete's record, never handed to the tool: each test flown (sim-NNNN.yaml, sim-NNNN-runI.ulg)
     tool-stdout.txt, tool-stderr.txt   what the tool printed
     flights.csv      one row per agent.run(): agent, API, runs, statuses, competition distances, time
     summary.json     the tests the tool wrote, with their competition distance and points; the budget spent
 
-Example::
 
-    >>> plan = prepare("../shared/third_party/uav-testing-competition/snippets", "mission1", 10)  # doctest: +SKIP
-    >>> result = run(plan)                                                                      # doctest: +SKIP
-    >>> result.output_folder, len(result.tests), result.spent, result.problem                   # doctest: +SKIP
+``surrealist compete`` (``cli/competition/compete.py``) is this module's command: ``prepare`` then ``run``.
 """
 from __future__ import annotations
 
