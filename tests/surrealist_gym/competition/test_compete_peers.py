@@ -88,7 +88,7 @@ def test_peer_tool_overspending_is_reported(peer_run):
     unflyable = sum(1 for row in rows if "the test cannot be flown" in row)  # e.g. overlapping boxes (TGen-UQ)
     assert summary["requests"] == len(rows) == summary["simulations"] + summary["refused"] + unflyable
     assert BUDGET - unflyable <= summary["simulations"] <= BUDGET and code == 0
-    assert summary["simulations"] >= 5 and unflyable <= 2, (name, unflyable)  # several tests, not only the first
+    assert summary["simulations"] >= 5, (name, unflyable)  # several tests flown, not only the first
     if not unflyable:
         assert summary["refused"] == TOOLS[name][2]
     line = f"budget: the tool asked for {summary['refused']} simulations past its budget of {BUDGET}; they were refused"
