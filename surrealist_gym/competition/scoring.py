@@ -187,6 +187,10 @@ def draw_folder(folder, ed: Edition, seed: int = 0) -> Draw:
         raise SurrealistError(f"{os.fspath(folder)}: tests of {len(studies)} case studies ({named}); a folder holds "
                               f"one case study's tests: put each in a folder of its own")
     valid = [file for file, test in tests if not rule_broken(test, ed.rules)] if ed.valid_only else None
+    if valid == []:
+        file, test = tests[0]
+        raise SurrealistError(f"{os.fspath(folder)}: none of its {len(tests)} tests keeps the {ed.name} edition's "
+                              f"rules ({file.name}: {rule_broken(test, ed.rules)}): nothing to evaluate")
     drawn = draw([file for file, _ in tests], ed, seed, valid)
     return Draw(str(path.absolute()), next(iter(studies)), len(tests), tuple(str(f.absolute()) for f in drawn))
 

@@ -5,6 +5,7 @@ flown. Real flights, few runs."""
 import csv
 import json
 import math
+import re
 import shutil
 
 import pytest
@@ -143,7 +144,7 @@ def test_camba_mission3_scored_as_2024_matches_a_hand_computation(camba, tmp_pat
 
 
 @pytest.mark.slow
-def test_2024_flies_a_box_narrower_than_2_m_where_2025_and_2026_refuse_it(camba, tmp_path):
+def test_2024_flies_a_box_narrower_than_2_m_where_2025_and_2026_refuse_it(camba, tmp_path, capsys):
     """2024 bounded the count, the ground, overlaps and the area, not a box's size: a 1 m wide box is flown and scored.
     2025 draws it and scores it 0 unflown; 2026 evaluates the first valid tests in rank order, so it is not drawn."""
     folder = tmp_path / "tool"
@@ -167,6 +168,11 @@ def test_2024_flies_a_box_narrower_than_2_m_where_2025_and_2026_refuse_it(camba,
         else:
             assert first["file"].endswith("test_0.yaml") and first["invalid"].startswith(invalid), (year, first)
             assert (" 1 is outside the competition's [2, 20]" in first["invalid"]) == (year == "2025")
+    (folder / "test_1.yaml").unlink()  # the narrow test alone: 2026 has nothing to evaluate, in one line
+    capsys.readouterr()
+    assert main(["evaluate", str(folder), "--competition", "2026", "--out", str(tmp_path / "none")]) == 2
+    assert re.search(r"tool: none of its 1 tests keeps the 2026 edition's rules \(test_0.yaml: obstacles\[0\]\.[lw]: "
+                     r"1 is outside", _one_line(capsys)) and not (tmp_path / "none").exists()
 
 
 # --- resume, ranking ------------------------------------------------------------------------------------------------
