@@ -15,14 +15,13 @@ A record that is not of this form gets a one-line :class:`~surrealist_gym.errors
 """
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
 from ..errors import FrozenDict, LogFormatError, read_text
-from .scenario import NUMBER_FIELDS, Poles, Scenario, frozen_json, is_number, point, shown
+from .scenario import NUMBER_FIELDS, Poles, Scenario, frozen_json, is_number, parse_json, point, shown
 from .space import InvalidScenario, Rule
 
 TRAIN_SPLIT = "train"
@@ -222,7 +221,7 @@ def read_flight(path: str | os.PathLike) -> FlightRecord:
     """A flight record of the kit (``flights/*.json``); a one-line :class:`LogFormatError` naming the file and the
     field if it is not one."""
     where = os.fspath(path)
-    doc = _json(read_text(where, "flight record", LogFormatError, _MAX_BYTES), where)
+    doc = parse_json(read_text(where, "flight record", LogFormatError, _MAX_BYTES), where, LogFormatError)
     f = _Fields(doc, where)
     params = f.params()
     for key in ("area", "corridor"):
@@ -350,17 +349,8 @@ def read_train_manifest(path: str | os.PathLike) -> tuple[ManifestRecord, ...]:
     records = []
     for number, line in enumerate(read_text(name, "manifest", LogFormatError, _MAX_BYTES).splitlines(), start=1):
         if line.strip():
-            obj = _json(line, f"{name}:{number}")
+            obj = parse_json(line, f"{name}:{number}", LogFormatError)
             if isinstance(obj, dict) and obj.get("split") != TRAIN_SPLIT:
                 continue
             records.append(manifest_record(obj, f"{name}:{number}"))
     return tuple(records)
-
-
-def _json(text: str, where: str) -> Any:
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as err:
-        raise LogFormatError(f"{where}: not JSON ({err.msg} at line {err.lineno} column {err.colno})") from None
-    except RecursionError:
-        raise LogFormatError(f"{where}: not JSON (nested too deeply)") from None

@@ -263,14 +263,14 @@ class Submission:
         return json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n"
 
 
-def parse_json(text: str, source: str) -> Any:
-    """The JSON document in ``text``, or a one-line :class:`InvalidScenario` naming ``source`` and the place."""
+def parse_json(text: str, source: str, error: type[Exception] = InvalidScenario) -> Any:
+    """The JSON document in ``text``, or a one-line ``error`` naming ``source`` and the place."""
     try:
         return json.loads(text)
     except json.JSONDecodeError as err:
-        raise InvalidScenario(f"{source}: not JSON ({err.msg} at line {err.lineno} column {err.colno})") from None
+        raise error(f"{source}: not JSON ({err.msg} at line {err.lineno} column {err.colno})") from None
     except RecursionError:
-        raise InvalidScenario(f"{source}: not JSON (nested too deeply)") from None
+        raise error(f"{source}: not JSON (nested too deeply)") from None
 
 
 def read_submission(path: str | os.PathLike) -> Submission:
