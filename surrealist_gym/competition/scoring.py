@@ -65,8 +65,8 @@ class Edition:
     each suite was evaluated twice, with the case study's wind and without (``wind``: 2026). How alike tests were
     judged (``similarity``: ``flights``, the DTW of their averaged runs under ``similar_m`` metres, penalised by
     ``sim_pen``, 2024 and 2026; ``area``, the ground their boxes cover, duplicates counted once, 2025); whether tests
-    beyond the evaluated earned a rest score (``rest``: 2024); whether the tools were ranked on failures and
-    diversity (``ranks_diversity``: 2025), or on the suite score alone (2024, 2026)."""
+    beyond the evaluated earned a rest score (``rest``: 2024). The ranking follows the similarity
+    (:attr:`ranks_diversity`)."""
 
     name: str
     tests: int
@@ -75,12 +75,17 @@ class Edition:
     budget: int = 100
     max_obstacles: int = 3
     wind: bool = False
-    ranks_diversity: bool = True
     similarity: str = "area"
     rest: bool = False
     size_bounds: bool = True
     valid_only: bool = False
     similar_m: float = SIMILAR_FLIGHT_M
+
+    @property
+    def ranks_diversity(self) -> bool:
+        """Whether tools were ranked on failures and the area diversity of their tests (R = 0.75 R_F + 0.25 R_D): the
+        edition that judged tests alike by the ground their boxes cover (2025); the others ranked the suite score."""
+        return self.similarity == "area"
 
     @property
     def rules(self):
@@ -95,11 +100,10 @@ class Edition:
 #: similarity penalty; 2025 (ICST, SBFT): budget 100, up to 3 boxes within the size bounds, the first 20 tests, 3 runs
 #: each, duplicates and diversity; 2026: 2025's rules on boxes, the first 20 valid tests in the tool's rank order, 5
 #: runs each, 2024's similarity penalty, with and without wind (``shared/COMPETITION.md`` sections 2, 3, 5 and 6).
-EDITIONS = {"2024": Edition("2024", 20, 5, "random", budget=200, max_obstacles=4, ranks_diversity=False,
-                            similarity="flights", rest=True, size_bounds=False),
+EDITIONS = {"2024": Edition("2024", 20, 5, "random", budget=200, max_obstacles=4, similarity="flights", rest=True,
+                            size_bounds=False),
             "2025": Edition("2025", 20, 3, "first"),
-            "2026": Edition("2026", 20, 5, "first", wind=True, ranks_diversity=False, similarity="flights",
-                            valid_only=True)}
+            "2026": Edition("2026", 20, 5, "first", wind=True, similarity="flights", valid_only=True)}
 _SAME_AREA = 1.0 - 1e-9  # area similarity counted as 1 (floating error of the footprints' union and intersection)
 
 
@@ -186,11 +190,12 @@ def draw_folder(folder, ed: Edition, seed: int = 0) -> Draw:
         named = "; ".join(f"{name}: {len(names)} ({names[0]}, ...)" for name, names in sorted(studies.items()))
         raise SurrealistError(f"{os.fspath(folder)}: tests of {len(studies)} case studies ({named}); a folder holds "
                               f"one case study's tests: put each in a folder of its own")
-    valid = [file for file, test in tests if not rule_broken(test, ed.rules)] if ed.valid_only else None
+    broken = {file: rule_broken(test, ed.rules) for file, test in tests} if ed.valid_only else {}
+    valid = [file for file, rule in broken.items() if not rule] if ed.valid_only else None
     if valid == []:
-        file, test = tests[0]
+        first = tests[0][0]
         raise SurrealistError(f"{os.fspath(folder)}: none of its {len(tests)} tests keeps the {ed.name} edition's "
-                              f"rules ({file.name}: {rule_broken(test, ed.rules)}): nothing to evaluate")
+                              f"rules ({first.name}: {broken[first]}): nothing to evaluate")
     drawn = draw([file for file, _ in tests], ed, seed, valid)
     return Draw(str(path.absolute()), next(iter(studies)), len(tests), tuple(str(f.absolute()) for f in drawn))
 
@@ -310,7 +315,7 @@ class SuiteScore:
     @property
     def failing(self) -> int:
         """Drawn tests (2025: duplicates once) with a score above 0: the reports' ``#tests (failing)``."""
-        return sum(t.score > 0 and (EDITIONS[self.edition].similarity != "area" or t.counted) for t in self.drawn)
+        return sum(t.score > 0 and (not EDITIONS[self.edition].ranks_diversity or t.counted) for t in self.drawn)
 
     @property
     def alike(self) -> int:

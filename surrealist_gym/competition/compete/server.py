@@ -338,8 +338,6 @@ class SimulationServer:
         results = self._executor.run(test, range(first, first + runs), self.seed, self.config)
         from ...logs.ulog_writer import write_run_ulog
 
-        self.folder.mkdir(parents=True, exist_ok=True)
-
         logs, statuses, distances, failures = [], [], [], 0
         for i, run in enumerate(results):
             statuses.append(str(getattr(run.status, "value", run.status)))

@@ -179,6 +179,8 @@ def hand_over(config, plain: dict, records: list) -> list:
     own, beside the test as flown (``<id>.yaml``); their paths, in order."""
     import shutil
 
+    import yaml  # Aerialist's own import: there wherever Aerialist runs
+
     folder, run_id = run_folder(config)
     logs = []
     for record in records:
@@ -189,10 +191,6 @@ def hand_over(config, plain: dict, records: list) -> list:
             raise RuntimeError(f"surrealist compete: the log of this run could not be handed over to {log} "
                                f"({type(err).__name__}: {err.strerror or 'no such file'})") from None
         logs.append(log)
-    try:
-        import yaml
-    except ImportError:  # Aerialist's own import: always there where Aerialist runs
-        return logs
     with open(f"{folder}{run_id}.yaml", "w", encoding="utf-8") as f:
         yaml.safe_dump(plain, f, sort_keys=False)
     return logs
