@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Iterable, Sequence
 
+import shapely
+
 from ..errors import FrozenDict
 from .scenario import Scenario
 from .space import (
@@ -48,17 +50,9 @@ def band(scenario: Scenario) -> Band:
     return Band.TIGHT if scenario.corridor <= TIGHT_BAND_CORRIDOR_M else Band.WIDE
 
 
-def segment_distance(p: Point, a: Point, b: Point) -> float:
-    """Distance [m] from ``p`` to the segment ``a``-``b`` (a point when ``a == b``)."""
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    length2 = dx * dx + dy * dy
-    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2))
-    return math.hypot(p[0] - (a[0] + t * dx), p[1] - (a[1] + t * dy))
-
-
 def route_distance(p: Point, patrol: Sequence[Point]) -> float:
-    """Distance [m] from ``p`` to the route's polyline (at least two waypoints)."""
-    return min(segment_distance(p, patrol[k], patrol[k + 1]) for k in range(len(patrol) - 1))
+    """Distance [m] from ``p`` to the route's polyline (at least two waypoints; shapely)."""
+    return float(shapely.LineString(patrol).distance(shapely.Point(p)))
 
 
 def pole_route_distances(scenario: Scenario) -> tuple[float, ...]:
