@@ -408,12 +408,15 @@ for i in range(3):
     shutil.rmtree("../flights")
 print("folders:", len(set(folders)), all(os.path.isfile(os.path.join(f, os.path.basename(f) + ".yaml"))
                                          for f in folders))
+handed = [AerialistTest.from_yaml(os.path.join(f, os.path.basename(f) + ".yaml")) for f in folders]  # by Aerialist
+print("read back:", [len(t.simulation.obstacles) for t in handed])
 print("output folder: ./")
 ''')
     result = run(prepare(tool, "mission1", 3, tmp_path / "out"))
     assert result.problem is None, result.problem
     assert result.spent == 3 and [f.error for f in result.flights] == ["", "", ""]
-    assert "folders: 3 True" in (result.plan.out / "tool-stdout.txt").read_text(encoding="utf-8")
+    printed = (result.plan.out / "tool-stdout.txt").read_text(encoding="utf-8")
+    assert "folders: 3 True" in printed and "read back: [1, 1, 1]" in printed
 
 
 def test_a_refusal_names_the_file_and_the_field_and_quotes_neither(tmp_path):
